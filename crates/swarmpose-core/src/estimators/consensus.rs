@@ -1,0 +1,129 @@
+//! Pieces shared by the estimators: residuals, inlier sets, the truncated cost and the
+//! final SVD refinement on inliers.
+
+use nalgebra::{Isometry3, Point3};
+
+use crate::arun::arun_pairs;
+use crate::error::PoseError;
+use crate::geometry::{Correspondences, MIN_CORRESPONDENCES, check_spread};
+
+/// Squared residual `|d - (R s + t)|^2`, m².
+#[inline]
+pub(crate) fn residual_sq(t: &Isometry3<f64>, s: &Point3<f64>, d: &Point3<f64>) -> f64 {
+    (d - t * s).norm_squared()
+}
+
+/// Writes into `out` the indices whose residual is below `threshold_m` (metres).
+pub fn collect_inliers(
+    data: &Correspondences,
+    t: &Isometry3<f64>,
+    threshold_m: f64,
+    out: &mut Vec<usize>,
+) {
+    let thr2 = threshold_m * threshold_m;
+    out.clear();
+    out.extend(
+        data.src()
+            .iter()
+            .zip(data.dst())
+            .enumerate()
+            .filter(|(_, (s, d))| residual_sq(t, s, d) < thr2)
+            .map(|(i, _)| i),
+    );
+}
+
+/// The MSAC cost `Σ min(r_i^2, δ^2)` over all correspondences, m².
+#[must_use]
+pub fn truncated_cost(data: &Correspondences, t: &Isometry3<f64>, threshold_m: f64) -> f64 {
+    let thr2 = threshold_m * threshold_m;
+    data.src()
+        .iter()
+        .zip(data.dst())
+        .map(|(s, d)| residual_sq(t, s, d).min(thr2))
+        .sum()
+}
+
+/// RMS of the residuals over `indices`, metres (0 for an empty set).
+#[must_use]
+pub fn residual_rms(data: &Correspondences, t: &Isometry3<f64>, indices: &[usize]) -> f64 {
+    if indices.is_empty() {
+        return 0.0;
+    }
+    let sum: f64 = indices
+        .iter()
+        .map(|&i| residual_sq(t, &data.src()[i], &data.dst()[i]))
+        .sum();
+    (sum / indices.len() as f64).sqrt()
+}
+
+/// Arun on the correspondences at `indices` (equal weights).
+pub(crate) fn arun_on(
+    data: &Correspondences,
+    indices: &[usize],
+) -> Result<Isometry3<f64>, PoseError> {
+    let (src, dst) = (data.src(), data.dst());
+    arun_pairs(indices.iter().map(|&i| (&src[i], &dst[i], 1.0)))
+}
+
+/// Fails with [`PoseError::InsufficientSupport`] below [`MIN_CORRESPONDENCES`] indices,
+/// or [`PoseError::Degenerate`] when their source points are coincident or collinear.
+pub(crate) fn check_support(data: &Correspondences, indices: &[usize]) -> Result<(), PoseError> {
+    if indices.len() < MIN_CORRESPONDENCES {
+        return Err(PoseError::InsufficientSupport {
+            support: indices.len(),
+            needed: MIN_CORRESPONDENCES,
+        });
+    }
+    check_spread(indices.iter().map(|&i| &data.src()[i]), "inlier")
+}
+
+/// Validates an estimator's input: enough correspondences, neither set coincident or
+/// collinear.
+pub(crate) fn check_input(data: &Correspondences) -> Result<(), PoseError> {
+    data.require(MIN_CORRESPONDENCES)?;
+    check_spread(data.src(), "source")?;
+    check_spread(data.dst(), "destination")
+}
+
+/// Refits on the inliers of `start` and repeats (new inliers at `threshold_m`, new fit)
+/// until the set stops changing or `max_rounds` fits were made. Returns the pose and its
+/// inliers; `inliers` is scratch space and holds the final set.
+pub(crate) fn refine(
+    data: &Correspondences,
+    start: &Isometry3<f64>,
+    threshold_m: f64,
+    max_rounds: usize,
+    inliers: &mut Vec<usize>,
+) -> Result<Isometry3<f64>, PoseError> {
+    collect_inliers(data, start, threshold_m, inliers);
+    check_support(data, inliers)?;
+    let mut pose = arun_on(data, inliers)?;
+    let mut next = Vec::with_capacity(data.len());
+    for _ in 1..max_rounds {
+        collect_inliers(data, &pose, threshold_m, &mut next);
+        if next == *inliers {
+            break;
+        }
+        if check_support(data, &next).is_err() {
+            // The refit lost its support: keep the last supported fit.
+            break;
+        }
+        std::mem::swap(inliers, &mut next);
+        pose = arun_on(data, inliers)?;
+    }
+    // The returned inliers are those of the returned pose.
+    collect_inliers(data, &pose, threshold_m, inliers);
+    check_support(data, inliers)?;
+    Ok(pose)
+}
+
+/// Validates a threshold in metres: finite and positive.
+pub(crate) fn check_threshold(threshold_m: f64) -> Result<(), PoseError> {
+    if threshold_m.is_finite() && threshold_m > 0.0 {
+        Ok(())
+    } else {
+        Err(PoseError::InvalidConfig(format!(
+            "threshold must be a positive number of metres, got {threshold_m}"
+        )))
+    }
+}

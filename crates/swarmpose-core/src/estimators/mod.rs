@@ -1,0 +1,86 @@
+//! Estimators of the rigid motion `dst = R src + t` behind one trait, so the paper's
+//! method, the baselines and new ideas are compared by the same code.
+
+mod consensus;
+mod msac;
+mod pso_paper;
+mod pso_robust;
+mod svd;
+
+use std::time::Duration;
+
+use nalgebra::Isometry3;
+
+use crate::error::PoseError;
+use crate::geometry::Correspondences;
+use crate::rng::{SeededRng, seeded};
+
+pub use consensus::{collect_inliers, residual_rms, truncated_cost};
+pub use msac::{MsacConfig, MsacEstimator};
+pub use pso_paper::{PsoPaperConfig, PsoPaperEstimator};
+pub use pso_robust::{PsoEstimator, PsoEstimatorConfig};
+pub use svd::SvdEstimator;
+
+/// Counters and timings of one estimation.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Diagnostics {
+    /// Iterations of the method's main loop (PSO iterations, MSAC samples; 1 for SVD).
+    pub iterations: usize,
+    /// Evaluations of a cost or fitness function over the data.
+    pub cost_evaluations: u64,
+    /// Final cost: the truncated quadratic (MSAC) cost `Σ min(r², δ²)` in m² of the
+    /// returned pose over all correspondences, or `Σ r²` for methods without a threshold.
+    pub final_cost: f64,
+    /// Root mean square of the residuals `|dst - (R src + t)|` over the inliers, metres.
+    pub residual_rms_m: f64,
+    /// Inlier threshold δ used, metres (`None` for methods without one).
+    pub threshold_m: Option<f64>,
+    /// Wall-clock time of the estimation call.
+    pub elapsed: Duration,
+}
+
+/// What an estimator returns.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Estimate {
+    /// The motion, mapping source to destination: `dst ≈ R src + t`, metres.
+    pub transform: Isometry3<f64>,
+    /// 0-based indices of the correspondences the pose was fitted to, ascending.
+    pub inliers: Vec<usize>,
+    /// Counters and timings.
+    pub diagnostics: Diagnostics,
+}
+
+impl Estimate {
+    /// Fraction of the correspondences that are inliers, in `[0, 1]`.
+    #[must_use]
+    pub fn inlier_ratio(&self, total: usize) -> f64 {
+        if total == 0 {
+            0.0
+        } else {
+            self.inliers.len() as f64 / total as f64
+        }
+    }
+}
+
+/// A method that estimates the rigid motion of a set of correspondences.
+///
+/// Implementations are deterministic for a given random generator state, never return an
+/// improper rotation, and return an error rather than a pose they cannot support.
+pub trait Estimator: Send + Sync {
+    /// Short name as used on the command line (`pso`, `pso-paper`, `svd`, `msac`).
+    fn name(&self) -> &'static str;
+
+    /// Estimates `dst ≈ R src + t`, drawing any randomness from `rng`.
+    ///
+    /// # Errors
+    /// Too few or degenerate points, or too little support for a pose.
+    fn estimate(&self, data: &Correspondences, rng: &mut SeededRng) -> Result<Estimate, PoseError>;
+
+    /// [`Estimator::estimate`] with a fresh generator seeded by `seed`.
+    ///
+    /// # Errors
+    /// As [`Estimator::estimate`].
+    fn estimate_seeded(&self, data: &Correspondences, seed: u64) -> Result<Estimate, PoseError> {
+        self.estimate(data, &mut seeded(seed))
+    }
+}
