@@ -39,6 +39,7 @@ pub mod estimators;
 pub mod geometry;
 pub mod pso;
 pub mod rng;
+pub mod synthetic;
 
 pub use arun::{arun, arun_weighted};
 pub use error::{DegeneracyKind, PoseError};

@@ -84,3 +84,6 @@ pub trait Estimator: Send + Sync {
         self.estimate(data, &mut seeded(seed))
     }
 }
+
+#[cfg(test)]
+mod tests;
