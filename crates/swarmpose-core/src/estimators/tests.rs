@@ -240,3 +240,27 @@ fn pso_paper_degrades_with_outliers_as_recorded() {
         assert!(rot_deg < 0.5 && trans_m < 0.1);
     }
 }
+
+#[test]
+fn pso_handles_large_sets_through_sampled_pairs() {
+    // 3000 points: more pairs than the budget, so pairs are drawn at random.
+    for (seed, outliers) in [(1u64, 0.0), (2, 0.5), (3, 0.9)] {
+        let s = SyntheticSpec {
+            n: 3000,
+            outlier_fraction: outliers,
+            ..SyntheticSpec::default()
+        }
+        .generate(seed)
+        .expect("valid spec");
+        let out = PsoEstimator::new(PsoEstimatorConfig::default().with_threshold(0.07))
+            .estimate_seeded(&s.data, seed)
+            .expect("solvable");
+        let (rot_deg, trans_m) = errors(&out.transform, &s.truth);
+        assert!(
+            rot_deg < 0.5 && trans_m < 0.1,
+            "{outliers}: {rot_deg} deg {trans_m} m"
+        );
+        let truly = out.inliers.iter().filter(|&&i| s.inlier[i]).count();
+        assert!(truly * 100 >= out.inliers.len() * 95);
+    }
+}

@@ -10,6 +10,8 @@ use crate::rng::SeededRng;
 
 /// Shortest source pair, as a multiple of δ, that is worth scoring.
 const MIN_PAIR_LENGTH_FACTOR: f64 = 5.0;
+/// Random pair sampling stops once this many times `max_pairs` consistent pairs are found.
+const ENOUGH_PAIRS_FACTOR: usize = 16;
 /// Tries per seed when looking for a consistent triangle.
 const SEED_TRIES: usize = 16;
 
@@ -62,7 +64,12 @@ impl PairSet {
                 }
             }
         } else {
+            // Random pairs until the budget is spent or plenty of consistent ones are found.
+            let enough = ENOUGH_PAIRS_FACTOR.saturating_mul(cfg.max_pairs);
             for _ in 0..cfg.pair_budget {
+                if all.len() >= enough {
+                    break;
+                }
                 let i = rng.random_range(0..n);
                 let j = rng.random_range(0..n);
                 if i != j && consistent(data, i, j, tol_m, min_len_m) {
