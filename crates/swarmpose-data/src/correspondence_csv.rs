@@ -173,7 +173,8 @@ pub fn read_from<R: Read>(reader: R, name: &str) -> Result<Correspondences, CsvE
         buf.clear();
         let read = reader
             .read_until(b'\n', &mut buf)
-            .map_err(|e| err(Some(line_no + 1), CsvErrorKind::Read(e)))?;
+            // Failing before the first line is a failure of the input, not of a line.
+            .map_err(|e| err((line_no > 0).then_some(line_no + 1), CsvErrorKind::Read(e)))?;
         if read == 0 {
             break;
         }
@@ -478,9 +479,10 @@ mod tests {
             msg.starts_with(&format!("{}: cannot read: ", path.display())),
             "{msg}"
         );
-        // A directory is not a readable file either.
+        // A directory is not a readable file either (it opens, reading fails).
         let e = read_path(&dir.0).unwrap_err();
         assert!(matches!(e.kind, CsvErrorKind::Read(_)), "{e}");
+        assert_eq!(e.line, None);
     }
 
     #[test]
