@@ -1,1 +1,96 @@
-fn main() {}
+//! `swarmpose`: rigid 3D-3D pose estimation from matched points on the command line.
+//!
+//! Each subcommand lives in [`commands`]; every failure is printed as one line,
+//! `swarmpose: error: ...`, with exit status 2 for bad usage or input and 1 for a run
+//! that failed.
+
+#![warn(clippy::unwrap_used)]
+
+mod commands;
+mod error;
+mod input;
+mod methods;
+
+use std::process::ExitCode;
+
+use clap::error::ErrorKind;
+use clap::{CommandFactory, Parser, Subcommand};
+
+use crate::error::CliError;
+
+/// Rigid 3D-3D pose estimation by particle swarm.
+#[derive(Debug, Parser)]
+#[command(name = "swarmpose", version, propagate_version = true)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Estimate the rigid motion dst = R src + t of a correspondence CSV; prints one
+    /// JSON object.
+    Register(commands::register::RegisterArgs),
+}
+
+fn run(cli: Cli) -> Result<(), CliError> {
+    match cli.command {
+        Command::Register(args) => commands::register::run(&args),
+    }
+}
+
+/// Panics are bugs; still, report them as one line and no backtrace.
+fn install_panic_hook() {
+    std::panic::set_hook(Box::new(|info| {
+        let what = info
+            .payload()
+            .downcast_ref::<&str>()
+            .map(|s| (*s).to_owned())
+            .or_else(|| info.payload().downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "unknown panic".to_owned());
+        let at = info
+            .location()
+            .map(|l| format!(" at {}:{}", l.file(), l.line()))
+            .unwrap_or_default();
+        CliError::failure(format!("internal error (a bug){at}: {what}")).print();
+    }));
+}
+
+fn main() -> ExitCode {
+    install_panic_hook();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion) => {
+            // Help and version go to standard output with status 0.
+            return match e.print() {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(_) => ExitCode::from(error::EXIT_FAILURE),
+            };
+        }
+        Err(e) if e.kind() == ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => {
+            let names: Vec<String> = Cli::command()
+                .get_subcommands()
+                .map(|c| c.get_name().to_owned())
+                .filter(|n| n != "help")
+                .collect();
+            let err = CliError::usage(format!(
+                "no subcommand given: use one of {} (try 'swarmpose --help')",
+                names.join(", ")
+            ));
+            err.print();
+            return ExitCode::from(err.code);
+        }
+        Err(e) => {
+            let err = error::from_clap(&e);
+            err.print();
+            return ExitCode::from(err.code);
+        }
+    };
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(err) => {
+            err.print();
+            ExitCode::from(err.code)
+        }
+    }
+}

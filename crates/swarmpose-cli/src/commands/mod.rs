@@ -1,0 +1,5 @@
+//! One module per subcommand: its clap arguments and a `run` returning a [`CliError`].
+//!
+//! [`CliError`]: crate::error::CliError
+
+pub mod register;

@@ -1,0 +1,130 @@
+//! `swarmpose register`: estimate the rigid motion of one correspondence CSV and print
+//! it as one JSON object.
+
+use std::io::Write;
+use std::path::PathBuf;
+
+use clap::Args;
+use serde::Serialize;
+use swarmpose_core::geometry::quaternion_wxyz;
+use swarmpose_core::{Estimate, PoseError};
+
+use crate::error::CliError;
+use crate::input::{display_name, read_correspondences};
+use crate::methods::{EstimatorOptions, Method, build};
+
+/// Arguments of `swarmpose register`.
+#[derive(Debug, Args)]
+#[command(after_help = "\
+Output: one JSON object on standard output, one line: method, input, seed, \
+n_correspondences, rotation_wxyz ([w, x, y, z], w >= 0), translation ([x, y, z], metres), \
+inliers (0-based row indices), inlier_ratio, threshold_m (null for svd), final_cost (m^2), \
+residual_rms_m, iterations, cost_evaluations, elapsed_ms.
+
+Exit status: 0 on success; 1 when the estimator found no pose with enough support; \
+2 for bad options or bad input (unreadable file, malformed CSV, too few or degenerate \
+points).")]
+pub struct RegisterArgs {
+    /// Correspondence CSV with header src_x,src_y,src_z,dst_x,dst_y,dst_z (metres,
+    /// dst = R src + t), or '-' for standard input.
+    #[arg(value_name = "FILE.csv|-")]
+    pub input: PathBuf,
+
+    /// Estimator.
+    #[arg(long, value_enum, default_value_t = Method::Pso)]
+    pub method: Method,
+
+    /// Seed of the random generator; one seed gives one answer.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub seed: u64,
+
+    #[command(flatten)]
+    pub options: EstimatorOptions,
+}
+
+/// What `register` prints.
+#[derive(Debug, Serialize)]
+struct Report<'a> {
+    method: &'a str,
+    input: &'a str,
+    seed: u64,
+    n_correspondences: usize,
+    /// Rotation of dst = R src + t, `[w, x, y, z]` with `w >= 0`.
+    rotation_wxyz: [f64; 4],
+    /// Translation of dst = R src + t, metres.
+    translation: [f64; 3],
+    inlier_ratio: f64,
+    threshold_m: Option<f64>,
+    final_cost: f64,
+    residual_rms_m: f64,
+    iterations: usize,
+    cost_evaluations: u64,
+    elapsed_ms: f64,
+    inliers: &'a [usize],
+}
+
+impl<'a> Report<'a> {
+    fn new(method: &'a str, input: &'a str, seed: u64, n: usize, e: &'a Estimate) -> Self {
+        let t = e.transform.translation.vector;
+        let d = &e.diagnostics;
+        Self {
+            method,
+            input,
+            seed,
+            n_correspondences: n,
+            rotation_wxyz: quaternion_wxyz(&e.transform.rotation),
+            translation: [t.x, t.y, t.z],
+            inlier_ratio: e.inlier_ratio(n),
+            threshold_m: d.threshold_m,
+            final_cost: d.final_cost,
+            residual_rms_m: d.residual_rms_m,
+            iterations: d.iterations,
+            cost_evaluations: d.cost_evaluations,
+            elapsed_ms: d.elapsed.as_secs_f64() * 1e3,
+            inliers: &e.inliers,
+        }
+    }
+}
+
+/// The message and exit status of an estimator error on input `name`.
+pub fn estimation_error(name: &str, method: Method, e: &PoseError) -> CliError {
+    match e {
+        // Options are checked when parsed; a config the core still rejects is usage.
+        PoseError::InvalidConfig(_) => CliError::usage(format!("{}: {e}", method.name())),
+        // The data ran and no pose had enough support: a failed run, not bad input.
+        PoseError::InsufficientSupport { .. } => {
+            CliError::failure(format!("{name}: {}: {e}", method.name()))
+        }
+        // Too few, degenerate or non-finite points: the input cannot determine a pose.
+        PoseError::TooFewPoints { .. }
+        | PoseError::Degenerate { .. }
+        | PoseError::NonFinite { .. }
+        | PoseError::LengthMismatch { .. } => {
+            CliError::usage(format!("{name}: {}: {e}", method.name()))
+        }
+    }
+}
+
+/// Runs `register`: read, estimate, print one JSON line.
+///
+/// # Errors
+/// Bad options, unreadable or malformed input, an estimator error (all naming the input
+/// where they concern it), or standard output that cannot be written.
+pub fn run(args: &RegisterArgs) -> Result<(), CliError> {
+    // Options first: a bad option is reported before any input is read.
+    let estimator = build(args.method, &args.options)?;
+    let name = display_name(&args.input);
+    let data = read_correspondences(&args.input)?;
+    let estimate = estimator
+        .estimate_seeded(&data, args.seed)
+        .map_err(|e| estimation_error(&name, args.method, &e))?;
+    let report = Report::new(estimator.name(), &name, args.seed, data.len(), &estimate);
+    let mut line = serde_json::to_string(&report)
+        .map_err(|e| CliError::failure(format!("cannot encode the result as JSON: {e}")))?;
+    line.push('\n');
+    let mut stdout = std::io::stdout().lock();
+    stdout
+        .write_all(line.as_bytes())
+        .and_then(|()| stdout.flush())
+        .map_err(|e| CliError::failure(format!("cannot write to standard output: {e}")))
+}

@@ -1,0 +1,353 @@
+//! The estimators by command-line name, and the options that configure them: the one
+//! place that maps `--method NAME` plus knobs to a `Box<dyn Estimator>`.
+//!
+//! Subcommands flatten [`EstimatorOptions`] into their arguments and call [`build`].
+//! Defaults shown in `--help` are read from the core's `Default` configurations, so
+//! they cannot drift from what runs.
+
+use std::fmt::Display;
+
+use clap::{Args, ValueEnum};
+use swarmpose_core::pso::PsoConfig;
+use swarmpose_core::{
+    Estimator, MsacConfig, MsacEstimator, PsoEstimator, PsoEstimatorConfig, PsoPaperConfig,
+    PsoPaperEstimator, SvdEstimator,
+};
+
+use crate::error::CliError;
+
+/// An estimator by its command-line name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Method {
+    /// Robust PSO over unit quaternions on translation-free pairs, then SVD refinement.
+    Pso,
+    /// The paper's PSO/SVD, literally (all-point centroids); fragile with outliers.
+    PsoPaper,
+    /// Arun's SVD least squares on all points, no outlier rejection.
+    Svd,
+    /// MSAC with 3-point samples and a final SVD refit.
+    Msac,
+}
+
+impl Method {
+    /// The command-line name, equal to the estimator's [`Estimator::name`].
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Pso => "pso",
+            Method::PsoPaper => "pso-paper",
+            Method::Svd => "svd",
+            Method::Msac => "msac",
+        }
+    }
+}
+
+/// Settings of every estimator; an option left out keeps the method's default.
+#[derive(Debug, Clone, Default, PartialEq, Args)]
+pub struct EstimatorOptions {
+    /// Inlier threshold δ on |dst - (R src + t)| (not for svd).
+    #[arg(long, value_name = "METRES", value_parser = positive_metres,
+          allow_negative_numbers = true, help = threshold_help())]
+    pub threshold: Option<f64>,
+
+    /// Swarm size.
+    #[arg(long, value_name = "N", value_parser = at_least_one, help_heading = PSO_HEADING,
+          allow_negative_numbers = true, help = pso_help("Swarm size", |c| c.swarm_size))]
+    pub particles: Option<usize>,
+
+    /// Iteration budget after the initial evaluation.
+    #[arg(long, value_name = "N", value_parser = count, help_heading = PSO_HEADING,
+          allow_negative_numbers = true,
+          help = pso_help("Iteration budget after the initial evaluation", |c| c.max_iterations))]
+    pub iterations: Option<usize>,
+
+    /// Inertia α of the velocity update.
+    #[arg(long, value_name = "A", value_parser = non_negative, help_heading = PSO_HEADING,
+          allow_negative_numbers = true,
+          help = pso_help("Inertia α of the velocity update, >= 0", |c| c.inertia))]
+    pub inertia: Option<f64>,
+
+    /// Acceleration c of the cognitive and social terms.
+    #[arg(long, value_name = "C", value_parser = non_negative, help_heading = PSO_HEADING,
+          allow_negative_numbers = true,
+          help = pso_help("Acceleration c of the cognitive and social terms, >= 0", |c| c.acceleration))]
+    pub acceleration: Option<f64>,
+
+    /// Stop after N iterations without improvement, or `none`.
+    #[arg(long, value_name = "N|none", value_parser = stall, help_heading = PSO_HEADING,
+          allow_negative_numbers = true,
+          help = pso_help("Stop after N iterations without a better best, or 'none' to run the whole budget",
+                          |c| Stall(c.stall_iterations)))]
+    pub stall: Option<Stall>,
+
+    /// Particles started from 3-point minimal samples (pso only).
+    #[arg(long, value_name = "N", value_parser = count, help_heading = PSO_HEADING,
+          allow_negative_numbers = true, help = format!(
+              "Particles started from 3-point minimal samples, pso only [default: {}]",
+              PsoEstimatorConfig::default().seeded_particles))]
+    pub seeded_particles: Option<usize>,
+
+    /// MSAC confidence that an all-inlier sample was drawn.
+    #[arg(long, value_name = "P", value_parser = probability, help_heading = MSAC_HEADING,
+          allow_negative_numbers = true, help = format!(
+              "Probability that an all-inlier sample was drawn when sampling stops, in (0, 1) [default: {}]",
+              MsacConfig::default().confidence))]
+    pub confidence: Option<f64>,
+
+    /// Cap on the number of MSAC samples.
+    #[arg(long, value_name = "N", value_parser = at_least_one, help_heading = MSAC_HEADING,
+          allow_negative_numbers = true, help = format!(
+              "Cap on the number of samples [default: {}]",
+              MsacConfig::default().max_iterations))]
+    pub max_samples: Option<usize>,
+}
+
+const PSO_HEADING: &str = "PSO options (pso, pso-paper)";
+const MSAC_HEADING: &str = "MSAC options (msac)";
+
+/// `--stall`: `Some(n)` stops after `n` iterations without improvement, `None` never.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Stall(pub Option<usize>);
+
+impl Display for Stall {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.0 {
+            Some(n) => write!(f, "{n}"),
+            None => f.write_str("none"),
+        }
+    }
+}
+
+/// `[default: X]` when every method agrees, else `[default: X for a, Y for b]`.
+fn default_note<T: Display + PartialEq>(values: &[(&str, T)]) -> String {
+    match values {
+        [(_, first), rest @ ..] if rest.iter().all(|(_, v)| v == first) => {
+            format!("[default: {first}]")
+        }
+        _ => {
+            let parts: Vec<String> = values.iter().map(|(m, v)| format!("{v} for {m}")).collect();
+            format!("[default: {}]", parts.join(", "))
+        }
+    }
+}
+
+fn threshold_help() -> String {
+    format!(
+        "Inlier threshold δ on |dst - (R src + t)|, metres, > 0; svd has none {}",
+        default_note(&[
+            ("pso", PsoEstimatorConfig::default().threshold_m),
+            ("pso-paper", PsoPaperConfig::default().threshold_m),
+            ("msac", MsacConfig::default().threshold_m),
+        ])
+    )
+}
+
+fn pso_help<T: Display + PartialEq>(what: &str, field: impl Fn(&PsoConfig) -> T) -> String {
+    let note = default_note(&[
+        ("pso", field(&PsoEstimatorConfig::default().pso)),
+        ("pso-paper", field(&PsoPaperConfig::default().pso)),
+    ]);
+    format!("{what} {note}")
+}
+
+fn positive_metres(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err("must be a positive, finite number of metres".into()),
+    }
+}
+
+fn non_negative(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        _ => Err("must be a finite number >= 0".into()),
+    }
+}
+
+fn probability(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v > 0.0 && v < 1.0 => Ok(v),
+        _ => Err("must be a number strictly between 0 and 1".into()),
+    }
+}
+
+fn count(s: &str) -> Result<usize, String> {
+    s.trim()
+        .parse::<usize>()
+        .map_err(|_| "must be a whole number >= 0".into())
+}
+
+fn at_least_one(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(n) if n >= 1 => Ok(n),
+        _ => Err("must be a whole number >= 1".into()),
+    }
+}
+
+fn stall(s: &str) -> Result<Stall, String> {
+    if s.trim().eq_ignore_ascii_case("none") {
+        return Ok(Stall(None));
+    }
+    at_least_one(s)
+        .map(|n| Stall(Some(n)))
+        .map_err(|_| "must be a whole number >= 1, or 'none' to run the whole budget".into())
+}
+
+impl EstimatorOptions {
+    /// Names of the PSO options given (all of which apply to pso; all but
+    /// `--seeded-particles` to pso-paper).
+    fn pso_given(&self) -> Vec<&'static str> {
+        let given = [
+            ("--particles", self.particles.is_some()),
+            ("--iterations", self.iterations.is_some()),
+            ("--inertia", self.inertia.is_some()),
+            ("--acceleration", self.acceleration.is_some()),
+            ("--stall", self.stall.is_some()),
+            ("--seeded-particles", self.seeded_particles.is_some()),
+        ];
+        given.iter().filter(|g| g.1).map(|g| g.0).collect()
+    }
+
+    fn msac_given(&self) -> Vec<&'static str> {
+        let given = [
+            ("--confidence", self.confidence.is_some()),
+            ("--max-samples", self.max_samples.is_some()),
+        ];
+        given.iter().filter(|g| g.1).map(|g| g.0).collect()
+    }
+
+    /// The swarm settings: `base` with the given PSO options applied.
+    fn apply_pso(&self, mut pso: PsoConfig) -> PsoConfig {
+        pso.swarm_size = self.particles.unwrap_or(pso.swarm_size);
+        pso.max_iterations = self.iterations.unwrap_or(pso.max_iterations);
+        pso.inertia = self.inertia.unwrap_or(pso.inertia);
+        pso.acceleration = self.acceleration.unwrap_or(pso.acceleration);
+        if let Some(Stall(s)) = self.stall {
+            pso.stall_iterations = s;
+        }
+        pso
+    }
+}
+
+/// Fails when an option that `method` does not use was given: silently ignoring it
+/// would report a run that did not happen.
+fn reject(method: Method, options: &[&'static str]) -> Result<(), CliError> {
+    match options {
+        [] => Ok(()),
+        [one] => Err(CliError::usage(format!(
+            "{one} does not apply to --method {}",
+            method.name()
+        ))),
+        many => Err(CliError::usage(format!(
+            "{} do not apply to --method {}",
+            many.join(", "),
+            method.name()
+        ))),
+    }
+}
+
+/// The estimator for `method` with `options` applied over its defaults.
+///
+/// # Errors
+/// A usage error when an option given does not apply to `method`.
+pub fn build(method: Method, options: &EstimatorOptions) -> Result<Box<dyn Estimator>, CliError> {
+    let pso = options.pso_given();
+    let msac = options.msac_given();
+    Ok(match method {
+        Method::Pso => {
+            reject(method, &msac)?;
+            let mut config = PsoEstimatorConfig::default();
+            config.threshold_m = options.threshold.unwrap_or(config.threshold_m);
+            config.pso = options.apply_pso(config.pso);
+            config.seeded_particles = options.seeded_particles.unwrap_or(config.seeded_particles);
+            Box::new(PsoEstimator::new(config))
+        }
+        Method::PsoPaper => {
+            let not_used: Vec<_> = msac
+                .into_iter()
+                .chain(options.seeded_particles.map(|_| "--seeded-particles"))
+                .collect();
+            reject(method, &not_used)?;
+            let mut config = PsoPaperConfig::default();
+            config.threshold_m = options.threshold.unwrap_or(config.threshold_m);
+            config.pso = options.apply_pso(config.pso);
+            Box::new(PsoPaperEstimator::new(config))
+        }
+        Method::Svd => {
+            let threshold = options.threshold.map(|_| "--threshold");
+            let not_used: Vec<_> = threshold.into_iter().chain(pso).chain(msac).collect();
+            reject(method, &not_used)?;
+            Box::new(SvdEstimator)
+        }
+        Method::Msac => {
+            reject(method, &pso)?;
+            let mut config = MsacConfig::default();
+            config.threshold_m = options.threshold.unwrap_or(config.threshold_m);
+            config.confidence = options.confidence.unwrap_or(config.confidence);
+            config.max_iterations = options.max_samples.unwrap_or(config.max_iterations);
+            Box::new(MsacEstimator::new(config))
+        }
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_match_the_estimators() {
+        for &m in Method::value_variants() {
+            let e = build(m, &EstimatorOptions::default()).expect("defaults build");
+            assert_eq!(e.name(), m.name());
+            let parsed = Method::from_str(m.name(), false).expect("value name");
+            assert_eq!(parsed, m);
+        }
+    }
+
+    #[test]
+    fn default_notes() {
+        assert_eq!(default_note(&[("a", 1), ("b", 1)]), "[default: 1]");
+        assert_eq!(
+            default_note(&[("a", 1), ("b", 2)]),
+            "[default: 1 for a, 2 for b]"
+        );
+    }
+
+    #[test]
+    fn parsers_reject_bad_values() {
+        assert!(positive_metres("-0.1").is_err());
+        assert!(positive_metres("0").is_err());
+        assert!(positive_metres("NaN").is_err());
+        assert!(positive_metres("inf").is_err());
+        assert_eq!(positive_metres("0.05"), Ok(0.05));
+        assert!(at_least_one("0").is_err());
+        assert!(count("-1").is_err());
+        assert!(probability("1").is_err());
+        assert!(probability("NaN").is_err());
+        assert!(non_negative("-1").is_err());
+        assert_eq!(stall("none"), Ok(Stall(None)));
+        assert_eq!(stall("3"), Ok(Stall(Some(3))));
+        assert!(stall("0").is_err());
+    }
+
+    #[test]
+    fn options_that_do_not_apply_are_errors() {
+        let opts = EstimatorOptions {
+            particles: Some(10),
+            threshold: Some(0.2),
+            ..Default::default()
+        };
+        let e = build(Method::Svd, &opts).err().expect("svd has no knobs");
+        assert_eq!(
+            e.message,
+            "--threshold, --particles do not apply to --method svd"
+        );
+        assert!(build(Method::Msac, &opts).is_err());
+        assert!(build(Method::PsoPaper, &opts).is_ok());
+        let seeded = EstimatorOptions {
+            seeded_particles: Some(3),
+            ..Default::default()
+        };
+        assert!(build(Method::PsoPaper, &seeded).is_err());
+        assert!(build(Method::Pso, &seeded).is_ok());
+    }
+}
