@@ -1,69 +1,15 @@
 //! `swarmpose register` end to end: the built binary on small CSVs in a temp dir.
 
-use std::io::Write;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
-use std::sync::atomic::{AtomicUsize, Ordering};
+mod common;
 
+use std::path::Path;
+use std::process::Output;
+
+use common::{HEADER, TempDir, check_error, csv, json_of, swarmpose};
 use nalgebra::{Isometry3, Point3, UnitQuaternion, Vector3};
 use serde_json::Value;
 
-const HEADER: &str = "src_x,src_y,src_z,dst_x,dst_y,dst_z";
 const METHODS: [&str; 4] = ["pso", "pso-paper", "svd", "msac"];
-
-/// A fresh directory under the system temp dir, removed on drop.
-struct TempDir(PathBuf);
-
-impl TempDir {
-    fn new(tag: &str) -> Self {
-        static COUNTER: AtomicUsize = AtomicUsize::new(0);
-        let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-        let nanos = std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .map_or(0, |d| d.subsec_nanos());
-        let dir = std::env::temp_dir().join(format!(
-            "swarmpose-cli-{tag}-{}-{n}-{nanos}",
-            std::process::id()
-        ));
-        std::fs::create_dir_all(&dir).expect("create temp dir");
-        Self(dir)
-    }
-
-    /// Writes `text` to `name` in the directory; returns its path.
-    fn file(&self, name: &str, text: &str) -> PathBuf {
-        let path = self.0.join(name);
-        std::fs::write(&path, text).expect("write test file");
-        path
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
-/// Runs the binary with `args`, feeding `stdin` if given; backtraces are switched on so
-/// that one would show if anything panicked.
-fn swarmpose(args: &[&str], stdin: Option<&str>) -> Output {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_swarmpose"))
-        .args(args)
-        .env("RUST_BACKTRACE", "1")
-        .stdin(if stdin.is_some() {
-            Stdio::piped()
-        } else {
-            Stdio::null()
-        })
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("run swarmpose");
-    if let Some(text) = stdin {
-        let mut pipe = child.stdin.take().expect("stdin pipe");
-        pipe.write_all(text.as_bytes()).expect("write stdin");
-    }
-    child.wait_with_output().expect("wait for swarmpose")
-}
 
 fn register(path: &Path, extra: &[&str]) -> Output {
     let path = path.to_str().expect("utf-8 temp path");
@@ -92,41 +38,11 @@ fn source_points(n: usize) -> Vec<Point3<f64>> {
         .collect()
 }
 
-/// A correspondence CSV; values written in Rust's shortest round-trip form.
-fn csv(src: &[Point3<f64>], dst: &[Point3<f64>]) -> String {
-    let mut text = format!("{HEADER}\n");
-    for (s, d) in src.iter().zip(dst) {
-        text.push_str(&format!(
-            "{},{},{},{},{},{}\n",
-            s.x, s.y, s.z, d.x, d.y, d.z
-        ));
-    }
-    text
-}
-
 /// Noise-free data: `dst = truth * src` for every row.
 fn clean_csv(n: usize) -> String {
     let src = source_points(n);
     let dst: Vec<_> = src.iter().map(|p| truth() * p).collect();
     csv(&src, &dst)
-}
-
-/// Parses the one JSON line on stdout of a successful run.
-fn json_of(out: &Output) -> Value {
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "stderr: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    assert!(
-        out.stderr.is_empty(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let text = String::from_utf8(out.stdout.clone()).expect("utf-8 stdout");
-    assert_eq!(text.lines().count(), 1, "one line of JSON: {text}");
-    serde_json::from_str(&text).expect("stdout is JSON")
 }
 
 fn f64s(v: &Value, key: &str) -> Vec<f64> {
@@ -306,31 +222,6 @@ fn reads_standard_input() {
     ));
     check_pose(&v, "svd", 10, 0.1);
     assert_eq!(v["input"], "<stdin>");
-}
-
-/// Checks a failed run: status 2, nothing on stdout, exactly one non-empty line on
-/// stderr that contains every `needle`, and no sign of a panic.
-fn check_error(out: &Output, needles: &[&str]) -> String {
-    let stderr = String::from_utf8(out.stderr.clone()).expect("utf-8 stderr");
-    assert_eq!(out.status.code(), Some(2), "stderr: {stderr}");
-    assert!(out.stdout.is_empty(), "stdout should be empty");
-    let lines: Vec<&str> = stderr.lines().collect();
-    assert_eq!(lines.len(), 1, "exactly one line: {stderr:?}");
-    let line = lines[0];
-    assert!(line.starts_with("swarmpose: error: "), "{line}");
-    assert!(line.len() > "swarmpose: error: ".len(), "{line}");
-    for bad in [
-        "panicked",
-        "RUST_BACKTRACE",
-        "internal error",
-        "stack backtrace",
-    ] {
-        assert!(!stderr.contains(bad), "{bad}: {stderr}");
-    }
-    for needle in needles {
-        assert!(line.contains(needle), "{needle:?} not in {line:?}");
-    }
-    line.to_owned()
 }
 
 /// Writes `text` as `name` and checks the error of registering it.
