@@ -2,13 +2,19 @@
 
 use nalgebra::{Isometry3, Matrix3, UnitQuaternion, Vector3};
 
-/// The quaternion of a rotation as `[w, x, y, z]` with `w >= 0` (of `q` and `-q`, which
-/// are one rotation, the one with non-negative scalar part).
+/// The quaternion of a rotation as `[w, x, y, z]`, canonical among `q` and `-q` (one
+/// rotation): `w >= 0`, and for `w = 0` (half turns) the first non-zero of `x, y, z` is
+/// positive. Negative zeros come out as `+0.0`.
 #[must_use]
 pub fn quaternion_wxyz(q: &UnitQuaternion<f64>) -> [f64; 4] {
     let c = q.quaternion().coords; // nalgebra stores [x, y, z, w]
-    let s = if c.w < 0.0 { -1.0 } else { 1.0 };
-    [s * c.w, s * c.x, s * c.y, s * c.z]
+    let lead = [c.w, c.x, c.y, c.z]
+        .into_iter()
+        .find(|v| *v != 0.0)
+        .unwrap_or(1.0);
+    let s = if lead < 0.0 { -1.0 } else { 1.0 };
+    // `+ 0.0` turns -0.0 into +0.0.
+    [s * c.w + 0.0, s * c.x + 0.0, s * c.y + 0.0, s * c.z + 0.0]
 }
 
 /// Angle (radians, in `[0, π]`) of the rotation that takes `a` to `b`.
@@ -107,6 +113,22 @@ mod tests {
         let m = eq12_as_printed(quaternion_wxyz(&q));
         // Symmetric off-diagonal terms: not orthonormal for a generic rotation.
         assert!((m * m.transpose() - Matrix3::identity()).norm() > 0.1);
+    }
+
+    #[test]
+    fn wxyz_is_canonical_for_half_turns() {
+        let half = UnitQuaternion::from_axis_angle(&Vector3::y_axis(), std::f64::consts::PI);
+        let neg = UnitQuaternion::new_unchecked(-half.into_inner());
+        let (a, b) = (quaternion_wxyz(&half), quaternion_wxyz(&neg));
+        assert!(
+            a.iter().zip(&b).all(|(x, y)| (x - y).abs() < 1e-15),
+            "{a:?} vs {b:?}"
+        );
+        assert!(a[2] > 0.0 && a[0].abs() < 1e-15);
+        let exact = UnitQuaternion::new_unchecked(nalgebra::Quaternion::new(-0.0, 0.0, -1.0, 0.0));
+        let w = quaternion_wxyz(&exact);
+        assert_eq!(w, [0.0, 0.0, 1.0, 0.0]);
+        assert!(w[0].is_sign_positive());
     }
 
     #[test]

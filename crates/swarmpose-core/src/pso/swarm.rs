@@ -117,8 +117,8 @@ impl ParticleSwarm {
     }
 
     /// Minimises `fitness` over the box `lower..=upper`. `initial` positions (clamped to
-    /// the box) seed the first particles; the rest start uniformly in the box. Initial
-    /// velocities are uniform in `±clamp`.
+    /// the box) seed the first particles, which start at rest; the rest start uniformly in
+    /// the box with velocities uniform in `±clamp`.
     ///
     /// A score that does not compare (NaN) never becomes a best.
     ///
@@ -154,11 +154,14 @@ impl ParticleSwarm {
             let mut x = [0.0; D];
             let mut v = [0.0; D];
             for d in 0..D {
-                x[d] = match initial.get(i) {
-                    Some(p) => p[d].clamp(lower[d], upper[d]),
-                    None => rng.random_range(lower[d]..=upper[d]),
+                // A seeded particle is a hypothesis to refine: it starts at rest.
+                (x[d], v[d]) = match initial.get(i) {
+                    Some(p) => (p[d].clamp(lower[d], upper[d]), 0.0),
+                    None => (
+                        rng.random_range(lower[d]..=upper[d]),
+                        rng.random_range(-vmax[d]..=vmax[d]),
+                    ),
                 };
-                v[d] = rng.random_range(-vmax[d]..=vmax[d]);
             }
             pos.push(x);
             vel.push(v);

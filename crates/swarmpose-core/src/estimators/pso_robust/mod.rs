@@ -12,7 +12,8 @@
 //!
 //! 1. **Pairs.** Keep pairs whose lengths agree, `| |b_k| - |a_k| | < 2δ` (a rigid motion
 //!    keeps lengths; a random wrong match rarely does), and whose source length is at least
-//!    `5δ` (short pairs carry little rotation). All `n(n-1)/2` pairs are tested when that
+//!    `min(5δ, extent/10)` (short pairs carry little rotation; `extent` is the largest
+//!    principal extent of the source points, so small scenes keep their pairs). All `n(n-1)/2` pairs are tested when that
 //!    fits `pair_budget`, otherwise random pairs until the budget is spent or `16 max_pairs`
 //!    consistent ones are found. At most `max_pairs` of the
 //!    consistent ones are scored.

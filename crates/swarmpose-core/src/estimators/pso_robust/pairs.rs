@@ -8,10 +8,14 @@ use crate::arun::arun_pairs;
 use crate::geometry::{Correspondences, particle_from_rotation};
 use crate::rng::SeededRng;
 
-/// Shortest source pair, as a multiple of δ, that is worth scoring.
+/// Shortest source pair, as a multiple of δ, that is worth scoring...
 const MIN_PAIR_LENGTH_FACTOR: f64 = 5.0;
+/// ...unless the scene is small: then a tenth of its largest principal extent.
+const MIN_PAIR_LENGTH_EXTENT: f64 = 0.1;
 /// Random pair sampling stops once this many times `max_pairs` consistent pairs are found.
 const ENOUGH_PAIRS_FACTOR: usize = 16;
+/// Cost changes below this fraction of one pair's truncation cost `tol²` do not count.
+const COST_QUANTUM: f64 = 0.01;
 /// Tries per seed when looking for a consistent triangle.
 const SEED_TRIES: usize = 16;
 
@@ -52,7 +56,9 @@ impl PairSet {
     ) -> Self {
         let n = data.len();
         let tol_m = 2.0 * cfg.threshold_m;
-        let min_len_m = MIN_PAIR_LENGTH_FACTOR * cfg.threshold_m;
+        let extent_m = crate::geometry::spread(data.src())[0];
+        let min_len_m =
+            (MIN_PAIR_LENGTH_FACTOR * cfg.threshold_m).min(MIN_PAIR_LENGTH_EXTENT * extent_m);
         let total = n * (n - 1) / 2;
         let mut all = Vec::new();
         if total <= cfg.pair_budget {
@@ -132,7 +138,9 @@ impl PairSet {
     }
 
     /// The particle score of a rotation: (scored pairs not supporting it, truncated cost
-    /// `Σ min(|e|², tol²)` in m²), compared lexicographically, lower is better.
+    /// `Σ min(|e|², tol²)` in units of `COST_QUANTUM tol²`, rounded), compared
+    /// lexicographically, lower is better. The rounding makes negligible gains ties, so the
+    /// swarm's stall test can stop it.
     #[inline]
     pub(super) fn score(&self, q: &UnitQuaternion<f64>, tol_m: f64) -> (usize, f64) {
         let m: Matrix3<f64> = q.to_rotation_matrix().into_inner();
@@ -149,7 +157,7 @@ impl PairSet {
             support += usize::from(e2 < tol2);
             cost += e2.min(tol2);
         }
-        (ax.len() - support, cost)
+        (ax.len() - support, (cost / (COST_QUANTUM * tol2)).round())
     }
 
     /// Up to `k` points taking part in the most scored pairs that support rotation `m`,
