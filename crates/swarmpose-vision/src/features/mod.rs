@@ -1,0 +1,125 @@
+//! Feature detection and description behind one trait.
+//!
+//! Image coordinates are in pixels with the origin at the centre of the top-left pixel,
+//! `x` to the right (column) and `y` down (row).
+
+/// A detected interest point.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Keypoint {
+    /// Column, pixels (sub-pixel).
+    pub x: f32,
+    /// Row, pixels (sub-pixel).
+    pub y: f32,
+    /// Characteristic scale, pixels (for SURF `1.2 * filter size / 9`; for a
+    /// single-scale corner the patch radius).
+    pub scale: f32,
+    /// Orientation, radians, counter-clockwise from the `+x` axis in image coordinates;
+    /// 0 for upright (non-oriented) features.
+    pub angle: f32,
+    /// Detector response: larger is stronger.
+    pub response: f32,
+    /// Pyramid octave (or 0 for single-scale detectors).
+    pub octave: u8,
+}
+
+/// A feature descriptor with a distance between two of them (smaller is more alike).
+pub trait Descriptor: Clone + Send + Sync + 'static {
+    /// Distance between descriptors: Hamming distance for binary descriptors, Euclidean
+    /// for real-valued ones.
+    fn distance(&self, other: &Self) -> f32;
+}
+
+/// A 256-bit binary descriptor (ORB/BRIEF style); distance = Hamming.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct BinaryDescriptor(pub [u8; 32]);
+
+impl Descriptor for BinaryDescriptor {
+    #[inline]
+    fn distance(&self, other: &Self) -> f32 {
+        self.0
+            .iter()
+            .zip(&other.0)
+            .map(|(a, b)| (a ^ b).count_ones())
+            .sum::<u32>() as f32
+    }
+}
+
+/// A 64-dimensional real descriptor (SURF), unit length; distance = Euclidean.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FloatDescriptor64(pub [f32; 64]);
+
+impl Descriptor for FloatDescriptor64 {
+    #[inline]
+    fn distance(&self, other: &Self) -> f32 {
+        self.0
+            .iter()
+            .zip(&other.0)
+            .map(|(a, b)| (a - b) * (a - b))
+            .sum::<f32>()
+            .sqrt()
+    }
+}
+
+/// Keypoints and their descriptors, index-aligned.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Features<D> {
+    /// The keypoints.
+    pub keypoints: Vec<Keypoint>,
+    /// `descriptors[i]` describes `keypoints[i]`.
+    pub descriptors: Vec<D>,
+}
+
+impl<D> Features<D> {
+    /// Number of features.
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.keypoints.len()
+    }
+
+    /// True when there are none.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.keypoints.is_empty()
+    }
+}
+
+/// A borrowed 8-bit grayscale image, row-major, `width * height` bytes.
+#[derive(Debug, Clone, Copy)]
+pub struct GrayView<'a> {
+    /// Width, pixels.
+    pub width: usize,
+    /// Height, pixels.
+    pub height: usize,
+    /// Pixels, row-major: pixel `(x, y)` is `data[y * width + x]`.
+    pub data: &'a [u8],
+}
+
+/// Detects and describes features in a grayscale image.
+pub trait FeatureExtractor: Send + Sync {
+    /// The descriptor this extractor produces.
+    type Descriptor: Descriptor;
+
+    /// Short name (`surf`, `upright-surf`, `orb`).
+    fn name(&self) -> &'static str;
+
+    /// Detects and describes features. Deterministic: one image, one answer.
+    fn extract(&self, image: GrayView<'_>) -> Features<Self::Descriptor>;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn distances() {
+        let a = BinaryDescriptor([0u8; 32]);
+        let mut b = a;
+        b.0[3] = 0b1011;
+        assert_eq!(a.distance(&b), 3.0);
+        let mut x = FloatDescriptor64([0.0; 64]);
+        let mut y = x;
+        x.0[0] = 3.0;
+        y.0[1] = 4.0;
+        assert_eq!(x.distance(&y), 5.0);
+    }
+}
