@@ -10,6 +10,7 @@
 pub mod camera;
 pub mod error;
 pub mod outliers;
+pub mod plots;
 pub mod scenario;
 
 pub use camera::Pinhole;
@@ -27,3 +28,9 @@ pub use estimators::{EstimatorEntry, default_estimators, oracle_threshold};
 pub use experiment::Experiment;
 pub use metrics::RunRecord;
 pub use runner::run_experiment;
+pub mod report;
+pub mod runs_csv;
+pub mod simulate;
+pub mod stats;
+
+pub use simulate::{SimOptions, SimOutcome, simulate};

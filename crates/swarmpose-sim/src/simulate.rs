@@ -1,0 +1,175 @@
+//! The whole job behind `swarmpose simulate`: check the settings and folders, optionally
+//! export the scenarios, run every estimator with a progress bar, write `runs.csv`,
+//! `summary.md` and the figures.
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use rayon::prelude::*;
+
+use crate::error::SimError;
+use crate::estimators::EstimatorEntry;
+use crate::experiment::Experiment;
+use crate::export::{scenario_name, write_scenario};
+use crate::metrics::RunRecord;
+use crate::output::{ensure_writable_dir, write_file};
+use crate::plots::write_figures;
+use crate::report::{console_summary, summary_markdown};
+use crate::runner::run_experiment;
+use crate::runs_csv::runs_csv;
+use crate::stats::Summary;
+
+/// Default output folder.
+pub const DEFAULT_OUT: &str = "out/simulate";
+
+/// Settings of a simulation job.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SimOptions {
+    /// The grid.
+    pub experiment: Experiment,
+    /// Where `runs.csv`, `summary.md` and the figures go (created).
+    pub out_dir: PathBuf,
+    /// Also write every scenario as CSV + truth JSON here.
+    pub export_dir: Option<PathBuf>,
+    /// Worker threads (`None`: rayon's default, one per core).
+    pub threads: Option<usize>,
+    /// Show a progress bar on standard error (hidden when it is not a terminal).
+    pub progress: bool,
+}
+
+impl Default for SimOptions {
+    fn default() -> Self {
+        Self {
+            experiment: Experiment::default(),
+            out_dir: PathBuf::from(DEFAULT_OUT),
+            export_dir: None,
+            threads: None,
+            progress: true,
+        }
+    }
+}
+
+/// What a job produced.
+#[derive(Debug, Clone)]
+pub struct SimOutcome {
+    /// Every run.
+    pub rows: Vec<RunRecord>,
+    /// The aggregates.
+    pub summary: Summary,
+    /// Files written, in order.
+    pub files: Vec<PathBuf>,
+    /// The short table for the terminal.
+    pub console: String,
+    /// Wall time of the estimation phase.
+    pub wall: Duration,
+    /// Threads used.
+    pub threads: usize,
+}
+
+impl SimOptions {
+    /// Checks the settings and that the folders can be written, creating them.
+    ///
+    /// # Errors
+    /// [`SimError::InvalidConfig`] or [`SimError::Io`].
+    pub fn check(&self) -> Result<(), SimError> {
+        self.experiment.validate()?;
+        if self.threads == Some(0) {
+            return Err(SimError::InvalidConfig("threads must be at least 1".into()));
+        }
+        ensure_writable_dir(&self.out_dir)?;
+        if let Some(dir) = &self.export_dir {
+            ensure_writable_dir(dir)?;
+        }
+        Ok(())
+    }
+}
+
+fn bar(len: usize, show: bool, message: &str) -> ProgressBar {
+    let target = if show {
+        ProgressDrawTarget::stderr()
+    } else {
+        ProgressDrawTarget::hidden()
+    };
+    let pb = ProgressBar::with_draw_target(Some(len as u64), target);
+    if let Ok(style) = ProgressStyle::with_template(
+        "{msg} [{elapsed_precise}] {wide_bar} {pos}/{len} scenarios (eta {eta})",
+    ) {
+        pb.set_style(style);
+    }
+    pb.set_message(message.to_owned());
+    pb
+}
+
+/// Writes every scenario of the experiment into `dir`.
+fn export_all(exp: &Experiment, dir: &Path, show: bool) -> Result<(), SimError> {
+    let jobs: Vec<(f64, f64, usize)> = exp
+        .noise_levels
+        .iter()
+        .flat_map(|&n| {
+            exp.fractions
+                .iter()
+                .flat_map(move |&f| (0..exp.runs).map(move |r| (n, f, r)))
+        })
+        .collect();
+    let pb = bar(jobs.len(), show, "export");
+    jobs.par_iter().try_for_each(|&(noise, f, run)| {
+        let s = exp.scene.scenario(exp.run_seed(run), noise, f, exp.mode)?;
+        write_scenario(dir, &scenario_name(exp.mode, noise, f, run), &s)?;
+        pb.inc(1);
+        Ok::<(), SimError>(())
+    })?;
+    pb.finish_and_clear();
+    Ok(())
+}
+
+/// Runs the job (see the module documentation) with `estimators`.
+///
+/// # Errors
+/// Bad settings or unwritable folders before any work ([`SimOptions::check`]); write or
+/// plot failures after.
+pub fn simulate(opts: &SimOptions, estimators: &[EstimatorEntry]) -> Result<SimOutcome, SimError> {
+    opts.check()?;
+    if estimators.is_empty() {
+        return Err(SimError::InvalidConfig("no estimator to run".into()));
+    }
+    let mut builder = rayon::ThreadPoolBuilder::new();
+    if let Some(n) = opts.threads {
+        builder = builder.num_threads(n);
+    }
+    let pool = builder
+        .build()
+        .map_err(|e| SimError::ThreadPool(e.to_string()))?;
+    let exp = &opts.experiment;
+    let (rows, wall) = pool.install(|| {
+        if let Some(dir) = &opts.export_dir {
+            export_all(exp, dir, opts.progress)?;
+        }
+        let pb = bar(exp.scenarios(), opts.progress, "simulate");
+        let start = Instant::now();
+        let rows = run_experiment(exp, estimators, &|| pb.inc(1))?;
+        pb.finish_and_clear();
+        Ok::<_, SimError>((rows, start.elapsed()))
+    })?;
+    let threads = pool.current_num_threads();
+    let summary = Summary::new(exp, &rows);
+    let mut files = Vec::new();
+    let csv = opts.out_dir.join("runs.csv");
+    write_file(&csv, runs_csv(&rows))?;
+    files.push(csv);
+    let md = opts.out_dir.join("summary.md");
+    write_file(
+        &md,
+        summary_markdown(exp, &summary, wall.as_secs_f64(), threads),
+    )?;
+    files.push(md);
+    files.extend(write_figures(&summary, &opts.out_dir)?);
+    Ok(SimOutcome {
+        console: console_summary(&summary),
+        rows,
+        summary,
+        files,
+        wall,
+        threads,
+    })
+}
