@@ -9,3 +9,4 @@
 #![warn(clippy::unwrap_used)]
 
 pub mod features;
+pub mod surf;

@@ -1,0 +1,386 @@
+//! Fast-Hessian detector: box-filter approximations of the Hessian over octaves and
+//! scales, 3×3×3 non-maximum suppression and quadratic sub-pixel/sub-scale refinement.
+//!
+//! At a point `x` and scale `σ` the Hessian of the Gaussian-smoothed image is
+//!
+//! ```text
+//! H(x, σ) = | Lxx  Lxy |
+//!           | Lxy  Lyy |,   Lab = ∂²(G_σ ∗ I)/∂a∂b.
+//! ```
+//!
+//! SURF replaces the second-order Gaussian derivatives by box filters of size `L × L`
+//! (`L = 9` approximates `σ = 1.2`, so `σ = 1.2 · L / 9`), evaluated in constant time on
+//! the integral image. With lobe length `l = L / 3`:
+//!
+//! * `Dyy`: three stacked `(2l − 1) × l` lobes weighted `+1, −2, +1` (`Dxx` transposed);
+//! * `Dxy`: four `l × l` lobes in the quadrants around the centre, `+1` where `x·y > 0`
+//!   and `−1` elsewhere, separated by a one-pixel cross.
+//!
+//! Responses are divided by the filter area `L²` (and intensities by 255) so that they are
+//! comparable across scales, and the blob response is the approximated determinant
+//!
+//! ```text
+//! det(H_approx) = Dxx · Dyy − (0.9 · Dxy)²,
+//! ```
+//!
+//! where 0.9 ≈ ‖Lxy‖_F ‖Dyy‖_F / (‖Lyy‖_F ‖Dxy‖_F) balances the box approximation. The
+//! sign of the trace `Dxx + Dyy` (the Laplacian) tells bright blobs on a dark background
+//! (negative) from dark blobs on a bright one (positive).
+//!
+//! The box filters are not Gaussian derivatives: `Dyy` changes sign at `±L/6` where
+//! `∂²G_σ/∂y²` does at `±σ = ±0.133 L`. As a consequence, with the area normalisation, an
+//! isotropic Gaussian blob of standard deviation `σ_b` gives its strongest response at
+//! `L ≈ 5.04 σ_b` (computed in closed form with error functions for the continuous
+//! filters, and observed on sampled blobs), i.e. at `s = 1.2 L / 9 ≈ 0.67 σ_b` rather than
+//! at `s = σ_b` as scale-normalised Gaussian derivatives would. Scale covariance is
+//! unaffected: the factor is the same at every scale.
+//!
+//! Octave `o` (from 0) holds `intervals + 2` filters of sizes
+//! `L(o, i) = 3 · (2^(o+1) · (i + 1) + 1)` — 9, 15, 21, 27; 15, 27, 39, 51; 27, 51, 75, 99;
+//! … — sampled every `step · 2^o` pixels. Maxima are searched in the inner `intervals`
+//! layers of each octave.
+
+use super::integral::IntegralImage;
+
+/// Filter size `L` of layer `layer` (0-based, `0..intervals + 2`) in octave `octave`:
+/// `3 · (2^(octave+1) · (layer + 1) + 1)`.
+#[must_use]
+pub(crate) fn filter_size(octave: usize, layer: usize) -> usize {
+    3 * ((2usize << octave) * (layer + 1) + 1)
+}
+
+/// One scale of the detector: `det(H_approx)` and the Laplacian sign on a sampling grid.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct ResponseLayer {
+    /// Filter size `L`, pixels.
+    pub filter: usize,
+    /// Sampling step, pixels: sample `(c, r)` is pixel `(c · step, r · step)`.
+    pub step: usize,
+    /// Grid columns.
+    pub cols: usize,
+    /// Grid rows.
+    pub rows: usize,
+    /// Row-major `det(H_approx)`; 0 where the filter does not fit inside the image.
+    pub det: Vec<f32>,
+    /// Row-major `Dxx + Dyy > 0`.
+    pub laplacian_positive: Vec<bool>,
+}
+
+impl ResponseLayer {
+    /// Sets the geometry and computes every response.
+    pub fn compute(&mut self, integral: &IntegralImage, filter: usize, step: usize) {
+        let (w, h) = (integral.width(), integral.height());
+        self.filter = filter;
+        self.step = step;
+        self.cols = w.div_ceil(step);
+        self.rows = h.div_ceil(step);
+        let n = self.cols * self.rows;
+        self.det.clear();
+        self.det.resize(n, 0.0);
+        self.laplacian_positive.clear();
+        self.laplacian_positive.resize(n, false);
+
+        let l = filter / 3;
+        let r = (filter - 1) / 2;
+        if filter > w || filter > h {
+            return;
+        }
+        let stride = integral.stride();
+        let at = |u: usize, v: usize| v * stride + u;
+        // Box corners relative to the top-left corner of the filter window.
+        let big = 2 * l - 1;
+        let yy_whole = (at(r + 1 - l, 0), filter * stride, big);
+        let yy_mid = (at(r + 1 - l, r - (l - 1) / 2), l * stride, big);
+        let xx_whole = (at(0, r + 1 - l), big * stride, filter);
+        let xx_mid = (at(r - (l - 1) / 2, r + 1 - l), big * stride, l);
+        let lobe = l * stride;
+        let q_tl = at(r - l, r - l);
+        let q_tr = at(r + 1, r - l);
+        let q_bl = at(r - l, r + 1);
+        let q_br = at(r + 1, r + 1);
+        let sum = |base: usize, b: (usize, usize, usize)| -> i64 {
+            i64::from(integral.box_sum_at(base + b.0, b.1, b.2))
+        };
+        let norm = 1.0 / (255.0 * (filter * filter) as f32);
+
+        let c_lo = r.div_ceil(step);
+        let r_lo = c_lo;
+        // Last valid sample: c · step + r ≤ w − 1.
+        let c_hi = (w - 1 - r) / step;
+        let r_hi = (h - 1 - r) / step;
+        for row in r_lo..=r_hi {
+            let y = row * step;
+            let row_base = (y - r) * stride;
+            let out = row * self.cols;
+            for col in c_lo..=c_hi {
+                let base = row_base + col * step - r;
+                let dyy = (sum(base, yy_whole) - 3 * sum(base, yy_mid)) as f32 * norm;
+                let dxx = (sum(base, xx_whole) - 3 * sum(base, xx_mid)) as f32 * norm;
+                let tl = integral.box_sum_at(base + q_tl, lobe, l);
+                let tr = integral.box_sum_at(base + q_tr, lobe, l);
+                let bl = integral.box_sum_at(base + q_bl, lobe, l);
+                let br = integral.box_sum_at(base + q_br, lobe, l);
+                let dxy = ((i64::from(tl) + i64::from(br)) - (i64::from(tr) + i64::from(bl)))
+                    as f32
+                    * norm;
+                let det = dxx * dyy - 0.81 * dxy * dxy;
+                self.det[out + col] = det;
+                self.laplacian_positive[out + col] = dxx + dyy > 0.0;
+            }
+        }
+    }
+
+    /// Response at grid position `(col, row)`; the caller keeps it inside the grid.
+    #[inline]
+    fn at(&self, col: usize, row: usize) -> f32 {
+        self.det[row * self.cols + col]
+    }
+
+    /// Grid range `[lo, hi]` of columns (and rows) where this filter lies inside the
+    /// image, or `None` when it fits nowhere.
+    fn valid_range(&self, extent: usize) -> Option<(usize, usize)> {
+        let r = (self.filter - 1) / 2;
+        if self.filter > extent {
+            return None;
+        }
+        let lo = r.div_ceil(self.step);
+        let hi = (extent - 1 - r) / self.step;
+        (lo <= hi).then_some((lo, hi))
+    }
+}
+
+/// A refined detection in image coordinates.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Detection {
+    /// Column, pixels.
+    pub x: f32,
+    /// Row, pixels.
+    pub y: f32,
+    /// `s = 1.2 · L / 9` at the interpolated filter size `L`.
+    pub scale: f32,
+    /// Interpolated `det(H_approx)`.
+    pub response: f32,
+    /// `Dxx + Dyy > 0` at the maximum (a dark blob on a brighter background).
+    pub laplacian_positive: bool,
+    /// Octave of the maximum.
+    pub octave: u8,
+}
+
+/// Detects scale-space maxima of `det(H_approx)` above `threshold` and appends them to
+/// `out`. `layers` is scratch space reused across octaves (and calls).
+pub(crate) fn detect(
+    integral: &IntegralImage,
+    octaves: usize,
+    intervals: usize,
+    initial_step: usize,
+    threshold: f32,
+    layers: &mut Vec<ResponseLayer>,
+    out: &mut Vec<Detection>,
+) {
+    let per_octave = intervals + 2;
+    if layers.len() < per_octave {
+        layers.resize_with(per_octave, ResponseLayer::default);
+    }
+    let (w, h) = (integral.width(), integral.height());
+    for octave in 0..octaves.min(24) {
+        let step = initial_step.max(1) << octave;
+        let top = filter_size(octave, per_octave - 1);
+        if top + 2 * step > w || top + 2 * step > h {
+            break;
+        }
+        for (layer, slot) in layers.iter_mut().take(per_octave).enumerate() {
+            slot.compute(integral, filter_size(octave, layer), step);
+        }
+        // The largest filter bounds where all three scales of a 3×3×3 block exist.
+        let (Some((c_lo, c_hi)), Some((r_lo, r_hi))) = (
+            layers[per_octave - 1].valid_range(w),
+            layers[per_octave - 1].valid_range(h),
+        ) else {
+            break;
+        };
+        if c_hi < c_lo + 2 || r_hi < r_lo + 2 {
+            break;
+        }
+        for mid in 1..=intervals {
+            let (below, centre, above) = (&layers[mid - 1], &layers[mid], &layers[mid + 1]);
+            for row in r_lo + 1..r_hi {
+                for col in c_lo + 1..c_hi {
+                    let v = centre.at(col, row);
+                    if v <= threshold || !is_local_max(v, below, centre, above, col, row) {
+                        continue;
+                    }
+                    if let Some(d) = refine(below, centre, above, col, row, octave) {
+                        out.push(d);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// True when `v = centre(col, row)` is strictly larger than its 26 neighbours.
+#[inline]
+fn is_local_max(
+    v: f32,
+    below: &ResponseLayer,
+    centre: &ResponseLayer,
+    above: &ResponseLayer,
+    col: usize,
+    row: usize,
+) -> bool {
+    for layer in [below, centre, above] {
+        for rr in row - 1..=row + 1 {
+            for cc in col - 1..=col + 1 {
+                let same = std::ptr::eq(layer, centre) && rr == row && cc == col;
+                if !same && layer.at(cc, rr) >= v {
+                    return false;
+                }
+            }
+        }
+    }
+    true
+}
+
+/// Fits a 3D quadratic to the 3×3×3 block and moves to its extremum:
+///
+/// ```text
+/// D(x + δ) ≈ D + gᵀδ + ½ δᵀHδ,   δ* = −H⁻¹ g,   D(δ*) = D + ½ gᵀδ*,
+/// ```
+///
+/// with `g` and `H` from central differences over (column, row, layer). Returns `None`
+/// when `H` is singular or any component of `δ*` exceeds 0.5 (the extremum belongs to a
+/// neighbouring sample).
+fn refine(
+    below: &ResponseLayer,
+    centre: &ResponseLayer,
+    above: &ResponseLayer,
+    col: usize,
+    row: usize,
+    octave: usize,
+) -> Option<Detection> {
+    let c = |l: &ResponseLayer, dc: isize, dr: isize| -> f64 {
+        f64::from(l.at(col.wrapping_add_signed(dc), row.wrapping_add_signed(dr)))
+    };
+    let v = c(centre, 0, 0);
+    let g = nalgebra::Vector3::new(
+        (c(centre, 1, 0) - c(centre, -1, 0)) / 2.0,
+        (c(centre, 0, 1) - c(centre, 0, -1)) / 2.0,
+        (c(above, 0, 0) - c(below, 0, 0)) / 2.0,
+    );
+    let dxx = c(centre, 1, 0) + c(centre, -1, 0) - 2.0 * v;
+    let dyy = c(centre, 0, 1) + c(centre, 0, -1) - 2.0 * v;
+    let dss = c(above, 0, 0) + c(below, 0, 0) - 2.0 * v;
+    let dxy = (c(centre, 1, 1) - c(centre, -1, 1) - c(centre, 1, -1) + c(centre, -1, -1)) / 4.0;
+    let dxs = (c(above, 1, 0) - c(above, -1, 0) - c(below, 1, 0) + c(below, -1, 0)) / 4.0;
+    let dys = (c(above, 0, 1) - c(above, 0, -1) - c(below, 0, 1) + c(below, 0, -1)) / 4.0;
+    let hessian = nalgebra::Matrix3::new(dxx, dxy, dxs, dxy, dyy, dys, dxs, dys, dss);
+    let offset = -(hessian.try_inverse()? * g);
+    if offset.iter().any(|o| !o.is_finite() || o.abs() > 0.5) {
+        return None;
+    }
+    let step = centre.step as f64;
+    let filter_step = (above.filter - centre.filter) as f64;
+    let filter = centre.filter as f64 + offset.z * filter_step;
+    Some(Detection {
+        x: ((col as f64 + offset.x) * step) as f32,
+        y: ((row as f64 + offset.y) * step) as f32,
+        scale: (1.2 * filter / 9.0) as f32,
+        response: (v + 0.5 * g.dot(&offset)) as f32,
+        laplacian_positive: centre.laplacian_positive[row * centre.cols + col],
+        octave: octave as u8,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::features::GrayView;
+    use crate::surf::test_images::gaussian_blob;
+
+    #[test]
+    fn filter_sizes_follow_the_paper() {
+        let sizes = |o| (0..4).map(|i| filter_size(o, i)).collect::<Vec<_>>();
+        assert_eq!(sizes(0), [9, 15, 21, 27]);
+        assert_eq!(sizes(1), [15, 27, 39, 51]);
+        assert_eq!(sizes(2), [27, 51, 75, 99]);
+        assert_eq!(sizes(3), [51, 99, 147, 195]);
+    }
+
+    /// `det(H_approx)` at the image centre for filter size `filter`.
+    fn centre_response(img: &[u8], n: usize, filter: usize) -> (f32, bool) {
+        let ii = IntegralImage::new(GrayView {
+            width: n,
+            height: n,
+            data: img,
+        });
+        let mut layer = ResponseLayer::default();
+        layer.compute(&ii, filter, 1);
+        let i = (n / 2) * layer.cols + n / 2;
+        (layer.det[i], layer.laplacian_positive[i])
+    }
+
+    #[test]
+    fn blob_response_peaks_near_the_matching_filter_size() {
+        let n = 161;
+        for sigma in [2.5f32, 4.0, 6.0] {
+            let img = gaussian_blob(n, n, sigma, true);
+            let (best, _) = (9..=99)
+                .step_by(6)
+                .map(|f| (f, centre_response(&img, n, f).0))
+                .fold((0, f32::MIN), |a, b| if b.1 > a.1 { b } else { a });
+            // The continuous box filters peak at L = 5.04 σ (s = 0.67 σ); the grid of
+            // sizes is 6 pixels apart.
+            let predicted = 5.04 * sigma;
+            assert!(
+                (best as f32 - predicted).abs() <= 3.5,
+                "sigma {sigma}: peak at L = {best}, box-filter prediction {predicted}"
+            );
+            // The Gaussian-derivative rule L = 9σ / 1.2 overestimates it by a third.
+            let gaussian_rule = sigma * 9.0 / 1.2;
+            assert!(best as f32 > 0.6 * gaussian_rule && (best as f32) < gaussian_rule);
+        }
+    }
+
+    #[test]
+    fn laplacian_sign_tells_dark_from_bright_blobs() {
+        let n = 81;
+        let (det_bright, lap_bright) = centre_response(&gaussian_blob(n, n, 3.0, true), n, 21);
+        let (det_dark, lap_dark) = centre_response(&gaussian_blob(n, n, 3.0, false), n, 21);
+        assert!(det_bright > 0.0 && det_dark > 0.0);
+        assert!(!lap_bright, "bright blob: negative trace");
+        assert!(lap_dark, "dark blob: positive trace");
+    }
+
+    #[test]
+    fn detector_finds_a_blob_at_its_position_and_scale() {
+        let n = 161;
+        for sigma in [3.0f32, 5.0] {
+            let img = gaussian_blob(n, n, sigma, false);
+            let ii = IntegralImage::new(GrayView {
+                width: n,
+                height: n,
+                data: &img,
+            });
+            let mut found = Vec::new();
+            detect(&ii, 4, 2, 1, 1e-4, &mut Vec::new(), &mut found);
+            let best = found
+                .iter()
+                .max_by(|a, b| a.response.total_cmp(&b.response))
+                .copied();
+            let Some(best) = best else {
+                panic!("no detection for sigma {sigma}");
+            };
+            let c = (n / 2) as f32;
+            assert!(
+                (best.x - c).abs() < 1.0 && (best.y - c).abs() < 1.0,
+                "{best:?}"
+            );
+            // s = 1.2 L / 9 at the peak L ≈ 5.04 σ: s ≈ 0.67 σ.
+            assert!(
+                (best.scale / (0.672 * sigma) - 1.0).abs() < 0.2,
+                "sigma {sigma}: {best:?}"
+            );
+            assert!(best.laplacian_positive);
+        }
+    }
+}

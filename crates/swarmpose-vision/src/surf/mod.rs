@@ -1,0 +1,265 @@
+//! SURF: Speeded-Up Robust Features (Bay, Tuytelaars & Van Gool, ECCV 2006; Bay, Ess,
+//! Tuytelaars & Van Gool, CVIU 110(3), 2008), written from the published algorithm.
+//!
+//! The pipeline, one submodule per stage:
+//!
+//! 1. [`integral`]: the integral image, so that any box sum costs four look-ups;
+//! 2. `hessian`: the fast-Hessian detector — box-filter approximations `Dxx, Dyy, Dxy` of
+//!    the second-order Gaussian derivatives over octaves and scales, the blob response
+//!    `det(H) = Dxx·Dyy − (0.9·Dxy)²`, a threshold, 3×3×3 non-maximum suppression and a
+//!    3D quadratic fit for sub-pixel, sub-scale positions;
+//! 3. `orientation`: the dominant direction of Haar wavelet responses in a disc of
+//!    radius `6s` (skipped by upright SURF, U-SURF);
+//! 4. `descriptor`: 4 × 4 subregions of a `20s` window, each summarised by
+//!    `(Σdx, Σ|dx|, Σdy, Σ|dy|)`, unit-normalised into 64 numbers.
+//!
+//! A keypoint's scale is `s = 1.2 · L / 9` for the (interpolated) filter size `L`, i.e.
+//! the `σ` of the Gaussian the box filters approximate. The sign of the Laplacian
+//! `Dxx + Dyy` at the detection is kept beside the features ([`SurfFeatures`]): features
+//! of opposite sign (a dark blob and a bright blob) never match, which halves the matching
+//! work and removes some wrong matches.
+
+mod descriptor;
+mod hessian;
+pub mod integral;
+mod orientation;
+#[cfg(test)]
+mod test_images;
+
+use crate::features::{FeatureExtractor, Features, FloatDescriptor64, GrayView, Keypoint};
+use integral::IntegralImage;
+
+/// Parameters of [`Surf`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SurfConfig {
+    /// Minimum blob response `det(H_approx) = Dxx·Dyy − (0.9·Dxy)²`, with the filter
+    /// responses normalised by the filter area and intensities scaled to `[0, 1]`.
+    /// Default `0.0004` (comparable to a threshold of ≈ 26 with 0–255 intensities, and to
+    /// OpenCV's `hessianThreshold` ≈ 26); lower finds more, weaker features.
+    pub hessian_threshold: f32,
+    /// Number of octaves (each doubles the filter-size increment and the sampling step).
+    /// Default 4: filter sizes up to 195 pixels, scales `s` from 2.0 to ≈ 20 pixels.
+    /// Octaves whose filters do not fit in the image are skipped.
+    pub octaves: usize,
+    /// Scale layers searched for maxima per octave; each octave computes
+    /// `intervals + 2` filter sizes. Default 2 (filters 9, 15, 21, 27 in octave 0). At
+    /// least 1.
+    pub intervals: usize,
+    /// Sampling step of the first octave, pixels (doubled per octave). Default 1; 2 is
+    /// about twice as fast and loses some of the smallest features. At least 1.
+    pub initial_step: usize,
+    /// Upright SURF (U-SURF): no orientation assignment, every `angle` is 0. Faster, and
+    /// more distinctive when the camera does not roll (as in road sequences), but not
+    /// rotation invariant. Default `false`.
+    pub upright: bool,
+    /// Keep at most this many features, the strongest responses first; `None` (default)
+    /// keeps every detection above the threshold.
+    pub max_features: Option<usize>,
+}
+
+impl Default for SurfConfig {
+    fn default() -> Self {
+        Self {
+            hessian_threshold: 0.0004,
+            octaves: 4,
+            intervals: 2,
+            initial_step: 1,
+            upright: false,
+            max_features: None,
+        }
+    }
+}
+
+impl SurfConfig {
+    /// The default configuration with `upright = true` (U-SURF).
+    #[must_use]
+    pub fn upright() -> Self {
+        Self {
+            upright: true,
+            ..Self::default()
+        }
+    }
+}
+
+/// SURF features with the sign of the Laplacian of each one.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SurfFeatures {
+    /// Keypoints and unit-length 64-dimensional descriptors, strongest response first.
+    pub features: Features<FloatDescriptor64>,
+    /// `laplacian_positive[i]` is `Dxx + Dyy > 0` at keypoint `i`: true for a dark blob
+    /// on a brighter background, false for a bright blob on a darker one.
+    pub laplacian_positive: Vec<bool>,
+}
+
+impl Default for SurfFeatures {
+    fn default() -> Self {
+        Self {
+            features: Features {
+                keypoints: Vec::new(),
+                descriptors: Vec::new(),
+            },
+            laplacian_positive: Vec::new(),
+        }
+    }
+}
+
+impl SurfFeatures {
+    /// True when feature `i` of `self` and feature `j` of `other` have the same
+    /// Laplacian sign, the necessary condition for them to match (false when an index is
+    /// out of range).
+    #[must_use]
+    pub fn same_laplacian(&self, i: usize, other: &Self, j: usize) -> bool {
+        match (
+            self.laplacian_positive.get(i),
+            other.laplacian_positive.get(j),
+        ) {
+            (Some(a), Some(b)) => a == b,
+            _ => false,
+        }
+    }
+}
+
+/// The SURF detector and descriptor; see the module documentation.
+///
+/// ```
+/// use swarmpose_vision::features::{FeatureExtractor, GrayView};
+/// use swarmpose_vision::surf::{Surf, SurfConfig};
+///
+/// let (w, h) = (64, 64);
+/// let pixels: Vec<u8> = (0..w * h)
+///     .map(|k| {
+///         let (x, y) = ((k % w) as f32 - 32.0, (k / w) as f32 - 32.0);
+///         (40.0 + 180.0 * (-(x * x + y * y) / 18.0).exp()) as u8
+///     })
+///     .collect();
+/// let surf = Surf::new(SurfConfig::default());
+/// let found = surf.extract(GrayView { width: w, height: h, data: &pixels });
+/// assert!(found.keypoints.iter().any(|k| (k.x - 32.0).abs() < 1.0 && (k.y - 32.0).abs() < 1.0));
+/// ```
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Surf {
+    config: SurfConfig,
+}
+
+impl Surf {
+    /// A SURF extractor; `octaves`, `intervals` and `initial_step` below 1 are raised to 1.
+    #[must_use]
+    pub fn new(config: SurfConfig) -> Self {
+        Self {
+            config: SurfConfig {
+                octaves: config.octaves.max(1),
+                intervals: config.intervals.max(1),
+                initial_step: config.initial_step.max(1),
+                ..config
+            },
+        }
+    }
+
+    /// Upright SURF with the default parameters.
+    #[must_use]
+    pub fn upright() -> Self {
+        Self::new(SurfConfig::upright())
+    }
+
+    /// The configuration in use.
+    #[must_use]
+    pub fn config(&self) -> &SurfConfig {
+        &self.config
+    }
+
+    /// Detects keypoints (with orientations unless upright) without describing them,
+    /// strongest response first.
+    #[must_use]
+    pub fn detect(&self, image: GrayView<'_>) -> Vec<Keypoint> {
+        let integral = IntegralImage::new(image);
+        self.detect_in(&integral)
+            .into_iter()
+            .map(|(keypoint, _)| keypoint)
+            .collect()
+    }
+
+    /// Detects and describes features and keeps the Laplacian sign of each.
+    #[must_use]
+    pub fn extract_with_laplacian(&self, image: GrayView<'_>) -> SurfFeatures {
+        let integral = IntegralImage::new(image);
+        let detected = self.detect_in(&integral);
+        let mut out = SurfFeatures {
+            features: Features {
+                keypoints: Vec::with_capacity(detected.len()),
+                descriptors: Vec::with_capacity(detected.len()),
+            },
+            laplacian_positive: Vec::with_capacity(detected.len()),
+        };
+        for (k, laplacian_positive) in detected {
+            let d = descriptor::describe(&integral, k.x, k.y, k.scale, k.angle);
+            out.features.keypoints.push(k);
+            out.features.descriptors.push(d);
+            out.laplacian_positive.push(laplacian_positive);
+        }
+        out
+    }
+
+    /// Keypoints with their Laplacian signs, sorted, truncated and oriented.
+    fn detect_in(&self, integral: &IntegralImage) -> Vec<(Keypoint, bool)> {
+        let c = &self.config;
+        let mut found = Vec::new();
+        hessian::detect(
+            integral,
+            c.octaves,
+            c.intervals,
+            c.initial_step,
+            c.hessian_threshold,
+            &mut Vec::new(),
+            &mut found,
+        );
+        // Strongest first; ties broken by position so the order is deterministic.
+        found.sort_by(|a, b| {
+            b.response
+                .total_cmp(&a.response)
+                .then(a.y.total_cmp(&b.y))
+                .then(a.x.total_cmp(&b.x))
+                .then(a.scale.total_cmp(&b.scale))
+        });
+        if let Some(max) = c.max_features {
+            found.truncate(max);
+        }
+        found
+            .into_iter()
+            .map(|d| {
+                let angle = if c.upright {
+                    0.0
+                } else {
+                    orientation::orientation(integral, d.x, d.y, d.scale)
+                };
+                let keypoint = Keypoint {
+                    x: d.x,
+                    y: d.y,
+                    scale: d.scale,
+                    angle,
+                    response: d.response,
+                    octave: d.octave,
+                };
+                (keypoint, d.laplacian_positive)
+            })
+            .collect()
+    }
+}
+
+impl FeatureExtractor for Surf {
+    type Descriptor = FloatDescriptor64;
+
+    fn name(&self) -> &'static str {
+        if self.config.upright {
+            "upright-surf"
+        } else {
+            "surf"
+        }
+    }
+
+    fn extract(&self, image: GrayView<'_>) -> Features<FloatDescriptor64> {
+        self.extract_with_laplacian(image).features
+    }
+}
+
+#[cfg(test)]
+mod tests;
