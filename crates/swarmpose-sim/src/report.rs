@@ -137,30 +137,32 @@ pub fn summary_markdown(exp: &Experiment, s: &Summary, wall_s: f64, threads: usi
     out
 }
 
-/// The short table printed at the end: success rate and median position error per
-/// noise level.
+/// The short table printed at the end: per noise level, a row per outlier fraction and
+/// a column per estimator with its success rate and median position error.
 #[must_use]
 pub fn console_summary(s: &Summary) -> String {
     let mut out = String::new();
     for (i, noise) in s.noise_levels.iter().enumerate() {
         let _ = writeln!(
             out,
-            "noise {noise} m: success % | median position error (m)"
+            "noise {noise} m (threshold {:.4} m): success % / median position error (m)",
+            oracle_threshold(*noise)
         );
-        let _ = write!(out, "  {:<10}", "outliers");
-        for f in &s.fractions {
-            let _ = write!(out, " {:>15}", format!("{f}"));
+        let _ = write!(out, "  {:>8}", "outliers");
+        for name in &s.estimators {
+            let _ = write!(out, " {name:>17}");
         }
         out.push('\n');
-        for (e, name) in s.estimators.iter().enumerate() {
-            let _ = write!(out, "  {name:<10}");
-            for c in &s.cells[e][i] {
+        for (j, f) in s.fractions.iter().enumerate() {
+            let _ = write!(out, "  {f:>8}");
+            for e in 0..s.estimators.len() {
+                let c = &s.cells[e][i][j];
                 let v = format!(
-                    "{:>3} | {}",
+                    "{:>3} / {}",
                     pct(c.success_pct()),
                     fmt_value(c.position_m.median)
                 );
-                let _ = write!(out, " {v:>15}");
+                let _ = write!(out, " {v:>17}");
             }
             out.push('\n');
         }

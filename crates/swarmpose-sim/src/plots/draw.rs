@@ -47,6 +47,8 @@ pub struct Figure {
     pub y_floor: f64,
     /// Draw interquartile bands.
     pub bands: bool,
+    /// Label the top edge "no pose" (where runs without a pose are drawn).
+    pub no_pose_edge: bool,
     /// Footnote.
     pub note: String,
     /// The panels.
@@ -197,6 +199,16 @@ where
         .bold_line_style(BLACK.mix(0.12))
         .draw()
         .map_err(|e| plot_err(fig, e))?;
+    if fig.no_pose_edge {
+        let x0 = chart.x_range().start;
+        chart
+            .draw_series(std::iter::once(Text::new(
+                "no pose (top edge)",
+                (x0, top),
+                (FAMILY, 14).into_font().color(&BLACK.mix(0.6)),
+            )))
+            .map_err(|e| plot_err(fig, e))?;
+    }
     let floor = fig.y_floor;
     let clamp = |v: f64| {
         if v.is_infinite() {
