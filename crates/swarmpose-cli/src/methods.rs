@@ -11,7 +11,7 @@ use clap::{Args, ValueEnum};
 use swarmpose_core::pso::PsoConfig;
 use swarmpose_core::{
     Estimator, MsacConfig, MsacEstimator, PsoEstimator, PsoEstimatorConfig, PsoPaperConfig,
-    PsoPaperEstimator, SvdEstimator,
+    PsoPaperEstimator, SvdEstimator, Threshold,
 };
 
 use crate::error::CliError;
@@ -132,11 +132,15 @@ fn default_note<T: Display + PartialEq>(values: &[(&str, T)]) -> String {
 
 fn threshold_help() -> String {
     format!(
-        "Inlier threshold δ on |dst - (R src + t)|, metres, > 0; svd has none {}",
+        "Inlier threshold δ on |dst - (R src + t)|, metres, > 0; svd has none; pso \
+         estimates it from the data unless given {}",
         default_note(&[
-            ("pso", PsoEstimatorConfig::default().threshold_m),
-            ("pso-paper", PsoPaperConfig::default().threshold_m),
-            ("msac", MsacConfig::default().threshold_m),
+            ("pso", PsoEstimatorConfig::default().threshold.to_string()),
+            (
+                "pso-paper",
+                PsoPaperConfig::default().threshold_m.to_string()
+            ),
+            ("msac", MsacConfig::default().threshold_m.to_string()),
         ])
     )
 }
@@ -256,7 +260,9 @@ pub fn build(method: Method, options: &EstimatorOptions) -> Result<Box<dyn Estim
         Method::Pso => {
             reject(method, &msac)?;
             let mut config = PsoEstimatorConfig::default();
-            config.threshold_m = options.threshold.unwrap_or(config.threshold_m);
+            if let Some(d) = options.threshold {
+                config.threshold = Threshold::Fixed(d);
+            }
             config.pso = options.apply_pso(config.pso);
             config.seeded_particles = options.seeded_particles.unwrap_or(config.seeded_particles);
             Box::new(PsoEstimator::new(config))

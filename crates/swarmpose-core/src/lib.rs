@@ -45,7 +45,7 @@ pub use arun::{arun, arun_weighted};
 pub use error::{DegeneracyKind, PoseError};
 pub use estimators::{
     Diagnostics, Estimate, Estimator, MsacConfig, MsacEstimator, PsoEstimator, PsoEstimatorConfig,
-    PsoPaperConfig, PsoPaperEstimator, SvdEstimator,
+    PsoPaperConfig, PsoPaperEstimator, RunnerUp, SvdEstimator, Threshold,
 };
 pub use geometry::{Correspondences, MIN_CORRESPONDENCES};
 pub use rng::SeededRng;

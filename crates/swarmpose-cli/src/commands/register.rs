@@ -19,7 +19,9 @@ use crate::methods::{EstimatorOptions, Method, build};
 Output: one JSON object on standard output, one line: method, input, seed, \
 n_correspondences, rotation_wxyz ([w, x, y, z], w >= 0), translation ([x, y, z], metres), \
 inliers (0-based row indices), inlier_ratio, threshold_m (null for svd), final_cost (m^2), \
-residual_rms_m, iterations, cost_evaluations, elapsed_ms.
+residual_rms_m, iterations, cost_evaluations, elapsed_ms, ambiguous (a second motion \
+with at least half the support was found: pso only) and runner_up (its rotation_wxyz, \
+translation, n_inliers; null when none).
 
 Exit status: 0 on success; 1 when the estimator found no pose with enough support; \
 2 for bad options or bad input (unreadable file, malformed CSV, too few or degenerate \
@@ -60,7 +62,19 @@ struct Report<'a> {
     iterations: usize,
     cost_evaluations: u64,
     elapsed_ms: f64,
+    /// True when a second motion with comparable support was found (pso only).
+    ambiguous: bool,
+    /// That second motion, or null.
+    runner_up: Option<RunnerUpReport>,
     inliers: &'a [usize],
+}
+
+/// A second motion found among the left-over correspondences.
+#[derive(Debug, Serialize)]
+struct RunnerUpReport {
+    rotation_wxyz: [f64; 4],
+    translation: [f64; 3],
+    n_inliers: usize,
 }
 
 impl<'a> Report<'a> {
@@ -81,6 +95,15 @@ impl<'a> Report<'a> {
             iterations: d.iterations,
             cost_evaluations: d.cost_evaluations,
             elapsed_ms: d.elapsed.as_secs_f64() * 1e3,
+            ambiguous: e.is_ambiguous(),
+            runner_up: d.runner_up.as_ref().map(|r| {
+                let t = r.transform.translation.vector;
+                RunnerUpReport {
+                    rotation_wxyz: quaternion_wxyz(&r.transform.rotation),
+                    translation: [t.x, t.y, t.z],
+                    n_inliers: r.inliers.len(),
+                }
+            }),
             inliers: &e.inliers,
         }
     }

@@ -13,6 +13,28 @@ pub(crate) fn residual_sq(t: &Isometry3<f64>, s: &Point3<f64>, d: &Point3<f64>) 
     (d - t * s).norm_squared()
 }
 
+/// Inlier tolerance on `|dst - (R src + t)|`, metres: one δ for every correspondence, or
+/// one δ_i each (for example `3.4 σ_i` from a per-point noise level).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Tolerance<'a> {
+    /// The same δ for all.
+    Uniform(f64),
+    /// δ_i for correspondence `i`.
+    PerPoint(&'a [f64]),
+}
+
+impl Tolerance<'_> {
+    /// δ_i, metres.
+    #[inline]
+    #[must_use]
+    pub fn at(&self, i: usize) -> f64 {
+        match self {
+            Tolerance::Uniform(d) => *d,
+            Tolerance::PerPoint(v) => v[i],
+        }
+    }
+}
+
 /// Writes into `out` the indices whose residual is below `threshold_m` (metres).
 pub fn collect_inliers(
     data: &Correspondences,
@@ -20,14 +42,23 @@ pub fn collect_inliers(
     threshold_m: f64,
     out: &mut Vec<usize>,
 ) {
-    let thr2 = threshold_m * threshold_m;
+    collect_inliers_within(data, t, Tolerance::Uniform(threshold_m), out);
+}
+
+/// Writes into `out` the indices `i` whose residual is below δ_i.
+pub fn collect_inliers_within(
+    data: &Correspondences,
+    t: &Isometry3<f64>,
+    tol: Tolerance<'_>,
+    out: &mut Vec<usize>,
+) {
     out.clear();
     out.extend(
         data.src()
             .iter()
             .zip(data.dst())
             .enumerate()
-            .filter(|(_, (s, d))| residual_sq(t, s, d) < thr2)
+            .filter(|(i, (s, d))| residual_sq(t, s, d) < tol.at(*i).powi(2))
             .map(|(i, _)| i),
     );
 }
@@ -35,11 +66,21 @@ pub fn collect_inliers(
 /// The MSAC cost `Σ min(r_i^2, δ^2)` over all correspondences, m².
 #[must_use]
 pub fn truncated_cost(data: &Correspondences, t: &Isometry3<f64>, threshold_m: f64) -> f64 {
-    let thr2 = threshold_m * threshold_m;
+    truncated_cost_within(data, t, Tolerance::Uniform(threshold_m))
+}
+
+/// The MSAC cost with per-correspondence tolerances, `Σ min(r_i^2, δ_i^2)`, m².
+#[must_use]
+pub fn truncated_cost_within(
+    data: &Correspondences,
+    t: &Isometry3<f64>,
+    tol: Tolerance<'_>,
+) -> f64 {
     data.src()
         .iter()
         .zip(data.dst())
-        .map(|(s, d)| residual_sq(t, s, d).min(thr2))
+        .enumerate()
+        .map(|(i, (s, d))| residual_sq(t, s, d).min(tol.at(i).powi(2)))
         .sum()
 }
 
@@ -95,12 +136,29 @@ pub(crate) fn refine(
     max_rounds: usize,
     inliers: &mut Vec<usize>,
 ) -> Result<Isometry3<f64>, PoseError> {
-    collect_inliers(data, start, threshold_m, inliers);
+    refine_within(
+        data,
+        start,
+        Tolerance::Uniform(threshold_m),
+        max_rounds,
+        inliers,
+    )
+}
+
+/// [`refine`] with per-correspondence tolerances.
+pub(crate) fn refine_within(
+    data: &Correspondences,
+    start: &Isometry3<f64>,
+    tol: Tolerance<'_>,
+    max_rounds: usize,
+    inliers: &mut Vec<usize>,
+) -> Result<Isometry3<f64>, PoseError> {
+    collect_inliers_within(data, start, tol, inliers);
     check_support(data, inliers)?;
     let mut pose = arun_on(data, inliers)?;
     let mut next = Vec::with_capacity(data.len());
     for _ in 1..max_rounds {
-        collect_inliers(data, &pose, threshold_m, &mut next);
+        collect_inliers_within(data, &pose, tol, &mut next);
         if next == *inliers {
             break;
         }
@@ -112,7 +170,7 @@ pub(crate) fn refine(
         pose = arun_on(data, inliers)?;
     }
     // The returned inliers are those of the returned pose.
-    collect_inliers(data, &pose, threshold_m, inliers);
+    collect_inliers_within(data, &pose, tol, inliers);
     check_support(data, inliers)?;
     Ok(pose)
 }

@@ -15,10 +15,13 @@ use crate::error::PoseError;
 use crate::geometry::Correspondences;
 use crate::rng::{SeededRng, seeded};
 
-pub use consensus::{collect_inliers, residual_rms, truncated_cost};
+pub use consensus::{
+    Tolerance, collect_inliers, collect_inliers_within, residual_rms, truncated_cost,
+    truncated_cost_within,
+};
 pub use msac::{MsacConfig, MsacEstimator};
 pub use pso_paper::{PsoPaperConfig, PsoPaperEstimator};
-pub use pso_robust::{PsoEstimator, PsoEstimatorConfig};
+pub use pso_robust::{PsoEstimator, PsoEstimatorConfig, Threshold};
 pub use svd::SvdEstimator;
 
 /// Counters and timings of one estimation.
@@ -37,6 +40,19 @@ pub struct Diagnostics {
     pub threshold_m: Option<f64>,
     /// Wall-clock time of the estimation call.
     pub elapsed: Duration,
+    /// A second motion with comparable support, when the estimator looked for one and
+    /// found it: the answer is ambiguous (for example a moving object covering much of
+    /// the view).
+    pub runner_up: Option<RunnerUp>,
+}
+
+/// A second rigid motion found among the correspondences the estimate left over.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunnerUp {
+    /// Its motion, `dst ≈ R src + t`.
+    pub transform: Isometry3<f64>,
+    /// 0-based indices of its inliers, ascending.
+    pub inliers: Vec<usize>,
 }
 
 /// What an estimator returns.
@@ -51,6 +67,12 @@ pub struct Estimate {
 }
 
 impl Estimate {
+    /// True when a runner-up motion with comparable support was found.
+    #[must_use]
+    pub fn is_ambiguous(&self) -> bool {
+        self.diagnostics.runner_up.is_some()
+    }
+
     /// Fraction of the correspondences that are inliers, in `[0, 1]`.
     #[must_use]
     pub fn inlier_ratio(&self, total: usize) -> f64 {

@@ -133,6 +133,7 @@ impl Estimator for PsoPaperEstimator {
                 residual_rms_m: residual_rms(data, &transform, &inliers),
                 threshold_m: Some(cfg.threshold_m),
                 elapsed: start.elapsed(),
+                runner_up: None,
             },
             transform,
             inliers,

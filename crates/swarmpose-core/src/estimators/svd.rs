@@ -42,6 +42,7 @@ impl Estimator for SvdEstimator {
                 residual_rms_m: (cost / data.len() as f64).sqrt(),
                 threshold_m: None,
                 elapsed: start.elapsed(),
+                runner_up: None,
             },
             inliers,
         })

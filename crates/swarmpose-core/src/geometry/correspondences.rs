@@ -17,6 +17,7 @@ pub const MIN_CORRESPONDENCES: usize = 4;
 pub struct Correspondences {
     src: Vec<Point3<f64>>,
     dst: Vec<Point3<f64>>,
+    noise_sigma_m: Option<Vec<f64>>,
 }
 
 impl Correspondences {
@@ -40,7 +41,58 @@ impl Correspondences {
         }) {
             return Err(PoseError::NonFinite { index });
         }
-        Ok(Self { src, dst })
+        Ok(Self {
+            src,
+            dst,
+            noise_sigma_m: None,
+        })
+    }
+
+    /// Attaches a noise level per correspondence: `sigma[i]` is the standard deviation, in
+    /// metres per axis, of the residual `dst_i - (R src_i + t)` of a correct match (for
+    /// stereo, it grows with the square of the depth). Estimators that support it scale
+    /// their inlier test per point instead of using one threshold.
+    ///
+    /// # Errors
+    /// [`PoseError::LengthMismatch`] for a wrong length, [`PoseError::InvalidConfig`] for a
+    /// value that is not finite and positive.
+    pub fn with_noise_sigma(mut self, sigma: Vec<f64>) -> Result<Self, PoseError> {
+        if sigma.len() != self.src.len() {
+            return Err(PoseError::LengthMismatch {
+                src: self.src.len(),
+                dst: sigma.len(),
+            });
+        }
+        if let Some(i) = sigma.iter().position(|v| !(v.is_finite() && *v > 0.0)) {
+            return Err(PoseError::InvalidConfig(format!(
+                "noise sigma of correspondence {i} must be finite and > 0, got {}",
+                sigma[i]
+            )));
+        }
+        self.noise_sigma_m = Some(sigma);
+        Ok(self)
+    }
+
+    /// Per-correspondence noise σ_i (metres per axis), if attached.
+    #[must_use]
+    pub fn noise_sigma(&self) -> Option<&[f64]> {
+        self.noise_sigma_m.as_deref()
+    }
+
+    /// The correspondences at `indices`, in that order (noise levels included).
+    ///
+    /// # Panics
+    /// Never for indices below [`Correspondences::len`]; an index out of range panics.
+    #[must_use]
+    pub fn select(&self, indices: &[usize]) -> Self {
+        Self {
+            src: indices.iter().map(|&i| self.src[i]).collect(),
+            dst: indices.iter().map(|&i| self.dst[i]).collect(),
+            noise_sigma_m: self
+                .noise_sigma_m
+                .as_ref()
+                .map(|s| indices.iter().map(|&i| s[i]).collect()),
+        }
     }
 
     /// Builds from `(src, dst)` pairs.
@@ -116,6 +168,21 @@ mod tests {
             Correspondences::new(vec![inf], vec![p]),
             Err(PoseError::NonFinite { index: 0 })
         );
+    }
+
+    #[test]
+    fn noise_sigma_is_checked_and_selected() {
+        let p = Point3::origin();
+        let c = Correspondences::from_pairs(vec![(p, p); 3]).expect("valid");
+        assert!(c.clone().with_noise_sigma(vec![0.1; 2]).is_err());
+        assert!(c.clone().with_noise_sigma(vec![0.1, 0.0, 0.1]).is_err());
+        assert!(
+            c.clone()
+                .with_noise_sigma(vec![0.1, f64::NAN, 0.1])
+                .is_err()
+        );
+        let c = c.with_noise_sigma(vec![0.1, 0.2, 0.3]).expect("valid");
+        assert_eq!(c.select(&[2, 0]).noise_sigma(), Some(&[0.3, 0.1][..]));
     }
 
     #[test]

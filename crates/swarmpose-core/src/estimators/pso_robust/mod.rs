@@ -8,82 +8,127 @@
 //! a_k = s_i - s_j,   b_k = d_i - d_j,   e_k(R) = b_k - R a_k.
 //! ```
 //!
-//! For two inliers `|e_k(R_true)| < 2δ` whatever `t` is. The steps:
+//! For two correct matches `|e_k(R_true)| < δ_i + δ_j` whatever `t` is. The steps:
 //!
-//! 1. **Pairs.** Keep pairs whose lengths agree, `| |b_k| - |a_k| | < 2δ` (a rigid motion
-//!    keeps lengths; a random wrong match rarely does), and whose source length is at least
-//!    `min(5δ, extent/10)` (short pairs carry little rotation; `extent` is the largest
-//!    principal extent of the source points, so small scenes keep their pairs). All `n(n-1)/2` pairs are tested when that
-//!    fits `pair_budget`, otherwise random pairs until the budget is spent or `16 max_pairs`
-//!    consistent ones are found. At most `max_pairs` of the
-//!    consistent ones are scored.
+//! 1. **Consistency graph.** On at most `max_points` hypothesis points, keep the pairs whose
+//!    lengths agree, `| |b_k| - |a_k| | < δ_i + δ_j` (a rigid motion keeps lengths; a wrong
+//!    match rarely does) and whose source length is at least `min(5δ, extent/10)`. Rank the
+//!    pairs by their number of common neighbours (correct matches form a dense cluster) and
+//!    score the best `max_pairs` ([`graph`]).
 //! 2. **Swarm.** Particles are rotation vectors mapped to unit quaternions
 //!    ([`crate::geometry::rotation_from_particle`]). A particle's support is the number of
-//!    scored pairs with `|e_k| < 2δ`; the best has the most support, ties broken by the
-//!    lower truncated cost `Σ min(|e_k|², 4δ²)`. Part of the swarm starts at rotations
-//!    solved from 3-point minimal samples drawn from mutually consistent pairs.
+//!    scored pairs with `|e_k| < δ_i + δ_j`; the best particle has the most support, ties
+//!    broken by the lower truncated cost. Part of the swarm starts at rotations solved from
+//!    triangles of the graph (a top pair and a common neighbour).
 //! 3. **Translation vote.** With the best rotation `R`, each point proposes
-//!    `t_i = d_i - R s_i`; among the points taking part in most supporting pairs, the
-//!    proposal with the most others within `2δ` wins.
-//! 4. **SVD refinement.** Inliers are the points with `|d_i - (R s_i + t)| < δ`; Arun's SVD
-//!    refits them, repeated until the inlier set is stable. Fewer than 4 supporting features
-//!    is [`PoseError::InsufficientSupport`].
+//!    `t_i = d_i - R s_i`; among the points in most supporting pairs, the proposal with the
+//!    most others within `δ_i + δ_c` wins ([`vote`]).
+//! 4. **SVD refinement.** Inliers are the points with `|d_i - (R s_i + t)| < δ_i`; Arun's
+//!    SVD refits them until the set is stable. Fewer than 4 is
+//!    [`PoseError::InsufficientSupport`].
+//! 5. **Ambiguity.** If the points left over could hold a second motion with at least
+//!    `ambiguity_ratio` of the winner's support (a moving object), steps 1-4 run on them and
+//!    the runner-up is reported ([`Diagnostics::runner_up`]).
+//!
+//! The tolerance δ_i is `sigma_multiplier · σ_i` when the correspondences carry a noise
+//! level per point ([`Correspondences::with_noise_sigma`]), else the fixed threshold, else
+//! (the default, [`Threshold::Auto`]) it is estimated: a first pass at
+//! `auto_initial_threshold_m` (halved up to three times while it finds no support), then
+//! `δ = sigma_multiplier · σ̂` with σ̂ from the median
+//! inlier residual, refitted.
 
-mod pairs;
+mod graph;
+mod vote;
 
 use std::f64::consts::PI;
 use std::time::Instant;
 
-use nalgebra::{Isometry3, Translation3, Vector3};
+use nalgebra::{Isometry3, Translation3};
+use rand::seq::index::sample;
 
-use super::consensus::{check_input, check_threshold, refine, residual_rms, truncated_cost};
-use super::{Diagnostics, Estimate, Estimator};
+use super::consensus::{
+    Tolerance, check_input, check_threshold, refine_within, residual_rms, truncated_cost_within,
+};
+use super::{Diagnostics, Estimate, Estimator, RunnerUp};
 use crate::error::PoseError;
-use crate::geometry::{Correspondences, MIN_CORRESPONDENCES, rotation_from_particle};
+use crate::geometry::{Correspondences, MIN_CORRESPONDENCES, rotation_from_particle, spread};
 use crate::pso::{ParticleSwarm, PsoConfig};
 use crate::rng::SeededRng;
-use pairs::PairSet;
+use graph::PairGraph;
+
+/// How `pso` chooses its inlier threshold when the data carry no per-point noise.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Threshold {
+    /// A fixed δ, metres.
+    Fixed(f64),
+    /// Estimated from the data (see the module documentation).
+    Auto,
+}
+
+impl std::fmt::Display for Threshold {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Threshold::Fixed(d) => write!(f, "{d}"),
+            Threshold::Auto => f.write_str("auto"),
+        }
+    }
+}
 
 /// Settings of [`PsoEstimator`]. Defaults in brackets.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PsoEstimatorConfig {
-    /// Inlier threshold δ on `|dst - (R src + t)|`, metres [0.1]. About `3.4 σ` for
-    /// isotropic Gaussian noise of σ per axis.
-    pub threshold_m: f64,
-    /// The swarm [24 particles, 40 iterations, α = 0.9, c = 1.5, stop after 8 iterations
-    /// without improvement].
+    /// Inlier threshold δ on `|dst - (R src + t)|` [`Threshold::Auto`]. A fixed δ of about
+    /// `3.4 σ` suits isotropic Gaussian noise of σ per axis. Ignored when the data carry a
+    /// noise level per point.
+    pub threshold: Threshold,
+    /// First-pass δ of [`Threshold::Auto`], metres [0.3]: must exceed the true `3.4 σ`.
+    pub auto_initial_threshold_m: f64,
+    /// Smallest δ [`Threshold::Auto`] may choose, metres [1e-4].
+    pub auto_min_threshold_m: f64,
+    /// δ_i = this · σ_i for per-point noise, and δ = this · σ̂ under
+    /// [`Threshold::Auto`] [3.368 = sqrt of the 99 % quantile of χ²(3)].
+    pub sigma_multiplier: f64,
+    /// The swarm [16 particles, 30 iterations, α = 0.9, c = 1.5, stop after 5
+    /// iterations without a better best].
     pub pso: PsoConfig,
-    /// Particles started from 3-point minimal samples; the rest start uniformly [12].
+    /// Particles started from graph triangles; the rest start uniformly [8].
     pub seeded_particles: usize,
-    /// Most pairs tested for length consistency [250000]; below that all pairs are.
-    pub pair_budget: usize,
-    /// Most consistent pairs scored per fitness evaluation [512].
+    /// Most points in the consistency graph; larger sets are sampled [400].
+    pub max_points: usize,
+    /// Most pairs scored per fitness evaluation [256].
     pub max_pairs: usize,
     /// Rounds of (inliers, SVD refit) at the end [5].
     pub refine_rounds: usize,
+    /// Report a runner-up motion when its support reaches this fraction of the winner's
+    /// [0.5]; 0 turns the check off.
+    pub ambiguity_ratio: f64,
 }
 
 impl Default for PsoEstimatorConfig {
     fn default() -> Self {
         Self {
-            threshold_m: 0.1,
+            threshold: Threshold::Auto,
+            auto_initial_threshold_m: 0.3,
+            auto_min_threshold_m: 1e-4,
+            sigma_multiplier: 3.368,
             pso: PsoConfig::default()
-                .with_swarm_size(24)
-                .with_max_iterations(40)
-                .with_stall_iterations(Some(8)),
-            seeded_particles: 12,
-            pair_budget: 250_000,
-            max_pairs: 512,
+                .with_swarm_size(16)
+                .with_max_iterations(30)
+                .with_stall_iterations(Some(5)),
+            seeded_particles: 8,
+            max_points: 400,
+            max_pairs: 256,
             refine_rounds: 5,
+            ambiguity_ratio: 0.5,
         }
     }
 }
 
 impl PsoEstimatorConfig {
-    /// Sets δ (metres).
+    /// Sets a fixed δ (metres).
     #[must_use]
     pub fn with_threshold(mut self, threshold_m: f64) -> Self {
-        self.threshold_m = threshold_m;
+        self.threshold = Threshold::Fixed(threshold_m);
         self
     }
 
@@ -94,19 +139,36 @@ impl PsoEstimatorConfig {
         self
     }
 
-    /// Sets how many particles start from minimal samples.
+    /// Sets how many particles start from graph triangles.
     #[must_use]
     pub fn with_seeded_particles(mut self, n: usize) -> Self {
         self.seeded_particles = n;
         self
     }
 
+    /// Sets the ambiguity ratio (0 turns the check off).
+    #[must_use]
+    pub fn with_ambiguity_ratio(mut self, ratio: f64) -> Self {
+        self.ambiguity_ratio = ratio;
+        self
+    }
+
     fn validate(&self) -> Result<(), PoseError> {
-        check_threshold(self.threshold_m)?;
+        if let Threshold::Fixed(d) = self.threshold {
+            check_threshold(d)?;
+        }
+        check_threshold(self.auto_initial_threshold_m)?;
+        check_threshold(self.auto_min_threshold_m)?;
+        check_threshold(self.sigma_multiplier)?;
         self.pso.validate()?;
-        if self.pair_budget == 0 || self.max_pairs == 0 || self.refine_rounds == 0 {
+        if self.max_points < MIN_CORRESPONDENCES || self.max_pairs == 0 || self.refine_rounds == 0 {
             return Err(PoseError::InvalidConfig(
-                "pair_budget, max_pairs and refine_rounds must be at least 1".into(),
+                "max_points must be >= 4, max_pairs and refine_rounds >= 1".into(),
+            ));
+        }
+        if !(0.0..=1.0).contains(&self.ambiguity_ratio) {
+            return Err(PoseError::InvalidConfig(
+                "ambiguity_ratio must be in [0, 1]".into(),
             ));
         }
         Ok(())
@@ -128,41 +190,157 @@ impl PsoEstimator {
     }
 }
 
-/// Number of anchor points whose translation proposals are voted on.
-const ANCHORS: usize = 32;
+/// Halvings of the first-pass δ tried by [`Threshold::Auto`] when a pass finds no support.
+const AUTO_RETRIES: usize = 3;
 
-/// Step 3: the translation with the most agreeing proposals `d_i - R s_i`.
-fn vote_translation(
-    data: &Correspondences,
-    pairs: &PairSet,
-    rotation: &nalgebra::UnitQuaternion<f64>,
-    tol_m: f64,
-) -> Option<Vector3<f64>> {
-    let m = rotation.to_rotation_matrix().into_inner();
-    let proposals: Vec<Vector3<f64>> = data
-        .src()
-        .iter()
-        .zip(data.dst())
-        .map(|(s, d)| d.coords - m * s.coords)
-        .collect();
-    let anchors = pairs.anchors(&m, ANCHORS);
-    let tol2 = tol_m * tol_m;
-    let mut best: Option<(usize, usize)> = None;
-    for &c in &anchors {
-        let count = proposals
-            .iter()
-            .filter(|p| (*p - proposals[c]).norm_squared() < tol2)
-            .count();
-        if best.is_none_or(|(b, _)| count > b) {
-            best = Some((count, c));
+/// Median of the norm of a 3D isotropic Gaussian of unit σ per axis.
+const CHI3_MEDIAN: f64 = 1.538;
+
+/// A motion with its inliers and the work it took.
+struct Found {
+    pose: Isometry3<f64>,
+    inliers: Vec<usize>,
+    iterations: usize,
+    evaluations: u64,
+}
+
+impl PsoEstimator {
+    /// Steps 1-4 on all of `data` with tolerance `tol`.
+    fn find(
+        &self,
+        data: &Correspondences,
+        tol: Tolerance<'_>,
+        rng: &mut SeededRng,
+    ) -> Result<(Found, PairGraph), PoseError> {
+        let cfg = &self.config;
+        let n = data.len();
+        let points: Vec<usize> = if n > cfg.max_points {
+            let mut p = sample(rng, n, cfg.max_points).into_vec();
+            p.sort_unstable();
+            p
+        } else {
+            (0..n).collect()
+        };
+        let typical_tol = match tol {
+            Tolerance::Uniform(d) => d,
+            Tolerance::PerPoint(v) => v.iter().sum::<f64>() / v.len().max(1) as f64,
+        };
+        let min_len_m = (5.0 * typical_tol).min(0.1 * spread(data.src())[0]);
+        let graph = PairGraph::build(data, points, tol, cfg.max_pairs, min_len_m);
+        let no_support = PoseError::InsufficientSupport {
+            support: 0,
+            needed: MIN_CORRESPONDENCES,
+        };
+        if graph.scored() == 0 {
+            return Err(no_support);
         }
+        let seeds = graph.seeds(data, cfg.seeded_particles, rng);
+        let swarm = ParticleSwarm::new(cfg.pso.clone());
+        let out = swarm.minimize([-PI; 3], [PI; 3], &seeds, rng, |x| {
+            graph.score(&rotation_from_particle(x))
+        })?;
+        let rotation = rotation_from_particle(&out.best_position);
+        let m = rotation.to_rotation_matrix().into_inner();
+        let anchors = graph.anchors(&m, vote::ANCHORS);
+        let t = vote::translation(data, &m, &anchors, tol).ok_or(no_support)?;
+        let hypothesis = Isometry3::from_parts(Translation3::from(t), rotation);
+        let mut inliers = Vec::with_capacity(n);
+        let pose = refine_within(data, &hypothesis, tol, cfg.refine_rounds, &mut inliers)?;
+        let found = Found {
+            pose,
+            inliers,
+            iterations: out.iterations,
+            evaluations: out.evaluations,
+        };
+        Ok((found, graph))
     }
-    let (_, c) = best?;
-    let (sum, k) = proposals
-        .iter()
-        .filter(|p| (*p - proposals[c]).norm_squared() < tol2)
-        .fold((Vector3::zeros(), 0usize), |(s, k), p| (s + p, k + 1));
-    Some(sum / k as f64)
+
+    /// Re-estimates δ from the inlier residuals and refits (Threshold::Auto).
+    fn auto_refit(&self, data: &Correspondences, found: &mut Found) -> Result<f64, PoseError> {
+        let cfg = &self.config;
+        let mut delta = cfg.auto_initial_threshold_m;
+        // (The first pass may have used a smaller δ; the loop only needs a starting value.)
+        for _ in 0..3 {
+            let mut r: Vec<f64> = found
+                .inliers
+                .iter()
+                .map(|&i| (data.dst()[i] - found.pose * data.src()[i]).norm())
+                .collect();
+            let mid = r.len() / 2;
+            let median = *r.select_nth_unstable_by(mid, f64::total_cmp).1;
+            let next = (cfg.sigma_multiplier * median / CHI3_MEDIAN)
+                .max(cfg.auto_min_threshold_m)
+                .min(cfg.auto_initial_threshold_m);
+            let mut inliers = Vec::with_capacity(data.len());
+            match refine_within(
+                data,
+                &found.pose,
+                Tolerance::Uniform(next),
+                cfg.refine_rounds,
+                &mut inliers,
+            ) {
+                Ok(pose) => {
+                    found.pose = pose;
+                    found.inliers = inliers;
+                    let settled = (next - delta).abs() <= 0.05 * delta;
+                    delta = next;
+                    if settled {
+                        break;
+                    }
+                }
+                // Too tight to keep support: stay with the last δ.
+                Err(_) => break,
+            }
+        }
+        Ok(delta)
+    }
+
+    /// Step 5: a second motion among the points the first left over, if it could reach
+    /// `ambiguity_ratio` of the winner's support.
+    fn runner_up(
+        &self,
+        data: &Correspondences,
+        winner: &Found,
+        graph: &PairGraph,
+        tol: Tolerance<'_>,
+        rng: &mut SeededRng,
+    ) -> Option<RunnerUp> {
+        let cfg = &self.config;
+        if cfg.ambiguity_ratio <= 0.0 {
+            return None;
+        }
+        let needed = ((cfg.ambiguity_ratio * winner.inliers.len() as f64).ceil() as usize)
+            .max(MIN_CORRESPONDENCES);
+        let mut taken = vec![false; data.len()];
+        for &i in &winner.inliers {
+            taken[i] = true;
+        }
+        let rest: Vec<usize> = (0..data.len()).filter(|&i| !taken[i]).collect();
+        // A rigid cluster of k points gives its pairs about k - 2 common neighbours; the
+        // graph sees a sample of the points, so be generous before paying for a search.
+        let sampled = graph_fraction(data.len(), cfg.max_points);
+        if rest.len() < needed
+            || (graph.max_common_outside(&taken) as f64) < 0.5 * sampled * needed as f64 - 2.0
+        {
+            return None;
+        }
+        let sub = data.select(&rest);
+        let sub_tol: Vec<f64> = rest.iter().map(|&i| tol.at(i)).collect();
+        let (found, _) = self.find(&sub, Tolerance::PerPoint(&sub_tol), rng).ok()?;
+        (found.inliers.len() >= needed).then(|| RunnerUp {
+            transform: found.pose,
+            inliers: found.inliers.iter().map(|&k| rest[k]).collect(),
+        })
+    }
+}
+
+/// Fraction of the points that the graph holds.
+fn graph_fraction(n: usize, max_points: usize) -> f64 {
+    if n <= max_points {
+        1.0
+    } else {
+        max_points as f64 / n as f64
+    }
 }
 
 impl Estimator for PsoEstimator {
@@ -175,46 +353,52 @@ impl Estimator for PsoEstimator {
         let cfg = &self.config;
         cfg.validate()?;
         check_input(data)?;
-        let pair_tol = 2.0 * cfg.threshold_m;
-        let pairs = PairSet::build(data, cfg, rng);
-        if pairs.is_empty() {
-            return Err(PoseError::InsufficientSupport {
-                support: 0,
-                needed: MIN_CORRESPONDENCES,
-            });
+        let per_point: Option<Vec<f64>> = data
+            .noise_sigma()
+            .map(|s| s.iter().map(|v| cfg.sigma_multiplier * v).collect());
+        let first_tol = match (&per_point, cfg.threshold) {
+            (Some(v), _) => Tolerance::PerPoint(v),
+            (None, Threshold::Fixed(d)) => Tolerance::Uniform(d),
+            (None, Threshold::Auto) => Tolerance::Uniform(cfg.auto_initial_threshold_m),
+        };
+        let mut attempt = self.find(data, first_tol, rng);
+        if let (None, Threshold::Auto) = (&per_point, cfg.threshold) {
+            // A generous first pass can drown very few inliers in chance agreements:
+            // retry with smaller δ before giving up.
+            let mut d = cfg.auto_initial_threshold_m;
+            for _ in 0..AUTO_RETRIES {
+                if attempt.is_ok() || d / 2.0 < cfg.auto_min_threshold_m {
+                    break;
+                }
+                d /= 2.0;
+                attempt = self.find(data, Tolerance::Uniform(d), rng);
+            }
         }
-        let seeds = pairs.minimal_sample_seeds(data, cfg.seeded_particles, rng);
-        let swarm = ParticleSwarm::new(cfg.pso.clone());
-        let out = swarm.minimize([-PI; 3], [PI; 3], &seeds, rng, |x| {
-            pairs.score(&rotation_from_particle(x), pair_tol)
-        })?;
-        let rotation = rotation_from_particle(&out.best_position);
-        let t = vote_translation(data, &pairs, &rotation, pair_tol).ok_or(
-            PoseError::InsufficientSupport {
-                support: 0,
-                needed: MIN_CORRESPONDENCES,
-            },
-        )?;
-        let hypothesis = Isometry3::from_parts(Translation3::from(t), rotation);
-        let mut inliers = Vec::with_capacity(data.len());
-        let transform = refine(
-            data,
-            &hypothesis,
-            cfg.threshold_m,
-            cfg.refine_rounds,
-            &mut inliers,
-        )?;
+        let (mut found, graph) = attempt?;
+        let (tol, threshold_m) = match (&per_point, cfg.threshold) {
+            (None, Threshold::Auto) => {
+                let d = self.auto_refit(data, &mut found)?;
+                (Tolerance::Uniform(d), Some(d))
+            }
+            (None, Threshold::Fixed(d)) => (first_tol, Some(d)),
+            (Some(_), _) => (first_tol, None),
+        };
+        let runner_up = self.runner_up(data, &found, &graph, tol, rng);
         Ok(Estimate {
             diagnostics: Diagnostics {
-                iterations: out.iterations,
-                cost_evaluations: out.evaluations,
-                final_cost: truncated_cost(data, &transform, cfg.threshold_m),
-                residual_rms_m: residual_rms(data, &transform, &inliers),
-                threshold_m: Some(cfg.threshold_m),
+                iterations: found.iterations,
+                cost_evaluations: found.evaluations,
+                final_cost: truncated_cost_within(data, &found.pose, tol),
+                residual_rms_m: residual_rms(data, &found.pose, &found.inliers),
+                threshold_m,
                 elapsed: start.elapsed(),
+                runner_up,
             },
-            transform,
-            inliers,
+            transform: found.pose,
+            inliers: found.inliers,
         })
     }
 }
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,307 @@
+//! The consistency graph of the hypothesis points: length-consistent pairs, their
+//! common-neighbour counts, and the scored pairs in structure-of-arrays layout.
+//!
+//! A rigid motion keeps distances, so two correct matches `i, j` satisfy
+//! `| |d_i - d_j| - |s_i - s_j| | < δ_i + δ_j`. Correct matches form a dense cluster of
+//! this graph: a pair of them shares every other correct match as a common neighbour,
+//! while a pair involving a wrong match shares few. Pairs are ranked by that count, so the
+//! scored pairs are mostly correct even when most matches are wrong.
+
+use nalgebra::{Matrix3, UnitQuaternion, Vector3};
+use rand::RngExt;
+
+use crate::arun::arun_pairs;
+use crate::estimators::consensus::Tolerance;
+use crate::geometry::{Correspondences, particle_from_rotation};
+use crate::rng::SeededRng;
+
+/// Cost changes below this fraction of one pair's truncation cost do not count.
+const COST_QUANTUM: f64 = 0.01;
+/// Tries per seed when looking for a triangle.
+const SEED_TRIES: usize = 8;
+
+/// Consistent pairs of a set of hypothesis points.
+pub(super) struct PairGraph {
+    /// Local index -> index in the correspondences.
+    points: Vec<usize>,
+    /// `u64` words per adjacency row.
+    words: usize,
+    /// Adjacency bitsets, one row of `words` words per local point.
+    rows: Vec<u64>,
+    /// Consistent pairs `(i, j, common neighbours)` in local indices; the first `scored`
+    /// are the best ranked, in rank order.
+    pairs: Vec<(u32, u32, u32)>,
+    /// Scored pairs: source differences `a = s_i - s_j`, metres.
+    a: [Vec<f64>; 3],
+    /// Scored pairs: destination differences `b = d_i - d_j`, metres.
+    b: [Vec<f64>; 3],
+    /// Scored pairs: squared tolerance `(δ_i + δ_j)^2`, m².
+    tol2: Vec<f64>,
+}
+
+impl PairGraph {
+    /// The graph of `points` (indices into `data`), keeping at most `max_pairs` for
+    /// scoring; pairs shorter than `min_len_m` in the source set are left out.
+    pub(super) fn build(
+        data: &Correspondences,
+        points: Vec<usize>,
+        tol: Tolerance<'_>,
+        max_pairs: usize,
+        min_len_m: f64,
+    ) -> Self {
+        let m = points.len();
+        let words = m.div_ceil(64);
+        let mut rows = vec![0u64; m * words];
+        let mut pairs = Vec::new();
+        let (src, dst) = (data.src(), data.dst());
+        for li in 0..m {
+            let (gi, ti) = (points[li], tol.at(points[li]));
+            for lj in li + 1..m {
+                let gj = points[lj];
+                let la = (src[gi] - src[gj]).norm();
+                let lb = (dst[gi] - dst[gj]).norm();
+                if la >= min_len_m && (la - lb).abs() < ti + tol.at(gj) {
+                    rows[li * words + lj / 64] |= 1 << (lj % 64);
+                    rows[lj * words + li / 64] |= 1 << (li % 64);
+                    pairs.push((li as u32, lj as u32, 0));
+                }
+            }
+        }
+        for p in &mut pairs {
+            let (ri, rj) = (p.0 as usize * words, p.1 as usize * words);
+            p.2 = (0..words)
+                .map(|w| (rows[ri + w] & rows[rj + w]).count_ones())
+                .sum();
+        }
+        let scored = rank_prefix(&mut pairs, max_pairs, m);
+        let mut graph = Self {
+            points,
+            words,
+            rows,
+            pairs,
+            a: Default::default(),
+            b: Default::default(),
+            tol2: Vec::with_capacity(scored),
+        };
+        for k in 0..scored {
+            let (gi, gj) = graph.global(k);
+            let (da, db) = (src[gi] - src[gj], dst[gi] - dst[gj]);
+            for c in 0..3 {
+                graph.a[c].push(da[c]);
+                graph.b[c].push(db[c]);
+            }
+            graph.tol2.push((tol.at(gi) + tol.at(gj)).powi(2));
+        }
+        graph
+    }
+
+    /// Global indices of pair `k`.
+    fn global(&self, k: usize) -> (usize, usize) {
+        let (i, j, _) = self.pairs[k];
+        (self.points[i as usize], self.points[j as usize])
+    }
+
+    /// Number of scored pairs.
+    pub(super) fn scored(&self) -> usize {
+        self.tol2.len()
+    }
+
+    /// Residual `|b - R a|^2` of scored pair `k`, m².
+    #[inline]
+    fn residual2(&self, m: &Matrix3<f64>, k: usize) -> f64 {
+        let a = Vector3::new(self.a[0][k], self.a[1][k], self.a[2][k]);
+        let b = Vector3::new(self.b[0][k], self.b[1][k], self.b[2][k]);
+        (b - m * a).norm_squared()
+    }
+
+    /// The particle score of a rotation: (scored pairs not supporting it, normalised
+    /// truncated cost `Σ min(|e|²/τ², 1)` in units of `COST_QUANTUM`, rounded), compared
+    /// lexicographically, lower is better. The rounding makes negligible gains ties, so the
+    /// swarm's stall test can stop it.
+    #[inline]
+    pub(super) fn score(&self, q: &UnitQuaternion<f64>) -> (usize, f64) {
+        let m: Matrix3<f64> = q.to_rotation_matrix().into_inner();
+        let [ax, ay, az] = &self.a;
+        let [bx, by, bz] = &self.b;
+        let tol2 = &self.tol2;
+        let mut support = 0usize;
+        let mut cost = 0.0;
+        for k in 0..tol2.len() {
+            let ex = bx[k] - (m[(0, 0)] * ax[k] + m[(0, 1)] * ay[k] + m[(0, 2)] * az[k]);
+            let ey = by[k] - (m[(1, 0)] * ax[k] + m[(1, 1)] * ay[k] + m[(1, 2)] * az[k]);
+            let ez = bz[k] - (m[(2, 0)] * ax[k] + m[(2, 1)] * ay[k] + m[(2, 2)] * az[k]);
+            let e2 = ex * ex + ey * ey + ez * ez;
+            support += usize::from(e2 < tol2[k]);
+            cost += (e2 / tol2[k]).min(1.0);
+        }
+        (tol2.len() - support, (cost / COST_QUANTUM).round())
+    }
+
+    /// Up to `k` points (global indices) taking part in the most scored pairs that support
+    /// rotation `m`, most first; points in no supporting pair are left out.
+    pub(super) fn anchors(&self, m: &Matrix3<f64>, k: usize) -> Vec<usize> {
+        let mut count = vec![0u32; self.points.len()];
+        for p in 0..self.scored() {
+            if self.residual2(m, p) < self.tol2[p] {
+                let (i, j, _) = self.pairs[p];
+                count[i as usize] += 1;
+                count[j as usize] += 1;
+            }
+        }
+        let mut order: Vec<usize> = (0..count.len()).filter(|&i| count[i] > 0).collect();
+        order.sort_by(|&x, &y| count[y].cmp(&count[x]).then(x.cmp(&y)));
+        order.truncate(k);
+        order.into_iter().map(|i| self.points[i]).collect()
+    }
+
+    /// Rotation vectors solved from up to `count` triangles: a highly ranked pair and one
+    /// of its common neighbours, so all three pairs are consistent.
+    pub(super) fn seeds(
+        &self,
+        data: &Correspondences,
+        count: usize,
+        rng: &mut SeededRng,
+    ) -> Vec<[f64; 3]> {
+        let mut seeds = Vec::with_capacity(count);
+        let pool = self.scored().min(4 * count.max(4));
+        if pool == 0 {
+            return seeds;
+        }
+        let (src, dst) = (data.src(), data.dst());
+        for _ in 0..count {
+            for _ in 0..SEED_TRIES {
+                let (i, j, c) = self.pairs[rng.random_range(0..pool)];
+                if c == 0 {
+                    continue;
+                }
+                let Some(m) = self.nth_common(i as usize, j as usize, rng.random_range(0..c))
+                else {
+                    continue;
+                };
+                let tri = [
+                    self.points[i as usize],
+                    self.points[j as usize],
+                    self.points[m],
+                ];
+                if let Ok(pose) = arun_pairs(tri.iter().map(|&g| (&src[g], &dst[g], 1.0))) {
+                    seeds.push(particle_from_rotation(&pose.rotation));
+                    break;
+                }
+            }
+        }
+        seeds
+    }
+
+    /// The `n`-th (0-based) common neighbour of local points `i` and `j`.
+    fn nth_common(&self, i: usize, j: usize, mut n: u32) -> Option<usize> {
+        for w in 0..self.words {
+            let mut bits = self.rows[i * self.words + w] & self.rows[j * self.words + w];
+            let ones = bits.count_ones();
+            if n >= ones {
+                n -= ones;
+                continue;
+            }
+            for _ in 0..n {
+                bits &= bits - 1; // drop the lowest set bit
+            }
+            return Some(w * 64 + bits.trailing_zeros() as usize);
+        }
+        None
+    }
+
+    /// The largest number of common neighbours a pair of points outside `taken` (global
+    /// indices flagged true) has among points outside `taken`: an upper bound on the
+    /// evidence for a second motion once the first one's inliers are removed.
+    pub(super) fn max_common_outside(&self, taken: &[bool]) -> u32 {
+        let mut free = vec![0u64; self.words];
+        for (l, &g) in self.points.iter().enumerate() {
+            if !taken[g] {
+                free[l / 64] |= 1 << (l % 64);
+            }
+        }
+        let is_free = |l: u32| free[l as usize / 64] >> (l % 64) & 1 == 1;
+        self.pairs
+            .iter()
+            .filter(|(i, j, _)| is_free(*i) && is_free(*j))
+            .map(|&(i, j, _)| {
+                let (ri, rj) = (i as usize * self.words, j as usize * self.words);
+                (0..self.words)
+                    .map(|w| (self.rows[ri + w] & self.rows[rj + w] & free[w]).count_ones())
+                    .sum::<u32>()
+            })
+            .max()
+            .unwrap_or(0)
+    }
+}
+
+/// Moves the (at most) `max_pairs` pairs with the most common neighbours to the front, in
+/// rank order (more first, then by index), and returns how many that is. Counting sort on
+/// the neighbour count: `O(pairs + points)`, deterministic.
+fn rank_prefix(pairs: &mut [(u32, u32, u32)], max_pairs: usize, points: usize) -> usize {
+    if pairs.len() <= max_pairs {
+        pairs.sort_by(|x, y| y.2.cmp(&x.2).then((x.0, x.1).cmp(&(y.0, y.1))));
+        return pairs.len();
+    }
+    let mut histogram = vec![0usize; points + 1];
+    for p in pairs.iter() {
+        histogram[p.2 as usize] += 1;
+    }
+    // Smallest count `cut` such that the pairs with more than `cut` fit.
+    let mut above = 0;
+    let mut cut = points;
+    while above + histogram[cut] < max_pairs && cut > 0 {
+        above += histogram[cut];
+        cut -= 1;
+    }
+    // Stable partition: pairs above `cut`, then those at `cut` (index order) up to the cap.
+    let mut front: Vec<(u32, u32, u32)> =
+        pairs.iter().copied().filter(|p| p.2 > cut as u32).collect();
+    front.extend(
+        pairs
+            .iter()
+            .copied()
+            .filter(|p| p.2 == cut as u32)
+            .take(max_pairs - front.len()),
+    );
+    front.sort_by(|x, y| y.2.cmp(&x.2).then((x.0, x.1).cmp(&(y.0, y.1))));
+    let n = front.len();
+    // Put the ranked prefix first; the rest keep their order after it.
+    let mut rest: Vec<(u32, u32, u32)> = Vec::with_capacity(pairs.len() - n);
+    let mut taken_at_cut = n - pairs.iter().filter(|p| p.2 > cut as u32).count();
+    for p in pairs.iter() {
+        if p.2 > cut as u32 {
+            continue;
+        }
+        if p.2 == cut as u32 && taken_at_cut > 0 {
+            taken_at_cut -= 1;
+            continue;
+        }
+        rest.push(*p);
+    }
+    pairs[..n].copy_from_slice(&front);
+    pairs[n..].copy_from_slice(&rest);
+    n
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rank_prefix_keeps_the_best_and_all_pairs() {
+        let mut pairs: Vec<(u32, u32, u32)> = (0..10)
+            .map(|k| (k, k + 1, [3, 7, 1, 7, 0, 5, 5, 2, 9, 5][k as usize]))
+            .collect();
+        let before = pairs.clone();
+        let n = rank_prefix(&mut pairs, 4, 20);
+        assert_eq!(n, 4);
+        let counts: Vec<u32> = pairs[..4].iter().map(|p| p.2).collect();
+        assert_eq!(counts, vec![9, 7, 7, 5]);
+        assert_eq!(pairs[3], (5, 6, 5)); // first of the tied 5s by index
+        let mut a = before;
+        let mut b = pairs.clone();
+        a.sort_unstable();
+        b.sort_unstable();
+        assert_eq!(a, b);
+    }
+}

@@ -1,0 +1,178 @@
+//! Adversarial cases of `pso`: 95 % outliers, a moving object, depth-dependent noise,
+//! very few inliers, the automatic threshold.
+
+use nalgebra::{Isometry3, Point3, Vector3};
+use rand::RngExt;
+use rand_distr::{Distribution, Normal};
+
+use super::*;
+use crate::geometry::rotation_angle_between;
+use crate::rng::seeded;
+use crate::synthetic::SyntheticSpec;
+
+fn errors(est: &Isometry3<f64>, truth: &Isometry3<f64>) -> (f64, f64) {
+    (
+        rotation_angle_between(&est.rotation, &truth.rotation).to_degrees(),
+        (est.translation.vector - truth.translation.vector).norm(),
+    )
+}
+
+#[test]
+fn survives_95_percent_outliers() {
+    let spec = SyntheticSpec {
+        outlier_fraction: 0.95,
+        ..SyntheticSpec::default()
+    };
+    let mut ok = 0;
+    for seed in 0..20 {
+        let s = spec.generate(700 + seed).expect("valid");
+        if let Ok(out) = PsoEstimator::default().estimate_seeded(&s.data, seed) {
+            let (r, t) = errors(&out.transform, &s.truth);
+            ok += usize::from(r < 2.0 && t < 0.2);
+        }
+    }
+    assert!(ok >= 19, "{ok}/20 at 95 % outliers");
+}
+
+#[test]
+fn very_few_inliers_among_many() {
+    // 8 correct matches among 400.
+    let spec = SyntheticSpec {
+        n: 400,
+        outlier_fraction: 0.98,
+        ..SyntheticSpec::default()
+    };
+    let s = spec.generate(5).expect("valid");
+    let out = PsoEstimator::default()
+        .estimate_seeded(&s.data, 1)
+        .expect("solvable");
+    let (r, t) = errors(&out.transform, &s.truth);
+    assert!(r < 2.0 && t < 0.2, "{r} deg, {t} m");
+    assert!(out.inliers.iter().filter(|&&i| s.inlier[i]).count() >= 6);
+}
+
+#[test]
+fn auto_threshold_tracks_the_noise() {
+    for sigma in [0.01, 0.05] {
+        let spec = SyntheticSpec {
+            noise_sigma_m: sigma,
+            outlier_fraction: 0.5,
+            ..SyntheticSpec::default()
+        };
+        let s = spec.generate(9).expect("valid");
+        let out = PsoEstimator::default()
+            .estimate_seeded(&s.data, 2)
+            .expect("solvable");
+        let d = out.diagnostics.threshold_m.expect("pso reports its δ");
+        assert!(
+            (d / (3.368 * sigma) - 1.0).abs() < 0.3,
+            "σ {sigma}: δ {d} vs {}",
+            3.368 * sigma
+        );
+        let (r, t) = errors(&out.transform, &s.truth);
+        assert!(r < 0.5 && t < 0.1);
+    }
+}
+
+/// Stereo-like noise: σ grows with the square of the depth, so one threshold either
+/// rejects the far points or lets near outliers in. With σ_i attached, the far points are
+/// kept and the near outliers are not.
+#[test]
+fn per_point_noise_keeps_far_points() {
+    let truth = Isometry3::new(Vector3::new(0.2, -0.1, 1.0), Vector3::new(0.0, 0.05, 0.02));
+    let mut rng = seeded(3);
+    let (mut src, mut dst, mut sigma, mut inlier) = (vec![], vec![], vec![], vec![]);
+    for i in 0..300 {
+        let z: f64 = rng.random_range(3.0..40.0);
+        let p = Point3::new(
+            rng.random_range(-10.0..10.0),
+            rng.random_range(-3.0..3.0),
+            z,
+        );
+        let s_i = 0.004 * z * z / 10.0; // 0.4 cm at 3 m .. 64 cm at 40 m
+        let noise = Normal::new(0.0, s_i).expect("valid sigma");
+        let d = p + Vector3::new(
+            noise.sample(&mut rng),
+            noise.sample(&mut rng),
+            noise.sample(&mut rng),
+        );
+        let wrong = i % 3 == 0; // a third of the matches are wrong
+        src.push(truth.inverse_transform_point(&p));
+        dst.push(if wrong {
+            Point3::new(
+                rng.random_range(-10.0..10.0),
+                rng.random_range(-3.0..3.0),
+                rng.random_range(3.0..40.0),
+            )
+        } else {
+            d
+        });
+        sigma.push(s_i);
+        inlier.push(!wrong);
+    }
+    let data = Correspondences::new(src, dst).expect("finite");
+    let with_sigma = data.clone().with_noise_sigma(sigma).expect("valid sigma");
+    let out = PsoEstimator::default()
+        .estimate_seeded(&with_sigma, 4)
+        .expect("solvable");
+    let (r, t) = errors(&out.transform, &truth);
+    assert!(r < 0.5 && t < 0.1, "{r} deg {t} m");
+    let correct = out.inliers.iter().filter(|&&i| inlier[i]).count();
+    let wrong = out.inliers.len() - correct;
+    let total_correct = inlier.iter().filter(|&&b| b).count();
+    assert!(
+        correct * 100 >= total_correct * 90,
+        "kept {correct}/{total_correct} correct"
+    );
+    assert!(
+        wrong * 100 <= out.inliers.len() * 3,
+        "{wrong} wrong matches accepted"
+    );
+    assert!(out.diagnostics.threshold_m.is_none());
+    // One tight threshold loses most far points.
+    let fixed = PsoEstimator::new(PsoEstimatorConfig::default().with_threshold(0.05))
+        .estimate_seeded(&data, 4)
+        .expect("solvable");
+    let fixed_correct = fixed.inliers.iter().filter(|&&i| inlier[i]).count();
+    assert!(
+        fixed_correct < correct,
+        "fixed {fixed_correct} vs per-point {correct}"
+    );
+}
+
+#[test]
+fn a_moving_object_covering_half_the_view_is_flagged() {
+    // Half the matches follow the camera motion, half a moving object's.
+    let truth = Isometry3::new(Vector3::new(0.3, 0.0, 0.5), Vector3::new(0.0, 0.08, 0.0));
+    let object = Isometry3::new(Vector3::new(-1.0, 0.2, 0.0), Vector3::new(0.1, 0.0, -0.1));
+    let mut rng = seeded(8);
+    let (mut src, mut dst) = (vec![], vec![]);
+    for i in 0..200 {
+        let d = Point3::new(
+            rng.random_range(-6.0..6.0),
+            rng.random_range(-6.0..6.0),
+            rng.random_range(2.0..25.0),
+        );
+        let motion = if i % 2 == 0 { truth } else { object };
+        src.push(motion.inverse_transform_point(&d));
+        dst.push(d);
+    }
+    let data = Correspondences::new(src, dst).expect("finite");
+    let out = PsoEstimator::default()
+        .estimate_seeded(&data, 1)
+        .expect("solvable");
+    assert!(out.is_ambiguous(), "a 50/50 split must be flagged");
+    let second = out.diagnostics.runner_up.as_ref().expect("runner-up");
+    let (a, _) = errors(&out.transform, &truth);
+    let (b, _) = errors(&second.transform, &truth);
+    // One of the two is the camera motion, the other the object's.
+    assert!(a.min(b) < 0.01, "{a} {b}");
+    assert!(second.inliers.len() * 10 >= out.inliers.len() * 9);
+    // 80/20: not ambiguous.
+    let keep: Vec<usize> = (0..200).filter(|i| i % 2 == 0 || i % 10 == 1).collect();
+    let lopsided = data.select(&keep);
+    let out = PsoEstimator::default()
+        .estimate_seeded(&lopsided, 1)
+        .expect("solvable");
+    assert!(!out.is_ambiguous());
+}
