@@ -5,8 +5,26 @@
 //!
 //! Features come from any [`features::FeatureExtractor`] (SURF as in the paper, or a fast
 //! binary detector), so matching and triangulation are written once.
+//!
+//! | module | what |
+//! |---|---|
+//! | [`image`] | owned grayscale images, PNG loading, bilinear sampling |
+//! | [`orb`] | FAST-9 + Harris ranking + intensity-centroid orientation + steered BRIEF |
+//! | [`bucketing`] | strongest features per grid cell |
+//! | [`stereo`] | row-constrained stereo matching, sub-pixel disparity, triangulation |
+//! | [`temporal`] | mutual nearest neighbours between frames, circular check |
+//! | [`frontend`] | two stereo frames to `swarmpose_core::Correspondences` |
+//! | [`rectify`] | radial-tangential undistortion and stereo rectification maps, remap |
+//! | [`draw`] | match drawings (the paper's figure 9) |
 #![deny(missing_docs)]
 #![warn(clippy::unwrap_used)]
 
+pub mod bucketing;
+pub mod draw;
 pub mod features;
-pub mod surf;
+pub mod frontend;
+pub mod image;
+pub mod orb;
+pub mod rectify;
+pub mod stereo;
+pub mod temporal;

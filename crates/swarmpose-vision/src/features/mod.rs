@@ -61,12 +61,23 @@ impl Descriptor for FloatDescriptor64 {
 }
 
 /// Keypoints and their descriptors, index-aligned.
-#[derive(Debug, Clone, Default, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Features<D> {
     /// The keypoints.
     pub keypoints: Vec<Keypoint>,
     /// `descriptors[i]` describes `keypoints[i]`.
     pub descriptors: Vec<D>,
+}
+
+// By hand: empty features exist for any descriptor type (a derive would require
+// `D: Default`).
+impl<D> Default for Features<D> {
+    fn default() -> Self {
+        Self {
+            keypoints: Vec::new(),
+            descriptors: Vec::new(),
+        }
+    }
 }
 
 impl<D> Features<D> {

@@ -1,0 +1,101 @@
+//! Errors of the sequence loaders; every variant names the file or directory at fault.
+
+use std::path::PathBuf;
+
+use swarmpose_vision::image::ImageError;
+
+/// Why a sequence or one of its frames could not be loaded.
+#[derive(Debug, thiserror::Error)]
+pub enum DatasetError {
+    /// A required file or directory does not exist.
+    #[error("{}: missing ({what})", path.display())]
+    Missing {
+        /// The path looked for.
+        path: PathBuf,
+        /// What it should have been.
+        what: &'static str,
+    },
+    /// The directory matches none of the known layouts.
+    #[error(
+        "{}: unknown sequence layout (expected KITTI image_0/ image_1/ calib.txt, Karlsruhe \
+         I1_*.png I2_*.png calib.txt, or EuRoC mav0/cam0 mav0/cam1)",
+        dir.display()
+    )]
+    UnknownLayout {
+        /// The directory.
+        dir: PathBuf,
+    },
+    /// A file or directory could not be read.
+    #[error("{}: cannot read: {source}", path.display())]
+    Io {
+        /// The path.
+        path: PathBuf,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+    /// An image could not be read or decoded (the message names the file).
+    #[error(transparent)]
+    Image(#[from] ImageError),
+    /// A malformed line in a calibration, list or ground-truth file.
+    #[error("{}:{line}: {message}", path.display())]
+    Parse {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line number (0 when the problem is the whole file).
+        line: usize,
+        /// What is wrong.
+        message: String,
+    },
+    /// The left and right cameras list a different number of images.
+    #[error(
+        "left/right image count mismatch: {} has {left}, {} has {right}",
+        left_dir.display(),
+        right_dir.display()
+    )]
+    CountMismatch {
+        /// Where the left images are listed.
+        left_dir: PathBuf,
+        /// Number of left images.
+        left: usize,
+        /// Where the right images are listed.
+        right_dir: PathBuf,
+        /// Number of right images.
+        right: usize,
+    },
+    /// Two images of one sequence have different sizes.
+    #[error(
+        "image size mismatch: {} is {}x{} but {} is {}x{}",
+        first.display(),
+        first_size.0,
+        first_size.1,
+        second.display(),
+        second_size.0,
+        second_size.1
+    )]
+    SizeMismatch {
+        /// The reference image.
+        first: PathBuf,
+        /// Its width and height, pixels.
+        first_size: (usize, usize),
+        /// The image that differs.
+        second: PathBuf,
+        /// Its width and height, pixels.
+        second_size: (usize, usize),
+    },
+    /// A frame index past the end.
+    #[error("{}: frame {index} out of range (the sequence has {len} frames)", dir.display())]
+    FrameOutOfRange {
+        /// The sequence directory.
+        dir: PathBuf,
+        /// The index asked for.
+        index: usize,
+        /// Number of frames.
+        len: usize,
+    },
+    /// The sequence has no frames.
+    #[error("{}: no stereo frames found", dir.display())]
+    Empty {
+        /// The directory searched.
+        dir: PathBuf,
+    },
+}

@@ -1,0 +1,284 @@
+//! EuRoC MAV (ASL) layout: `mav0/cam0` (left) and `mav0/cam1` (right), each with
+//! `data.csv` (`timestamp [ns], filename`), `data/*.png` and `sensor.yaml` (pinhole
+//! intrinsics, radial-tangential distortion, `T_BS`), and optionally
+//! `mav0/state_groundtruth_estimate0/data.csv` (body pose in the world frame).
+//!
+//! The images are raw: the loader computes the stereo rectification once
+//! ([`swarmpose_vision::rectify`]) and remaps every frame with bilinear interpolation.
+//! Ground truth, when present, is the pose of the RECTIFIED left camera.
+
+pub mod yaml;
+
+use std::path::{Path, PathBuf};
+
+use nalgebra::{Isometry3, Quaternion, Rotation3, Translation3, UnitQuaternion};
+use swarmpose_vision::rectify::{
+    RemapTable, StereoRectification, rectify_map, remap, stereo_rectify,
+};
+
+use crate::error::DatasetError;
+use crate::text::{numbers, parse_error, read_text};
+use crate::{RectifiedStereo, StereoPair, StereoSequence, check_counts, load_pair};
+
+pub use yaml::{SensorYaml, read_sensor_yaml};
+
+/// The `mav0` directory of `dir` (`dir` itself when it is one).
+fn mav0(dir: &Path) -> PathBuf {
+    if dir.file_name().is_some_and(|n| n == "mav0") {
+        dir.to_owned()
+    } else {
+        dir.join("mav0")
+    }
+}
+
+/// True when `dir` looks like a EuRoC sequence.
+#[must_use]
+pub fn detect(dir: &Path) -> bool {
+    let m = mav0(dir);
+    m.join("cam0").is_dir() && m.join("cam1").is_dir()
+}
+
+/// `(timestamp ns, image path)` rows of a camera `data.csv`.
+fn read_image_list(cam_dir: &Path) -> Result<Vec<(i64, PathBuf)>, DatasetError> {
+    let path = cam_dir.join("data.csv");
+    let text = read_text(&path, "EuRoC image list data.csv")?;
+    let mut out = Vec::new();
+    for (k, line) in text.lines().enumerate() {
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let Some((ts, name)) = line.split_once(',') else {
+            return Err(parse_error(&path, k + 1, "expected 'timestamp,filename'"));
+        };
+        let ts: i64 = ts.trim().parse().map_err(|_| {
+            parse_error(&path, k + 1, format!("'{}' is not a timestamp", ts.trim()))
+        })?;
+        out.push((ts, cam_dir.join("data").join(name.trim())));
+    }
+    Ok(out)
+}
+
+/// Body poses `(timestamp ns, world_from_body)` of a EuRoC ground-truth `data.csv`.
+fn read_groundtruth(path: &Path) -> Result<Vec<(i64, Isometry3<f64>)>, DatasetError> {
+    let text = read_text(path, "EuRoC ground truth data.csv")?;
+    let mut out = Vec::new();
+    for (k, line) in text.lines().enumerate() {
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let v = numbers(line, path, k + 1)?;
+        if v.len() < 8 {
+            return Err(parse_error(
+                path,
+                k + 1,
+                format!(
+                    "expected timestamp, position (3), quaternion wxyz (4); found {} numbers",
+                    v.len()
+                ),
+            ));
+        }
+        let q = UnitQuaternion::from_quaternion(Quaternion::new(v[4], v[5], v[6], v[7]));
+        let ts = line
+            .split(',')
+            .next()
+            .unwrap_or("")
+            .trim()
+            .parse::<i64>()
+            .unwrap_or(v[0] as i64);
+        out.push((
+            ts,
+            Isometry3::from_parts(Translation3::new(v[1], v[2], v[3]), q),
+        ));
+    }
+    Ok(out)
+}
+
+/// A EuRoC sequence, rectified on load.
+#[derive(Debug, Clone)]
+pub struct EurocSequence {
+    root: PathBuf,
+    left: Vec<PathBuf>,
+    right: Vec<PathBuf>,
+    timestamps_ns: Vec<i64>,
+    rectification: StereoRectification,
+    raw_size: (usize, usize),
+    left_map: RemapTable,
+    right_map: RemapTable,
+    poses: Option<Vec<Isometry3<f64>>>,
+}
+
+/// Largest time gap between a frame and its ground-truth row, nanoseconds.
+const GT_TOLERANCE_NS: i64 = 5_000_000;
+
+impl EurocSequence {
+    /// Opens a EuRoC sequence (the directory holding `mav0`, or `mav0` itself).
+    ///
+    /// # Errors
+    /// Missing or malformed `data.csv` / `sensor.yaml`, a left/right mismatch (count or
+    /// timestamps), a degenerate stereo geometry.
+    pub fn open(dir: &Path) -> Result<Self, DatasetError> {
+        let m = mav0(dir);
+        let (c0, c1) = (m.join("cam0"), m.join("cam1"));
+        let l = read_image_list(&c0)?;
+        let r = read_image_list(&c1)?;
+        let left: Vec<PathBuf> = l.iter().map(|x| x.1.clone()).collect();
+        let right: Vec<PathBuf> = r.iter().map(|x| x.1.clone()).collect();
+        check_counts(
+            dir,
+            &left,
+            &c0.join("data.csv"),
+            &right,
+            &c1.join("data.csv"),
+        )?;
+        if let Some(k) = l.iter().zip(&r).position(|(a, b)| a.0 != b.0) {
+            return Err(parse_error(
+                &c1.join("data.csv"),
+                0,
+                format!(
+                    "row {} has timestamp {} but cam0 has {}",
+                    k + 1,
+                    r[k].0,
+                    l[k].0
+                ),
+            ));
+        }
+        let s0 = read_sensor_yaml(&c0.join("sensor.yaml"))?;
+        let s1 = read_sensor_yaml(&c1.join("sensor.yaml"))?;
+        if (s0.camera.width, s0.camera.height) != (s1.camera.width, s1.camera.height) {
+            return Err(DatasetError::SizeMismatch {
+                first: c0.join("sensor.yaml"),
+                first_size: (s0.camera.width, s0.camera.height),
+                second: c1.join("sensor.yaml"),
+                second_size: (s1.camera.width, s1.camera.height),
+            });
+        }
+        // X_cam1 = T_BS1⁻¹ T_BS0 X_cam0.
+        let right_from_left = s1.body_from_camera.inverse() * s0.body_from_camera;
+        let rectification = stereo_rectify(
+            &s0.camera,
+            &s1.camera,
+            right_from_left.rotation.to_rotation_matrix().matrix(),
+            &right_from_left.translation.vector,
+        )
+        .map_err(|e| parse_error(&c1.join("sensor.yaml"), 0, e.to_string()))?;
+        let (w, h) = (rectification.width, rectification.height);
+        let left_map = rectify_map(
+            &s0.camera,
+            &rectification.rect_from_left,
+            &rectification.rig,
+            w,
+            h,
+        );
+        let right_map = rectify_map(
+            &s1.camera,
+            &rectification.rect_from_right,
+            &rectification.rig,
+            w,
+            h,
+        );
+        let gt_path = m.join("state_groundtruth_estimate0").join("data.csv");
+        let timestamps_ns: Vec<i64> = l.iter().map(|x| x.0).collect();
+        let poses = if gt_path.is_file() {
+            let gt = read_groundtruth(&gt_path)?;
+            // The rectified left camera in the world: T_WB T_BS0 R_rect⁻¹.
+            let cam_from_rect = Isometry3::from_parts(
+                Translation3::identity(),
+                UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix(
+                    &rectification.rect_from_left.transpose(),
+                )),
+            );
+            let world: Option<Vec<Isometry3<f64>>> = timestamps_ns
+                .iter()
+                .map(|&t| {
+                    let best = gt.iter().min_by_key(|g| (g.0 - t).abs())?;
+                    ((best.0 - t).abs() <= GT_TOLERANCE_NS)
+                        .then(|| best.1 * s0.body_from_camera * cam_from_rect)
+                })
+                .collect();
+            world.map(|w| {
+                let first_inv = w[0].inverse();
+                w.iter().map(|p| first_inv * p).collect()
+            })
+        } else {
+            None
+        };
+        Ok(Self {
+            root: dir.to_owned(),
+            left,
+            right,
+            timestamps_ns,
+            rectification,
+            raw_size: (s0.camera.width, s0.camera.height),
+            left_map,
+            right_map,
+            poses,
+        })
+    }
+
+    /// The rectification (rotations and the common camera).
+    #[must_use]
+    pub fn rectification(&self) -> &StereoRectification {
+        &self.rectification
+    }
+
+    /// Timestamps of the frames, nanoseconds.
+    #[must_use]
+    pub fn timestamps_ns(&self) -> &[i64] {
+        &self.timestamps_ns
+    }
+
+    /// Frame `i` as recorded (raw, distorted, unrectified).
+    ///
+    /// # Errors
+    /// As [`StereoSequence::frame`].
+    pub fn raw_frame(&self, i: usize) -> Result<StereoPair, DatasetError> {
+        let (Some(l), Some(r)) = (self.left.get(i), self.right.get(i)) else {
+            return Err(DatasetError::FrameOutOfRange {
+                dir: self.root.clone(),
+                index: i,
+                len: self.left.len(),
+            });
+        };
+        load_pair(
+            l,
+            r,
+            Some((self.raw_size, &self.root.join("mav0/cam0/sensor.yaml"))),
+        )
+    }
+}
+
+impl StereoSequence for EurocSequence {
+    fn layout(&self) -> &'static str {
+        "euroc"
+    }
+
+    fn root(&self) -> &Path {
+        &self.root
+    }
+
+    fn len(&self) -> usize {
+        self.left.len()
+    }
+
+    fn calibration(&self) -> RectifiedStereo {
+        self.rectification.rig
+    }
+
+    fn image_size(&self) -> (usize, usize) {
+        (self.rectification.width, self.rectification.height)
+    }
+
+    fn frame(&self, i: usize) -> Result<StereoPair, DatasetError> {
+        let raw = self.raw_frame(i)?;
+        Ok(StereoPair {
+            left: remap(raw.left.view(), &self.left_map),
+            right: remap(raw.right.view(), &self.right_map),
+        })
+    }
+
+    fn ground_truth(&self) -> Option<&[Isometry3<f64>]> {
+        self.poses.as_deref()
+    }
+}

@@ -1,0 +1,182 @@
+//! Karlsruhe stereo sequences (Geiger et al.): rectified, cropped grayscale pairs
+//! `I1_NNNNNN.png` (left) and `I2_NNNNNN.png` (right), in the sequence directory or its
+//! `*_Images/` subdirectory, and `calib.txt` whose `P1_roi` / `P2_roi` rows are the
+//! projection matrices of the cropped images (baseline from `P2_roi[0][3] = -f b`).
+//!
+//! `insdata.txt` holds rough GPS/INS poses of the vehicle, not of the camera, with no
+//! camera-to-INS extrinsic: it is not returned as camera ground truth.
+
+use std::path::{Path, PathBuf};
+
+use nalgebra::Isometry3;
+
+use crate::error::DatasetError;
+use crate::text::{list_sorted, numbers, parse_error, read_text};
+use crate::{RectifiedStereo, StereoPair, StereoSequence, check_counts, first_size, load_pair};
+
+fn is_left(name: &str) -> bool {
+    name.starts_with("I1_") && crate::text::is_png(name)
+}
+
+fn is_right(name: &str) -> bool {
+    name.starts_with("I2_") && crate::text::is_png(name)
+}
+
+/// The directory holding the `I1_*.png` images: `dir` or a `*_Images` subdirectory.
+fn image_dir(dir: &Path) -> Option<PathBuf> {
+    let has = |d: &Path| {
+        std::fs::read_dir(d).is_ok_and(|mut rd| {
+            rd.any(|e| e.is_ok_and(|e| e.file_name().to_str().is_some_and(is_left)))
+        })
+    };
+    if has(dir) {
+        return Some(dir.to_owned());
+    }
+    let mut subs: Vec<PathBuf> = std::fs::read_dir(dir)
+        .ok()?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.is_dir())
+        .collect();
+    subs.sort();
+    subs.into_iter().find(|p| has(p))
+}
+
+/// True when `dir` looks like a Karlsruhe sequence.
+#[must_use]
+pub fn detect(dir: &Path) -> bool {
+    image_dir(dir).is_some()
+}
+
+/// The rectified stereo model of a Karlsruhe `calib.txt` (`P1_roi`, `P2_roi` rows).
+///
+/// # Errors
+/// [`DatasetError::Parse`] naming the file and line.
+pub fn read_calibration(path: &Path) -> Result<RectifiedStereo, DatasetError> {
+    let text = read_text(path, "Karlsruhe calibration calib.txt")?;
+    let (mut p1, mut p2) = (None, None);
+    for (k, line) in text.lines().enumerate() {
+        let Some((name, rest)) = line.split_once(':') else {
+            continue;
+        };
+        let slot = match name.trim() {
+            "P1_roi" => &mut p1,
+            "P2_roi" => &mut p2,
+            _ => continue,
+        };
+        let v = numbers(rest, path, k + 1)?;
+        if v.len() != 12 {
+            return Err(parse_error(
+                path,
+                k + 1,
+                format!(
+                    "a 3x4 projection matrix needs 12 numbers, found {}",
+                    v.len()
+                ),
+            ));
+        }
+        *slot = Some((v, k + 1));
+    }
+    let (Some((p1, l1)), Some((p2, l2))) = (p1, p2) else {
+        return Err(parse_error(path, 0, "needs the P1_roi: and P2_roi: rows"));
+    };
+    if !(p1[0] > 0.0 && p1[5] > 0.0) {
+        return Err(parse_error(
+            path,
+            l1,
+            "P1_roi focal lengths must be positive",
+        ));
+    }
+    let baseline_m = -p2[3] / p2[0];
+    if baseline_m.is_nan() || baseline_m <= 0.0 {
+        return Err(parse_error(
+            path,
+            l2,
+            "P2_roi[0][3] gives no positive baseline",
+        ));
+    }
+    Ok(RectifiedStereo {
+        fx: p1[0],
+        fy: p1[5],
+        cx: p1[2],
+        cy: p1[6],
+        baseline_m,
+    })
+}
+
+/// A Karlsruhe sequence.
+#[derive(Debug, Clone)]
+pub struct KarlsruheSequence {
+    root: PathBuf,
+    left: Vec<PathBuf>,
+    right: Vec<PathBuf>,
+    rig: RectifiedStereo,
+    size: (usize, usize),
+}
+
+impl KarlsruheSequence {
+    /// Opens a sequence directory (the drive directory or its image directory).
+    ///
+    /// # Errors
+    /// No images, a count mismatch, a missing or malformed `calib.txt`, an unreadable
+    /// first image.
+    pub fn open(dir: &Path) -> Result<Self, DatasetError> {
+        let images = image_dir(dir).ok_or_else(|| DatasetError::Missing {
+            path: dir.join("I1_000000.png"),
+            what: "Karlsruhe left images I1_*.png",
+        })?;
+        let left = list_sorted(&images, is_left)?;
+        let right = list_sorted(&images, is_right)?;
+        check_counts(dir, &left, &images, &right, &images)?;
+        let calib = [dir.join("calib.txt"), images.join("calib.txt")]
+            .into_iter()
+            .chain(dir.parent().map(|p| p.join("calib.txt")))
+            .find(|p| p.is_file())
+            .unwrap_or_else(|| dir.join("calib.txt"));
+        let rig = read_calibration(&calib)?;
+        let size = first_size(&left[0])?;
+        Ok(Self {
+            root: dir.to_owned(),
+            left,
+            right,
+            rig,
+            size,
+        })
+    }
+}
+
+impl StereoSequence for KarlsruheSequence {
+    fn layout(&self) -> &'static str {
+        "karlsruhe"
+    }
+
+    fn root(&self) -> &Path {
+        &self.root
+    }
+
+    fn len(&self) -> usize {
+        self.left.len()
+    }
+
+    fn calibration(&self) -> RectifiedStereo {
+        self.rig
+    }
+
+    fn image_size(&self) -> (usize, usize) {
+        self.size
+    }
+
+    fn frame(&self, i: usize) -> Result<StereoPair, DatasetError> {
+        let (Some(l), Some(r)) = (self.left.get(i), self.right.get(i)) else {
+            return Err(DatasetError::FrameOutOfRange {
+                dir: self.root.clone(),
+                index: i,
+                len: self.len(),
+            });
+        };
+        load_pair(l, r, Some((self.size, &self.left[0])))
+    }
+
+    fn ground_truth(&self) -> Option<&[Isometry3<f64>]> {
+        None
+    }
+}

@@ -1,0 +1,227 @@
+//! KITTI odometry layout: `image_0/` (left) and `image_1/` (right) rectified grayscale
+//! PNGs, `calib.txt` with `P0:` and `P1:` 3x4 projection rows (the baseline comes from
+//! `P1[0][3] = -fx b`), and ground truth as row-major 3x4 `[R | t]` lines (`poses.txt`
+//! in the sequence directory, or `poses/NN.txt` of the official tree).
+
+use std::path::{Path, PathBuf};
+
+use nalgebra::Isometry3;
+
+use crate::error::DatasetError;
+use crate::text::{is_png, list_sorted, numbers, parse_error, read_text};
+use crate::{
+    RectifiedStereo, StereoPair, StereoSequence, check_counts, first_size, load_pair, pose_from_3x4,
+};
+
+/// True when `dir` looks like a KITTI sequence.
+#[must_use]
+pub fn detect(dir: &Path) -> bool {
+    dir.join("image_0").is_dir() && dir.join("image_1").is_dir()
+}
+
+/// A KITTI odometry sequence.
+#[derive(Debug, Clone)]
+pub struct KittiSequence {
+    root: PathBuf,
+    left: Vec<PathBuf>,
+    right: Vec<PathBuf>,
+    rig: RectifiedStereo,
+    size: (usize, usize),
+    poses: Option<Vec<Isometry3<f64>>>,
+}
+
+/// The rectified stereo model of a KITTI `calib.txt` (`P0:`/`P1:` rows; two unprefixed
+/// rows are read as P0 and P1).
+///
+/// # Errors
+/// [`DatasetError::Parse`] naming the file and line of a malformed row or a missing one.
+pub fn read_calibration(path: &Path) -> Result<RectifiedStereo, DatasetError> {
+    let text = read_text(path, "KITTI calibration calib.txt")?;
+    let (mut p0, mut p1) = (None, None);
+    let mut unnamed = Vec::new();
+    for (k, line) in text.lines().enumerate() {
+        let line_no = k + 1;
+        let line = line.trim();
+        if line.is_empty() {
+            continue;
+        }
+        let (name, rest) = match line.split_once(':') {
+            Some((n, r)) => (Some(n.trim()), r),
+            None => (None, line),
+        };
+        let slot = match name {
+            Some("P0") => &mut p0,
+            Some("P1") => &mut p1,
+            Some(_) => continue,
+            None => {
+                unnamed.push(line_no);
+                if unnamed.len() == 1 {
+                    &mut p0
+                } else if unnamed.len() == 2 {
+                    &mut p1
+                } else {
+                    continue;
+                }
+            }
+        };
+        let v = numbers(rest, path, line_no)?;
+        if v.len() != 12 {
+            return Err(parse_error(
+                path,
+                line_no,
+                format!(
+                    "a 3x4 projection matrix needs 12 numbers, found {}",
+                    v.len()
+                ),
+            ));
+        }
+        *slot = Some((v, line_no));
+    }
+    let (Some((p0, _)), Some((p1, l1))) = (p0, p1) else {
+        return Err(parse_error(
+            path,
+            0,
+            "needs the P0: and P1: projection rows",
+        ));
+    };
+    if !(p0[0] > 0.0 && p0[5] > 0.0) {
+        return Err(parse_error(path, 1, "P0 focal lengths must be positive"));
+    }
+    let baseline_m = -p1[3] / p1[0];
+    if baseline_m.is_nan() || baseline_m <= 0.0 {
+        return Err(parse_error(
+            path,
+            l1,
+            format!(
+                "P1[0][3] = {} gives no positive baseline (expected -fx * b)",
+                p1[3]
+            ),
+        ));
+    }
+    Ok(RectifiedStereo {
+        fx: p0[0],
+        fy: p0[5],
+        cx: p0[2],
+        cy: p0[6],
+        baseline_m,
+    })
+}
+
+/// Reads row-major 3x4 poses, one per line.
+///
+/// # Errors
+/// [`DatasetError::Parse`] naming the file and line.
+pub fn read_poses(path: &Path) -> Result<Vec<Isometry3<f64>>, DatasetError> {
+    let text = read_text(path, "ground-truth poses")?;
+    let mut out = Vec::new();
+    for (k, line) in text.lines().enumerate() {
+        if line.trim().is_empty() {
+            continue;
+        }
+        let v = numbers(line, path, k + 1)?;
+        if v.len() != 12 {
+            return Err(parse_error(
+                path,
+                k + 1,
+                format!("a 3x4 pose needs 12 numbers, found {}", v.len()),
+            ));
+        }
+        out.push(pose_from_3x4(&v));
+    }
+    Ok(out)
+}
+
+impl KittiSequence {
+    /// Opens a KITTI sequence directory.
+    ///
+    /// # Errors
+    /// Missing directories or calibration, a malformed calibration or pose line, a
+    /// left/right count mismatch, an unreadable first image.
+    pub fn open(dir: &Path) -> Result<Self, DatasetError> {
+        let (ld, rd) = (dir.join("image_0"), dir.join("image_1"));
+        for d in [&ld, &rd] {
+            if !d.is_dir() {
+                return Err(DatasetError::Missing {
+                    path: d.clone(),
+                    what: "KITTI image directory",
+                });
+            }
+        }
+        let left = list_sorted(&ld, is_png)?;
+        let right = list_sorted(&rd, is_png)?;
+        check_counts(dir, &left, &ld, &right, &rd)?;
+        let rig = read_calibration(&dir.join("calib.txt"))?;
+        let size = first_size(&left[0])?;
+        let pose_file = official_poses(dir).unwrap_or_else(|| dir.join("poses.txt"));
+        let poses = if pose_file.is_file() {
+            let p = read_poses(&pose_file)?;
+            if p.len() != left.len() {
+                return Err(parse_error(
+                    &pose_file,
+                    0,
+                    format!("{} poses for {} frames", p.len(), left.len()),
+                ));
+            }
+            Some(p)
+        } else {
+            None
+        };
+        Ok(Self {
+            root: dir.to_owned(),
+            left,
+            right,
+            rig,
+            size,
+            poses,
+        })
+    }
+}
+
+/// `../../poses/NN.txt` for an official `sequences/NN` directory, when it exists.
+fn official_poses(dir: &Path) -> Option<PathBuf> {
+    let name = dir.file_name()?;
+    let p = dir
+        .parent()?
+        .parent()?
+        .join("poses")
+        .join(name)
+        .with_extension("txt");
+    p.is_file().then_some(p)
+}
+
+impl StereoSequence for KittiSequence {
+    fn layout(&self) -> &'static str {
+        "kitti"
+    }
+
+    fn root(&self) -> &Path {
+        &self.root
+    }
+
+    fn len(&self) -> usize {
+        self.left.len()
+    }
+
+    fn calibration(&self) -> RectifiedStereo {
+        self.rig
+    }
+
+    fn image_size(&self) -> (usize, usize) {
+        self.size
+    }
+
+    fn frame(&self, i: usize) -> Result<StereoPair, DatasetError> {
+        let (Some(l), Some(r)) = (self.left.get(i), self.right.get(i)) else {
+            return Err(DatasetError::FrameOutOfRange {
+                dir: self.root.clone(),
+                index: i,
+                len: self.len(),
+            });
+        };
+        load_pair(l, r, Some((self.size, &self.left[0])))
+    }
+
+    fn ground_truth(&self) -> Option<&[Isometry3<f64>]> {
+        self.poses.as_deref()
+    }
+}

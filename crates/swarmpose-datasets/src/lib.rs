@@ -1,0 +1,189 @@
+//! # swarmpose-datasets
+//!
+//! Stereo image sequences behind one [`StereoSequence`] abstraction: frames in order as
+//! rectified grayscale pairs, the rectified stereo calibration, and optional ground
+//! truth. Three real layouts are read:
+//!
+//! | layout | module | notes |
+//! |---|---|---|
+//! | KITTI odometry | [`kitti`] | `image_0/`, `image_1/`, `calib.txt` (`P0:`, `P1:`), `poses.txt` or `../../poses/NN.txt` |
+//! | Karlsruhe sequences | [`karlsruhe`] | `I1_*.png`, `I2_*.png`, `calib.txt` (`P1_roi`, `P2_roi`); INS data is not camera ground truth |
+//! | EuRoC MAV (ASL) | [`euroc`] | raw images, undistorted and rectified on load from `sensor.yaml` |
+//!
+//! [`open`] detects the layout of a directory.
+//!
+//! Frames: ground-truth poses are those of the (rectified) LEFT camera at each frame,
+//! expressed in the left camera frame of frame 0 (x right, y down, z forward, metres).
+#![deny(missing_docs)]
+#![warn(clippy::unwrap_used)]
+
+pub mod error;
+pub mod euroc;
+pub mod karlsruhe;
+pub mod kitti;
+mod text;
+
+use std::path::{Path, PathBuf};
+
+use nalgebra::Isometry3;
+
+pub use error::DatasetError;
+pub use swarmpose_vision::image::GrayImage;
+pub use swarmpose_vision::stereo::RectifiedStereo;
+
+/// One rectified stereo frame, 8-bit grayscale, both images the same size.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct StereoPair {
+    /// Left image.
+    pub left: GrayImage,
+    /// Right image.
+    pub right: GrayImage,
+}
+
+/// A stereo sequence: frames in order, calibration, optional ground truth.
+pub trait StereoSequence: Send + Sync {
+    /// The layout (`kitti`, `karlsruhe`, `euroc`).
+    fn layout(&self) -> &'static str;
+
+    /// The sequence directory.
+    fn root(&self) -> &Path;
+
+    /// Number of frames.
+    fn len(&self) -> usize;
+
+    /// True when there are no frames.
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The rectified stereo model of every frame (pixels, baseline metres).
+    fn calibration(&self) -> RectifiedStereo;
+
+    /// Width and height of the rectified images, pixels.
+    fn image_size(&self) -> (usize, usize);
+
+    /// Loads frame `i` (0-based), rectified.
+    ///
+    /// # Errors
+    /// A missing or unreadable image, images of different sizes, or `i` out of range;
+    /// the message names the file.
+    fn frame(&self, i: usize) -> Result<StereoPair, DatasetError>;
+
+    /// Ground-truth pose of the left camera at each frame in the left camera frame of
+    /// frame 0, when the sequence has camera ground truth.
+    fn ground_truth(&self) -> Option<&[Isometry3<f64>]>;
+
+    /// Ground-truth motion mapping frame-`j` camera coordinates into frame `i`:
+    /// `pose_i⁻¹ · pose_j`, i.e. `dst = R src + t` with src in frame `j`, dst in frame `i`.
+    fn relative_ground_truth(&self, i: usize, j: usize) -> Option<Isometry3<f64>> {
+        let gt = self.ground_truth()?;
+        Some(gt.get(i)?.inverse() * gt.get(j)?)
+    }
+}
+
+/// Opens `dir`, detecting its layout.
+///
+/// # Errors
+/// [`DatasetError::Missing`] when `dir` does not exist, [`DatasetError::UnknownLayout`]
+/// when it matches no layout, or the loader's error.
+pub fn open(dir: &Path) -> Result<Box<dyn StereoSequence>, DatasetError> {
+    if !dir.is_dir() {
+        return Err(DatasetError::Missing {
+            path: dir.to_owned(),
+            what: "sequence directory",
+        });
+    }
+    if kitti::detect(dir) {
+        return Ok(Box::new(kitti::KittiSequence::open(dir)?));
+    }
+    if euroc::detect(dir) {
+        return Ok(Box::new(euroc::EurocSequence::open(dir)?));
+    }
+    if karlsruhe::detect(dir) {
+        return Ok(Box::new(karlsruhe::KarlsruheSequence::open(dir)?));
+    }
+    Err(DatasetError::UnknownLayout {
+        dir: dir.to_owned(),
+    })
+}
+
+/// The data root: `$SWARMPOSE_DATA`, or `../shared/data` next to the repository.
+#[must_use]
+pub fn data_root() -> PathBuf {
+    match std::env::var_os("SWARMPOSE_DATA") {
+        Some(p) if !p.is_empty() => PathBuf::from(p),
+        _ => Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data"),
+    }
+}
+
+/// Loads a left/right pair of PNGs and checks that both have `expected` size (when
+/// given) and the same size.
+///
+/// # Errors
+/// Image errors naming the file; [`DatasetError::SizeMismatch`] naming both files.
+pub fn load_pair(
+    left: &Path,
+    right: &Path,
+    expected: Option<((usize, usize), &Path)>,
+) -> Result<StereoPair, DatasetError> {
+    let l = GrayImage::load_png(left)?;
+    let r = GrayImage::load_png(right)?;
+    let (ls, rs) = ((l.width, l.height), (r.width, r.height));
+    if ls != rs {
+        return Err(DatasetError::SizeMismatch {
+            first: left.to_owned(),
+            first_size: ls,
+            second: right.to_owned(),
+            second_size: rs,
+        });
+    }
+    if let Some((size, reference)) = expected
+        && ls != size
+    {
+        return Err(DatasetError::SizeMismatch {
+            first: reference.to_owned(),
+            first_size: size,
+            second: left.to_owned(),
+            second_size: ls,
+        });
+    }
+    Ok(StereoPair { left: l, right: r })
+}
+
+/// Checks that the left and right lists have the same length and are not empty.
+pub(crate) fn check_counts(
+    dir: &Path,
+    left: &[PathBuf],
+    left_dir: &Path,
+    right: &[PathBuf],
+    right_dir: &Path,
+) -> Result<(), DatasetError> {
+    if left.len() != right.len() {
+        return Err(DatasetError::CountMismatch {
+            left_dir: left_dir.to_owned(),
+            left: left.len(),
+            right_dir: right_dir.to_owned(),
+            right: right.len(),
+        });
+    }
+    if left.is_empty() {
+        return Err(DatasetError::Empty {
+            dir: dir.to_owned(),
+        });
+    }
+    Ok(())
+}
+
+/// Size of the first image of a sequence (read from its header by decoding it).
+pub(crate) fn first_size(path: &Path) -> Result<(usize, usize), DatasetError> {
+    let img = GrayImage::load_png(path)?;
+    Ok((img.width, img.height))
+}
+
+/// Rows of 12 numbers as row-major 3x4 `[R | t]` poses.
+pub(crate) fn pose_from_3x4(m: &[f64]) -> Isometry3<f64> {
+    use nalgebra::{Matrix3, Rotation3, Translation3, UnitQuaternion};
+    let r = Matrix3::new(m[0], m[1], m[2], m[4], m[5], m[6], m[8], m[9], m[10]);
+    let rot = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix(&r));
+    Isometry3::from_parts(Translation3::new(m[3], m[7], m[11]), rot)
+}

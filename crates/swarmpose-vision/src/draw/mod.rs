@@ -1,0 +1,131 @@
+//! Drawing matches between two frames side by side (the paper's figure 9): frame I on
+//! the left, frame J on the right, a line per match; once an estimator has run, inliers
+//! in green and outliers in red (yellow when no classification is given).
+
+use std::path::Path;
+
+use crate::features::GrayView;
+
+/// Colour of a match without classification.
+pub const UNCLASSIFIED: [u8; 3] = [255, 220, 0];
+/// Colour of an inlier.
+pub const INLIER: [u8; 3] = [0, 230, 0];
+/// Colour of an outlier.
+pub const OUTLIER: [u8; 3] = [255, 40, 40];
+
+/// An RGB canvas, row-major, 3 bytes per pixel.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Canvas {
+    /// Width, pixels.
+    pub width: usize,
+    /// Height, pixels.
+    pub height: usize,
+    /// Pixels, `3 * (y * width + x)` is the red byte of `(x, y)`.
+    pub rgb: Vec<u8>,
+}
+
+impl Canvas {
+    /// Sets one pixel; outside is ignored.
+    pub fn put(&mut self, x: i64, y: i64, c: [u8; 3]) {
+        if x >= 0 && y >= 0 && (x as usize) < self.width && (y as usize) < self.height {
+            let i = 3 * (y as usize * self.width + x as usize);
+            self.rgb[i..i + 3].copy_from_slice(&c);
+        }
+    }
+
+    /// A straight line (Bresenham) between two pixels.
+    pub fn line(&mut self, a: (f32, f32), b: (f32, f32), c: [u8; 3]) {
+        let (mut x0, mut y0) = (a.0.round() as i64, a.1.round() as i64);
+        let (x1, y1) = (b.0.round() as i64, b.1.round() as i64);
+        let (dx, dy) = ((x1 - x0).abs(), -(y1 - y0).abs());
+        let (sx, sy) = (if x0 < x1 { 1 } else { -1 }, if y0 < y1 { 1 } else { -1 });
+        let mut err = dx + dy;
+        loop {
+            self.put(x0, y0, c);
+            if x0 == x1 && y0 == y1 {
+                break;
+            }
+            let e2 = 2 * err;
+            if e2 >= dy {
+                err += dy;
+                x0 += sx;
+            }
+            if e2 <= dx {
+                err += dx;
+                y0 += sy;
+            }
+        }
+    }
+
+    /// A small square marker of half-size 2 pixels.
+    pub fn marker(&mut self, p: (f32, f32), c: [u8; 3]) {
+        let (x, y) = (p.0.round() as i64, p.1.round() as i64);
+        for d in -2..=2 {
+            self.put(x + d, y - 2, c);
+            self.put(x + d, y + 2, c);
+            self.put(x - 2, y + d, c);
+            self.put(x + 2, y + d, c);
+        }
+    }
+
+    /// Saves as an RGB PNG.
+    ///
+    /// # Errors
+    /// The encoder's or the file system's message, naming `path`.
+    pub fn save_png(&self, path: &Path) -> Result<(), String> {
+        image::save_buffer(
+            path,
+            &self.rgb,
+            self.width as u32,
+            self.height as u32,
+            image::ExtendedColorType::Rgb8,
+        )
+        .map_err(|e| format!("{}: cannot write PNG: {e}", path.display()))
+    }
+}
+
+/// Frame I (`dst_img`) and frame J (`src_img`) side by side with a line from each
+/// `dst_pixels[k]` to `src_pixels[k]`; `inlier[k]` picks the colour when given.
+#[must_use]
+pub fn draw_matches(
+    dst_img: GrayView<'_>,
+    src_img: GrayView<'_>,
+    dst_pixels: &[(f32, f32)],
+    src_pixels: &[(f32, f32)],
+    inlier: Option<&[bool]>,
+) -> Canvas {
+    let width = dst_img.width + src_img.width;
+    let height = dst_img.height.max(src_img.height);
+    let mut canvas = Canvas {
+        width,
+        height,
+        rgb: vec![0; 3 * width * height],
+    };
+    for (img, x_off) in [(dst_img, 0), (src_img, dst_img.width)] {
+        for y in 0..img.height {
+            for x in 0..img.width {
+                let g = img.data[y * img.width + x];
+                let i = 3 * (y * width + x + x_off);
+                canvas.rgb[i..i + 3].copy_from_slice(&[g, g, g]);
+            }
+        }
+    }
+    let off = dst_img.width as f32;
+    // Outliers first so inliers stay visible on top.
+    let colour = |k: usize| match inlier {
+        None => UNCLASSIFIED,
+        Some(v) if v.get(k).copied().unwrap_or(false) => INLIER,
+        Some(_) => OUTLIER,
+    };
+    let mut order: Vec<usize> = (0..dst_pixels.len().min(src_pixels.len())).collect();
+    order.sort_by_key(|&k| colour(k) == INLIER);
+    for k in order {
+        let c = colour(k);
+        let a = dst_pixels[k];
+        let b = (src_pixels[k].0 + off, src_pixels[k].1);
+        canvas.line(a, b, c);
+        canvas.marker(a, c);
+        canvas.marker(b, c);
+    }
+    canvas
+}

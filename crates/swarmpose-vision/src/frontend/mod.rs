@@ -1,0 +1,242 @@
+//! The front end: from two rectified stereo frames to the 3D-3D correspondences the
+//! core estimators take, plus the pixel positions needed to draw them.
+//!
+//! Per frame: extract features in both images, match them along rows and triangulate
+//! ([`StereoFrame`]). Per pair of frames: match the left features of the triangulated
+//! points ([`Frontend::match_frames`]), optionally confirmed by the right images.
+
+use nalgebra::Point3;
+use swarmpose_core::{Correspondences, PoseError};
+
+use crate::bucketing::{BucketConfig, bucket_features};
+use crate::features::{Descriptor, FeatureExtractor, Features, GrayView, Keypoint};
+use crate::orb::OrbExtractor;
+use crate::stereo::{RectifiedStereo, StereoConfig, match_stereo};
+use crate::temporal::{TemporalConfig, circular_check, mutual_matches};
+
+/// The triangulated features of one stereo frame, index-aligned: feature `k` is seen at
+/// `left_keypoints[k]` and `right_keypoints[k]` and lies at `points[k]`.
+#[derive(Debug, Clone)]
+pub struct StereoFrame<D> {
+    /// Left-image keypoints, pixels.
+    pub left_keypoints: Vec<Keypoint>,
+    /// Their descriptors.
+    pub left_descriptors: Vec<D>,
+    /// Right-image keypoints, pixels.
+    pub right_keypoints: Vec<Keypoint>,
+    /// Their descriptors.
+    pub right_descriptors: Vec<D>,
+    /// The points, metres, in this frame's LEFT camera frame.
+    pub points: Vec<Point3<f64>>,
+    /// Sub-pixel disparities, pixels.
+    pub disparities_px: Vec<f32>,
+    /// Features detected in the left image before stereo matching.
+    pub n_left_features: usize,
+    /// Features detected in the right image.
+    pub n_right_features: usize,
+}
+
+impl<D> Default for StereoFrame<D> {
+    fn default() -> Self {
+        Self {
+            left_keypoints: Vec::new(),
+            left_descriptors: Vec::new(),
+            right_keypoints: Vec::new(),
+            right_descriptors: Vec::new(),
+            points: Vec::new(),
+            disparities_px: Vec::new(),
+            n_left_features: 0,
+            n_right_features: 0,
+        }
+    }
+}
+
+impl<D> StereoFrame<D> {
+    /// Number of triangulated features.
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.points.len()
+    }
+
+    /// True when no feature was triangulated.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+}
+
+/// The matches between frame I (destination) and frame J (source).
+#[derive(Debug, Clone)]
+pub struct FrameMatches {
+    /// `src[k]`: the point in frame J's left camera frame; `dst[k]`: the same feature in
+    /// frame I's left camera frame (metres). The motion `dst = R src + t` is the pose of
+    /// camera J in camera I.
+    pub correspondences: Correspondences,
+    /// Left-image pixel `(u, v)` of each correspondence in frame J.
+    pub src_pixels: Vec<(f32, f32)>,
+    /// Left-image pixel `(u, v)` of each correspondence in frame I.
+    pub dst_pixels: Vec<(f32, f32)>,
+    /// Index of each correspondence in frame J's [`StereoFrame`].
+    pub src_index: Vec<usize>,
+    /// Index of each correspondence in frame I's [`StereoFrame`].
+    pub dst_index: Vec<usize>,
+}
+
+/// Detector, calibration and matching settings of the front end.
+#[derive(Debug, Clone)]
+pub struct Frontend<E> {
+    /// The detector/descriptor.
+    pub extractor: E,
+    /// The rectified stereo camera.
+    pub rig: RectifiedStereo,
+    /// Stereo matching.
+    pub stereo: StereoConfig,
+    /// Matching between frames.
+    pub temporal: TemporalConfig,
+    /// Bucketing applied to each image's features after extraction (for extractors
+    /// that do not bucket themselves); `None` keeps them all.
+    pub bucketing: Option<BucketConfig>,
+}
+
+impl Frontend<OrbExtractor> {
+    /// The fast binary front end with default settings.
+    #[must_use]
+    pub fn orb(rig: RectifiedStereo) -> Self {
+        Self {
+            extractor: OrbExtractor::default(),
+            rig,
+            stereo: StereoConfig::default(),
+            temporal: TemporalConfig::default(),
+            bucketing: None,
+        }
+    }
+}
+
+impl<E: FeatureExtractor> Frontend<E> {
+    /// A front end for a real-valued descriptor (SURF): Euclidean distance limits
+    /// suited to unit-length descriptors, a stricter ratio, and bucketing.
+    #[must_use]
+    pub fn float_descriptor(extractor: E, rig: RectifiedStereo) -> Self {
+        Self {
+            extractor,
+            rig,
+            stereo: StereoConfig {
+                max_distance: 0.35,
+                ratio: 0.85,
+                ..StereoConfig::default()
+            },
+            temporal: TemporalConfig {
+                max_distance: 0.4,
+                ratio: 0.85,
+                ..TemporalConfig::default()
+            },
+            bucketing: Some(BucketConfig::default()),
+        }
+    }
+
+    /// Extracts (and buckets) the features of one image.
+    #[must_use]
+    pub fn extract(&self, image: GrayView<'_>) -> Features<E::Descriptor> {
+        let f = self.extractor.extract(image);
+        match &self.bucketing {
+            Some(b) => bucket_features(&f, image.width, image.height, b),
+            None => f,
+        }
+    }
+
+    /// Stereo-matches already extracted features and triangulates them.
+    #[must_use]
+    pub fn stereo_from_features(
+        &self,
+        left: &Features<E::Descriptor>,
+        right: &Features<E::Descriptor>,
+        left_img: GrayView<'_>,
+        right_img: GrayView<'_>,
+    ) -> StereoFrame<E::Descriptor> {
+        let matches = match_stereo(left, right, left_img, right_img, &self.rig, &self.stereo);
+        let mut f = StereoFrame {
+            n_left_features: left.len(),
+            n_right_features: right.len(),
+            ..StereoFrame::default()
+        };
+        for m in matches {
+            f.left_keypoints.push(left.keypoints[m.left]);
+            f.left_descriptors.push(left.descriptors[m.left].clone());
+            f.right_keypoints.push(right.keypoints[m.right]);
+            f.right_descriptors.push(right.descriptors[m.right].clone());
+            f.points.push(m.point);
+            f.disparities_px.push(m.disparity_px);
+        }
+        f
+    }
+
+    /// One stereo frame: extract in both images, match, triangulate.
+    #[must_use]
+    pub fn stereo_frame(
+        &self,
+        left: GrayView<'_>,
+        right: GrayView<'_>,
+    ) -> StereoFrame<E::Descriptor> {
+        let lf = self.extract(left);
+        let rf = self.extract(right);
+        self.stereo_from_features(&lf, &rf, left, right)
+    }
+
+    /// Matches frame J (`src`) to frame I (`dst`): mutual nearest neighbours of the left
+    /// descriptors (and the circular check when configured).
+    ///
+    /// # Errors
+    /// Never in practice (the points are finite); kept for the core's checked
+    /// constructor.
+    pub fn match_frames(
+        &self,
+        dst: &StereoFrame<E::Descriptor>,
+        src: &StereoFrame<E::Descriptor>,
+    ) -> Result<FrameMatches, PoseError> {
+        match_frames(dst, src, &self.temporal)
+    }
+}
+
+/// [`Frontend::match_frames`] without a front end.
+///
+/// # Errors
+/// As [`Frontend::match_frames`].
+pub fn match_frames<D: Descriptor>(
+    dst: &StereoFrame<D>,
+    src: &StereoFrame<D>,
+    config: &TemporalConfig,
+) -> Result<FrameMatches, PoseError> {
+    let mut pairs = mutual_matches(
+        &dst.left_keypoints,
+        &dst.left_descriptors,
+        &src.left_keypoints,
+        &src.left_descriptors,
+        config,
+    );
+    if config.circular_check {
+        let right = mutual_matches(
+            &dst.right_keypoints,
+            &dst.right_descriptors,
+            &src.right_keypoints,
+            &src.right_descriptors,
+            config,
+        );
+        pairs = circular_check(&pairs, &right);
+    }
+    let src_pts = pairs.iter().map(|&(_, j)| src.points[j]).collect();
+    let dst_pts = pairs.iter().map(|&(i, _)| dst.points[i]).collect();
+    let px = |k: &Keypoint| (k.x, k.y);
+    Ok(FrameMatches {
+        correspondences: Correspondences::new(src_pts, dst_pts)?,
+        src_pixels: pairs
+            .iter()
+            .map(|&(_, j)| px(&src.left_keypoints[j]))
+            .collect(),
+        dst_pixels: pairs
+            .iter()
+            .map(|&(i, _)| px(&dst.left_keypoints[i]))
+            .collect(),
+        src_index: pairs.iter().map(|&(_, j)| j).collect(),
+        dst_index: pairs.iter().map(|&(i, _)| i).collect(),
+    })
+}

@@ -1,0 +1,208 @@
+//! Owned 8-bit grayscale images: PNG loading with errors naming the file, bilinear
+//! sampling and a small separable blur.
+
+use std::path::{Path, PathBuf};
+
+use crate::features::GrayView;
+
+/// Why an image could not be loaded. Every variant names the file.
+#[derive(Debug, thiserror::Error)]
+pub enum ImageError {
+    /// The file could not be read (missing, permissions, ...).
+    #[error("{}: cannot read image: {source}", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+    /// The bytes are not a decodable PNG.
+    #[error("{}: not a readable PNG image: {message}", path.display())]
+    Decode {
+        /// The file.
+        path: PathBuf,
+        /// What the decoder said.
+        message: String,
+    },
+}
+
+/// An owned 8-bit grayscale image, row-major.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct GrayImage {
+    /// Width, pixels.
+    pub width: usize,
+    /// Height, pixels.
+    pub height: usize,
+    /// Pixels, row-major: pixel `(x, y)` is `data[y * width + x]`.
+    pub data: Vec<u8>,
+}
+
+impl GrayImage {
+    /// A black image of this size (pixels).
+    #[must_use]
+    pub fn new(width: usize, height: usize) -> Self {
+        Self {
+            width,
+            height,
+            data: vec![0; width * height],
+        }
+    }
+
+    /// Wraps row-major pixels; `None` when `data.len() != width * height`.
+    #[must_use]
+    pub fn from_raw(width: usize, height: usize, data: Vec<u8>) -> Option<Self> {
+        (data.len() == width * height).then_some(Self {
+            width,
+            height,
+            data,
+        })
+    }
+
+    /// Loads a PNG (any colour type; converted to 8-bit luma).
+    ///
+    /// # Errors
+    /// [`ImageError`] naming `path` when it cannot be read or decoded.
+    pub fn load_png(path: &Path) -> Result<Self, ImageError> {
+        let bytes = std::fs::read(path).map_err(|source| ImageError::Read {
+            path: path.to_owned(),
+            source,
+        })?;
+        let decoded = image::load_from_memory_with_format(&bytes, image::ImageFormat::Png)
+            .map_err(|e| ImageError::Decode {
+                path: path.to_owned(),
+                message: e.to_string(),
+            })?;
+        let luma = decoded.into_luma8();
+        let (w, h) = (luma.width() as usize, luma.height() as usize);
+        Ok(Self {
+            width: w,
+            height: h,
+            data: luma.into_raw(),
+        })
+    }
+
+    /// Saves as an 8-bit grayscale PNG.
+    ///
+    /// # Errors
+    /// The encoder's or the file system's message, naming `path`.
+    pub fn save_png(&self, path: &Path) -> Result<(), String> {
+        image::save_buffer(
+            path,
+            &self.data,
+            self.width as u32,
+            self.height as u32,
+            image::ExtendedColorType::L8,
+        )
+        .map_err(|e| format!("{}: cannot write PNG: {e}", path.display()))
+    }
+
+    /// A borrowed view.
+    #[must_use]
+    pub fn view(&self) -> GrayView<'_> {
+        GrayView {
+            width: self.width,
+            height: self.height,
+            data: &self.data,
+        }
+    }
+
+    /// Pixel `(x, y)`; the caller keeps it inside.
+    #[inline]
+    #[must_use]
+    pub fn get(&self, x: usize, y: usize) -> u8 {
+        self.data[y * self.width + x]
+    }
+}
+
+/// Bilinear sample at `(x, y)` pixels (pixel centres at integers); `None` outside the
+/// image (a sample needs all four neighbours).
+#[inline]
+#[must_use]
+pub fn sample_bilinear(img: GrayView<'_>, x: f32, y: f32) -> Option<f32> {
+    if !(x >= 0.0 && y >= 0.0) {
+        return None;
+    }
+    let (x0, y0) = (x as usize, y as usize);
+    if x0 + 1 >= img.width || y0 + 1 >= img.height {
+        // Exactly on the last row/column is still inside.
+        if x0 < img.width && y0 < img.height && x == x0 as f32 && y == y0 as f32 {
+            return Some(f32::from(img.data[y0 * img.width + x0]));
+        }
+        return None;
+    }
+    let (fx, fy) = (x - x0 as f32, y - y0 as f32);
+    let i = y0 * img.width + x0;
+    let d = img.data;
+    let top = f32::from(d[i]) * (1.0 - fx) + f32::from(d[i + 1]) * fx;
+    let bot = f32::from(d[i + img.width]) * (1.0 - fx) + f32::from(d[i + img.width + 1]) * fx;
+    Some(top * (1.0 - fy) + bot * fy)
+}
+
+/// Separable binomial blur `[1 4 6 4 1] / 16` (σ ≈ 1 pixel), borders clamped. `out` is
+/// resized to the image; `tmp` is scratch space (reused between calls).
+pub fn blur5(img: GrayView<'_>, tmp: &mut Vec<u16>, out: &mut Vec<u8>) {
+    let (w, h) = (img.width, img.height);
+    tmp.clear();
+    tmp.resize(w * h, 0);
+    out.clear();
+    out.resize(w * h, 0);
+    if w == 0 || h == 0 {
+        return;
+    }
+    let d = img.data;
+    for y in 0..h {
+        let row = &d[y * w..(y + 1) * w];
+        let trow = &mut tmp[y * w..(y + 1) * w];
+        for (x, t) in trow.iter_mut().enumerate() {
+            let at = |dx: isize| -> u16 {
+                let xx = (x as isize + dx).clamp(0, w as isize - 1) as usize;
+                u16::from(row[xx])
+            };
+            *t = at(-2) + 4 * at(-1) + 6 * at(0) + 4 * at(1) + at(2);
+        }
+    }
+    for y in 0..h {
+        let r = |dy: isize| (y as isize + dy).clamp(0, h as isize - 1) as usize * w;
+        let (a, b, c, e, f) = (r(-2), r(-1), r(0), r(1), r(2));
+        let orow = &mut out[y * w..(y + 1) * w];
+        for (x, o) in orow.iter_mut().enumerate() {
+            let s = u32::from(tmp[a + x])
+                + 4 * u32::from(tmp[b + x])
+                + 6 * u32::from(tmp[c + x])
+                + 4 * u32::from(tmp[e + x])
+                + u32::from(tmp[f + x]);
+            *o = ((s + 128) >> 8) as u8;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bilinear_and_blur() {
+        let img = GrayImage::from_raw(2, 2, vec![0, 100, 100, 200]).expect("size");
+        assert_eq!(sample_bilinear(img.view(), 0.5, 0.5), Some(100.0));
+        assert_eq!(sample_bilinear(img.view(), 1.0, 1.0), Some(200.0));
+        assert_eq!(sample_bilinear(img.view(), 1.5, 0.0), None);
+        let flat = GrayImage::from_raw(7, 5, vec![77; 35]).expect("size");
+        let (mut t, mut o) = (Vec::new(), Vec::new());
+        blur5(flat.view(), &mut t, &mut o);
+        assert!(o.iter().all(|&v| v == 77));
+    }
+
+    #[test]
+    fn load_errors_name_the_file() {
+        let missing = Path::new("/nonexistent/dir/x.png");
+        let e = GrayImage::load_png(missing).expect_err("missing");
+        assert!(e.to_string().contains("/nonexistent/dir/x.png"));
+        let dir = std::env::temp_dir().join(format!("swarmpose-vision-img-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("tmp");
+        let bad = dir.join("bad.png");
+        std::fs::write(&bad, b"not a png").expect("write");
+        let e = GrayImage::load_png(&bad).expect_err("bad");
+        assert!(e.to_string().contains("bad.png") && e.to_string().contains("PNG"));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}

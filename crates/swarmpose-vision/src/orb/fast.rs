@@ -1,0 +1,222 @@
+//! FAST-9 corners (Rosten & Drummond) with a 3x3 non-maximum suppression, and the
+//! Harris response and intensity-centroid orientation used to rank and orient them.
+
+use crate::features::GrayView;
+
+/// The 16 pixels of the Bresenham circle of radius 3, clockwise from the top.
+const CIRCLE: [(isize, isize); 16] = [
+    (0, -3),
+    (1, -3),
+    (2, -2),
+    (3, -1),
+    (3, 0),
+    (3, 1),
+    (2, 2),
+    (1, 3),
+    (0, 3),
+    (-1, 3),
+    (-2, 2),
+    (-3, 1),
+    (-3, 0),
+    (-3, -1),
+    (-2, -2),
+    (-1, -3),
+];
+
+/// A FAST corner: integer pixel position and FAST score.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Corner {
+    /// Column, pixels.
+    pub x: usize,
+    /// Row, pixels.
+    pub y: usize,
+    /// Sum of `|I(p) - I(c)| - threshold` over the circle pixels on the corner's side.
+    pub score: u16,
+}
+
+/// True when `mask` (16 bits, circular) has a run of at least 9 set bits.
+#[inline]
+fn has_run9(mask: u32) -> bool {
+    let m = mask | (mask << 16);
+    let mut r = m;
+    for k in 1..9 {
+        r &= m >> k;
+    }
+    r != 0
+}
+
+/// FAST-9 corners at least `border` pixels (and at least 3) from every edge, after a
+/// 3x3 non-maximum suppression on the score. `scores` is scratch space reused between
+/// calls; corners are appended to `out` in raster order.
+pub fn fast9(
+    img: GrayView<'_>,
+    threshold: u8,
+    border: usize,
+    scores: &mut Vec<u16>,
+    out: &mut Vec<Corner>,
+) {
+    let (w, h) = (img.width, img.height);
+    let border = border.max(3);
+    out.clear();
+    if w <= 2 * border || h <= 2 * border {
+        return;
+    }
+    scores.clear();
+    scores.resize(w * h, 0);
+    let offs: [isize; 16] = CIRCLE.map(|(dx, dy)| dy * w as isize + dx);
+    let d = img.data;
+    let t = i16::from(threshold);
+    let mut candidates: Vec<Corner> = Vec::new();
+    for y in border..h - border {
+        for x in border..w - border {
+            let i = y * w + x;
+            let c = i16::from(d[i]);
+            let (hi, lo) = (c + t, c - t);
+            let px = |k: usize| i16::from(d[(i as isize + offs[k]) as usize]);
+            let (p0, p8) = (px(0), px(8));
+            let a = p0 > hi || p0 < lo || p8 > hi || p8 < lo;
+            if !a {
+                continue;
+            }
+            let (p4, p12) = (px(4), px(12));
+            if !(p4 > hi || p4 < lo || p12 > hi || p12 < lo) {
+                continue;
+            }
+            let mut bright = 0u32;
+            let mut dark = 0u32;
+            let mut sb = 0u32;
+            let mut sd = 0u32;
+            for (k, &o) in offs.iter().enumerate() {
+                let p = i16::from(d[(i as isize + o) as usize]);
+                if p > hi {
+                    bright |= 1 << k;
+                    sb += (p - hi) as u32;
+                } else if p < lo {
+                    dark |= 1 << k;
+                    sd += (lo - p) as u32;
+                }
+            }
+            let score = if has_run9(bright) {
+                sb.max(if has_run9(dark) { sd } else { 0 })
+            } else if has_run9(dark) {
+                sd
+            } else {
+                continue;
+            };
+            let s = score.clamp(1, u32::from(u16::MAX)) as u16;
+            scores[i] = s;
+            candidates.push(Corner { x, y, score: s });
+        }
+    }
+    for c in candidates {
+        let i = c.y * w + c.x;
+        let s = c.score;
+        // Strictly greater than the neighbours before it, at least the ones after: one
+        // winner per plateau.
+        let before = [i - w - 1, i - w, i - w + 1, i - 1];
+        let after = [i + 1, i + w - 1, i + w, i + w + 1];
+        if before.iter().all(|&j| scores[j] < s) && after.iter().all(|&j| scores[j] <= s) {
+            out.push(c);
+        }
+    }
+}
+
+/// Harris corner response `det(M) - 0.04 trace(M)^2` of the structure tensor summed over
+/// a 7x7 window at `(x, y)`, with central-difference gradients (intensity units / 255).
+/// The caller keeps the window and its gradients inside the image (4 pixels).
+#[must_use]
+pub fn harris(img: GrayView<'_>, x: usize, y: usize) -> f32 {
+    let w = img.width;
+    let d = img.data;
+    let (mut sxx, mut syy, mut sxy) = (0f32, 0f32, 0f32);
+    for yy in y - 3..=y + 3 {
+        let row = yy * w;
+        for xx in x - 3..=x + 3 {
+            let gx = f32::from(d[row + xx + 1]) - f32::from(d[row + xx - 1]);
+            let gy = f32::from(d[row + w + xx]) - f32::from(d[row - w + xx]);
+            sxx += gx * gx;
+            syy += gy * gy;
+            sxy += gx * gy;
+        }
+    }
+    let scale = 1.0 / (255.0 * 255.0 * 49.0);
+    let (sxx, syy, sxy) = (sxx * scale, syy * scale, sxy * scale);
+    sxx * syy - sxy * sxy - 0.04 * (sxx + syy) * (sxx + syy)
+}
+
+/// Half-widths of the rows of a disc of radius `r` pixels: `u_max[v]` for `v = 0..=r`.
+#[must_use]
+pub fn disc_half_widths(r: usize) -> Vec<usize> {
+    (0..=r)
+        .map(|v| {
+            let rr = (r * r) as f64 + 0.25 * r as f64;
+            ((rr - (v * v) as f64).max(0.0)).sqrt().floor() as usize
+        })
+        .collect()
+}
+
+/// Orientation of the intensity centroid over the disc given by `u_max` around
+/// `(x, y)`: `atan2(m01, m10)` radians, image axes (x right, y down). The caller keeps
+/// the disc inside the image.
+#[must_use]
+pub fn centroid_angle(img: GrayView<'_>, x: usize, y: usize, u_max: &[usize]) -> f32 {
+    let w = img.width as isize;
+    let d = img.data;
+    let c = (y * img.width + x) as isize;
+    let (mut m10, mut m01) = (0i64, 0i64);
+    let r = u_max.len() as isize - 1;
+    for u in -r..=r {
+        m10 += i64::from(u as i32) * i64::from(d[(c + u) as usize]);
+    }
+    for v in 1..=r {
+        let um = u_max[v as usize] as isize;
+        let mut vsum = 0i64;
+        for u in -um..=um {
+            let below = i64::from(d[(c + v * w + u) as usize]);
+            let above = i64::from(d[(c - v * w + u) as usize]);
+            vsum += below - above;
+            m10 += i64::from(u as i32) * (below + above);
+        }
+        m01 += v as i64 * vsum;
+    }
+    (m01 as f32).atan2(m10 as f32)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn run9() {
+        assert!(has_run9(0b1_1111_1111));
+        assert!(!has_run9(0b1111_1111));
+        // Wrapping run: bits 12..16 and 0..4.
+        assert!(has_run9(0xf00f | 0x0800));
+    }
+
+    #[test]
+    fn finds_a_square_corner() {
+        let (w, h) = (40, 40);
+        let mut data = vec![20u8; w * h];
+        for y in 20..h {
+            for x in 20..w {
+                data[y * w + x] = 200;
+            }
+        }
+        let img = GrayView {
+            width: w,
+            height: h,
+            data: &data,
+        };
+        let (mut s, mut out) = (Vec::new(), Vec::new());
+        fast9(img, 20, 3, &mut s, &mut out);
+        assert!(!out.is_empty());
+        assert!(
+            out.iter()
+                .all(|c| c.x.abs_diff(20) <= 1 && c.y.abs_diff(20) <= 1)
+        );
+        // The bright quadrant is down-right: the centroid points there.
+        let a = centroid_angle(img, 20, 20, &disc_half_widths(8));
+        assert!((a - std::f32::consts::FRAC_PI_4).abs() < 0.2, "{a}");
+    }
+}

@@ -1,0 +1,206 @@
+//! ORB-style binary features: FAST-9 corners ranked by the Harris response, oriented
+//! by the intensity centroid, bucketed over the image, and described by steered BRIEF
+//! on a smoothed image (Rublee et al. 2011, single scale).
+//!
+//! Single scale is enough between consecutive video frames and across a rectified
+//! stereo pair; use SURF for large scale changes.
+
+pub mod brief;
+pub mod fast;
+
+use crate::bucketing::{BucketConfig, bucket_indices};
+use crate::features::{BinaryDescriptor, FeatureExtractor, Features, GrayView, Keypoint};
+use crate::image::blur5;
+
+use brief::{PATTERN_RADIUS, RotatedPattern};
+use fast::{Corner, centroid_angle, disc_half_widths, fast9, harris};
+
+/// Radius of the orientation disc, pixels (ORB's half patch size).
+pub const ORIENTATION_RADIUS: usize = 15;
+
+/// Settings of [`OrbExtractor`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OrbConfig {
+    /// FAST intensity threshold, gray levels [20].
+    pub fast_threshold: u8,
+    /// Bucketing of the detected corners (by Harris response); `None` keeps all.
+    pub bucketing: Option<BucketConfig>,
+    /// Most features overall after bucketing, strongest first [4000].
+    pub max_features: usize,
+    /// Orient the descriptor by the intensity centroid (ORB); `false` gives upright
+    /// BRIEF, which is more distinctive when the camera does not roll [true].
+    pub oriented: bool,
+}
+
+impl Default for OrbConfig {
+    fn default() -> Self {
+        Self {
+            fast_threshold: 20,
+            bucketing: Some(BucketConfig::default()),
+            max_features: 4000,
+            oriented: true,
+        }
+    }
+}
+
+/// The fast binary detector/descriptor.
+#[derive(Debug, Clone, Default)]
+pub struct OrbExtractor {
+    /// Settings.
+    pub config: OrbConfig,
+}
+
+/// Distance of keypoints from every edge, pixels: the orientation disc and the rotated
+/// test pattern stay inside.
+pub const BORDER: usize = {
+    let p = PATTERN_RADIUS as usize + 2;
+    if p > ORIENTATION_RADIUS + 1 {
+        p
+    } else {
+        ORIENTATION_RADIUS + 1
+    }
+};
+
+impl OrbExtractor {
+    /// An extractor with these settings.
+    #[must_use]
+    pub fn new(config: OrbConfig) -> Self {
+        Self { config }
+    }
+
+    /// Detection: FAST-9 corners, Harris response, bucketing, cap, orientation.
+    /// Keypoints are at integer pixels, [`BORDER`] away from every edge.
+    #[must_use]
+    pub fn detect(&self, image: GrayView<'_>) -> Vec<Keypoint> {
+        let mut scores = Vec::new();
+        let mut corners: Vec<Corner> = Vec::new();
+        fast9(
+            image,
+            self.config.fast_threshold,
+            BORDER,
+            &mut scores,
+            &mut corners,
+        );
+        let mut kps: Vec<Keypoint> = corners
+            .iter()
+            .map(|c| Keypoint {
+                x: c.x as f32,
+                y: c.y as f32,
+                scale: ORIENTATION_RADIUS as f32,
+                angle: 0.0,
+                response: harris(image, c.x, c.y),
+                octave: 0,
+            })
+            .collect();
+        if let Some(b) = &self.config.bucketing {
+            let keep = bucket_indices(&kps, image.width, image.height, b);
+            kps = keep.iter().map(|&i| kps[i]).collect();
+        }
+        if kps.len() > self.config.max_features {
+            kps.sort_by(|a, b| b.response.total_cmp(&a.response));
+            kps.truncate(self.config.max_features);
+            kps.sort_by(|a, b| {
+                (a.y, a.x)
+                    .partial_cmp(&(b.y, b.x))
+                    .unwrap_or(std::cmp::Ordering::Equal)
+            });
+        }
+        if self.config.oriented {
+            let u_max = disc_half_widths(ORIENTATION_RADIUS);
+            for k in &mut kps {
+                k.angle = centroid_angle(image, k.x as usize, k.y as usize, &u_max);
+            }
+        }
+        kps
+    }
+
+    /// Description: smooth the image, then steered BRIEF at each keypoint (which must
+    /// come from [`OrbExtractor::detect`] on the same image: integer, [`BORDER`] inside).
+    #[must_use]
+    pub fn describe(&self, image: GrayView<'_>, keypoints: &[Keypoint]) -> Vec<BinaryDescriptor> {
+        let (mut tmp, mut smooth) = (Vec::new(), Vec::new());
+        blur5(image, &mut tmp, &mut smooth);
+        let view = GrayView {
+            width: image.width,
+            height: image.height,
+            data: &smooth,
+        };
+        let pattern = RotatedPattern::new(image.width);
+        keypoints
+            .iter()
+            .map(|k| pattern.describe(view, k.x as usize, k.y as usize, k.angle))
+            .collect()
+    }
+}
+
+impl FeatureExtractor for OrbExtractor {
+    type Descriptor = BinaryDescriptor;
+
+    fn name(&self) -> &'static str {
+        "orb"
+    }
+
+    fn extract(&self, image: GrayView<'_>) -> Features<BinaryDescriptor> {
+        let keypoints = self.detect(image);
+        let descriptors = self.describe(image, &keypoints);
+        Features {
+            keypoints,
+            descriptors,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::features::Descriptor;
+
+    /// A deterministic blocky texture.
+    fn texture(w: usize, h: usize, seed: u32) -> Vec<u8> {
+        let mut s = seed;
+        let cells: Vec<u8> = (0..(w / 4 + 1) * (h / 4 + 1))
+            .map(|_| {
+                s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                (s >> 24) as u8
+            })
+            .collect();
+        (0..w * h)
+            .map(|i| cells[(i / w / 4) * (w / 4 + 1) + (i % w) / 4])
+            .collect()
+    }
+
+    #[test]
+    fn shifted_image_gives_the_same_descriptors() {
+        let (w, h) = (160, 120);
+        let a = texture(w, h, 3);
+        let mut b = vec![0u8; w * h];
+        for y in 0..h {
+            for x in 5..w {
+                b[y * w + x] = a[y * w + x - 5];
+            }
+        }
+        let orb = OrbExtractor::default();
+        let fa = orb.extract(GrayView {
+            width: w,
+            height: h,
+            data: &a,
+        });
+        let fb = orb.extract(GrayView {
+            width: w,
+            height: h,
+            data: &b,
+        });
+        assert!(fa.len() > 50, "{}", fa.len());
+        let mut same = 0;
+        for (k, d) in fa.keypoints.iter().zip(&fa.descriptors) {
+            let j = fb
+                .keypoints
+                .iter()
+                .position(|q| q.x == k.x + 5.0 && q.y == k.y);
+            if j.is_some_and(|j| d.distance(&fb.descriptors[j]) == 0.0) {
+                same += 1;
+            }
+        }
+        assert!(same > fa.len() / 2, "{same} of {}", fa.len());
+    }
+}

@@ -1,0 +1,214 @@
+//! Stereo matching on a rectified pair: candidates on the same row (within a tolerance)
+//! and inside a disparity range, best descriptor distance with a ratio test, left-right
+//! consistency, sub-pixel disparity, and triangulation into the left camera frame.
+
+mod rig;
+pub mod subpixel;
+
+use nalgebra::Point3;
+
+pub use rig::RectifiedStereo;
+
+use crate::features::{Descriptor, Features, GrayView, Keypoint};
+use subpixel::refine_disparity;
+
+/// Settings of [`match_stereo`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StereoConfig {
+    /// Largest row difference between a left and a right keypoint, pixels [1.0].
+    pub row_tolerance_px: f32,
+    /// Smallest disparity accepted, pixels [1.0].
+    pub min_disparity_px: f32,
+    /// Largest disparity searched, pixels [160].
+    pub max_disparity_px: f32,
+    /// Largest descriptor distance of a match (Hamming bits for binary descriptors,
+    /// Euclidean for SURF) [50].
+    pub max_distance: f32,
+    /// Ratio test: best distance `<` ratio × second best [0.9].
+    pub ratio: f32,
+    /// Keep a match only when the right feature's best left candidate is the same
+    /// feature [true].
+    pub left_right_check: bool,
+    /// Half size of the block refining the disparity, pixels (`r` gives a `(2r+1)²`
+    /// window); 0 keeps the keypoints' disparity [3].
+    pub subpixel_radius: usize,
+    /// Points deeper than this are dropped, metres [80].
+    pub max_depth_m: f64,
+}
+
+impl Default for StereoConfig {
+    fn default() -> Self {
+        Self {
+            row_tolerance_px: 1.0,
+            min_disparity_px: 1.0,
+            max_disparity_px: 160.0,
+            max_distance: 50.0,
+            ratio: 0.9,
+            left_right_check: true,
+            subpixel_radius: 3,
+            max_depth_m: 80.0,
+        }
+    }
+}
+
+/// One stereo match and its triangulated point.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StereoMatch {
+    /// Index of the left feature.
+    pub left: usize,
+    /// Index of the right feature.
+    pub right: usize,
+    /// Sub-pixel disparity `u_left - u_right`, pixels.
+    pub disparity_px: f32,
+    /// The point, metres, in the left camera frame.
+    pub point: Point3<f64>,
+}
+
+/// Indices of `kps` sorted by row, with the rows, for range queries.
+struct RowIndex {
+    order: Vec<usize>,
+    rows: Vec<f32>,
+}
+
+impl RowIndex {
+    fn new(kps: &[Keypoint]) -> Self {
+        let mut order: Vec<usize> = (0..kps.len()).collect();
+        order.sort_by(|&a, &b| kps[a].y.total_cmp(&kps[b].y));
+        let rows = order.iter().map(|&i| kps[i].y).collect();
+        Self { order, rows }
+    }
+
+    /// Indices with a row in `[y - tol, y + tol]`.
+    fn around(&self, y: f32, tol: f32) -> &[usize] {
+        let a = self.rows.partition_point(|&r| r < y - tol);
+        let b = self.rows.partition_point(|&r| r <= y + tol);
+        &self.order[a..b]
+    }
+}
+
+/// Best candidate of `query` among `cands` (indices into `kps`/`descs`) allowed by
+/// `ok(query keypoint, candidate keypoint)`: `(index, best, second best)` distances.
+fn best_two<D: Descriptor>(
+    q: &D,
+    cands: &[usize],
+    descs: &[D],
+    mut ok: impl FnMut(usize) -> bool,
+) -> Option<(usize, f32, f32)> {
+    let mut best = (usize::MAX, f32::INFINITY, f32::INFINITY);
+    for &c in cands {
+        if !ok(c) {
+            continue;
+        }
+        let d = q.distance(&descs[c]);
+        if d < best.1 {
+            best = (c, d, best.1);
+        } else if d < best.2 {
+            best.2 = d;
+        }
+    }
+    (best.0 != usize::MAX).then_some(best)
+}
+
+/// Matches left to right features of a rectified pair and triangulates the matches.
+/// `left_img`/`right_img` are the images the features come from (for the sub-pixel
+/// refinement). Matches are in ascending order of the left index.
+#[must_use]
+pub fn match_stereo<D: Descriptor>(
+    left: &Features<D>,
+    right: &Features<D>,
+    left_img: GrayView<'_>,
+    right_img: GrayView<'_>,
+    rig: &RectifiedStereo,
+    config: &StereoConfig,
+) -> Vec<StereoMatch> {
+    let tol = config.row_tolerance_px;
+    let (dmin, dmax) = (config.min_disparity_px, config.max_disparity_px);
+    let right_rows = RowIndex::new(&right.keypoints);
+    let left_rows = config
+        .left_right_check
+        .then(|| RowIndex::new(&left.keypoints));
+    let mut out = Vec::new();
+    for (li, lk) in left.keypoints.iter().enumerate() {
+        let cands = right_rows.around(lk.y, tol);
+        let Some((ri, d1, d2)) = best_two(&left.descriptors[li], cands, &right.descriptors, |c| {
+            let d = lk.x - right.keypoints[c].x;
+            d >= dmin - 0.5 && d <= dmax
+        }) else {
+            continue;
+        };
+        if d1 > config.max_distance || d1 >= config.ratio * d2 {
+            continue;
+        }
+        let rk = right.keypoints[ri];
+        if let Some(lr) = &left_rows {
+            let back = best_two(
+                &right.descriptors[ri],
+                lr.around(rk.y, tol),
+                &left.descriptors,
+                |c| {
+                    let d = left.keypoints[c].x - rk.x;
+                    d >= dmin - 0.5 && d <= dmax
+                },
+            );
+            if back.map(|b| b.0) != Some(li) {
+                continue;
+            }
+        }
+        let coarse = lk.x - rk.x;
+        let disparity = if config.subpixel_radius > 0 {
+            match refine_disparity(
+                left_img,
+                right_img,
+                lk.x.round().max(0.0) as usize,
+                lk.y.round().max(0.0) as usize,
+                i64::from(coarse.round() as i32),
+                2,
+                config.subpixel_radius,
+            ) {
+                Some(d) => d + (lk.x - lk.x.round()),
+                None => continue,
+            }
+        } else {
+            coarse
+        };
+        if disparity < dmin || disparity > dmax {
+            continue;
+        }
+        let Some(point) = rig.triangulate(f64::from(lk.x), f64::from(lk.y), f64::from(disparity))
+        else {
+            continue;
+        };
+        if point.z > config.max_depth_m {
+            continue;
+        }
+        out.push(StereoMatch {
+            left: li,
+            right: ri,
+            disparity_px: disparity,
+            point,
+        });
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn triangulation_formula() {
+        let rig = RectifiedStereo {
+            fx: 500.0,
+            fy: 500.0,
+            cx: 320.0,
+            cy: 240.0,
+            baseline_m: 0.5,
+        };
+        let p = rig.triangulate(420.0, 140.0, 25.0).expect("positive");
+        assert!((p.z - 10.0).abs() < 1e-12);
+        assert!((p.x - 2.0).abs() < 1e-12 && (p.y + 2.0).abs() < 1e-12);
+        assert!(rig.triangulate(1.0, 1.0, 0.0).is_none());
+        let (u, v) = rig.project_left(&p);
+        assert!((u - 420.0).abs() < 1e-9 && (v - 140.0).abs() < 1e-9);
+    }
+}
