@@ -1,5 +1,5 @@
 //! The simulation job without the CLI: `cargo run --release -p swarmpose-sim --example
-//! simulate -- [--quick] [OUT_DIR]`.
+//! simulate -- [--quick] [--structured] [OUT_DIR]`.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -13,6 +13,9 @@ fn main() -> ExitCode {
     if quick {
         opts.experiment = Experiment::quick();
         opts.out_dir = PathBuf::from("out/simulate-quick");
+    }
+    if args.iter().any(|a| a == "--structured") {
+        opts.experiment.mode = swarmpose_sim::OutlierMode::Structured;
     }
     if let Some(dir) = args.iter().find(|a| !a.starts_with("--")) {
         opts.out_dir = PathBuf::from(dir);

@@ -117,7 +117,7 @@ pub fn summary_markdown(exp: &Experiment, s: &Summary, wall_s: f64, threads: usi
         });
         table(
             &mut out,
-            "Inlier precision / recall against the truth (%, mean over runs with a pose); runs without a pose",
+            "Inlier precision / recall against the truth (%, mean over the runs with a pose; \"(k none)\": k runs gave no pose)",
             s,
             i,
             &|c| {
