@@ -3,6 +3,8 @@
 use std::path::Path;
 use std::sync::Once;
 
+use image::codecs::png::{CompressionType, FilterType, PngEncoder};
+use image::{ExtendedColorType, ImageEncoder};
 use plotters::coord::Shift;
 use plotters::coord::ranged1d::{AsRangedCoord, Ranged, ValueFormatter};
 use plotters::prelude::*;
@@ -307,12 +309,18 @@ pub fn render_png(fig: &Figure, path: &Path, size: (u32, u32)) -> Result<(), Sim
         let root = BitMapBackend::with_buffer(&mut buf, size).into_drawing_area();
         draw(&root, fig)?;
     }
-    image::save_buffer(path, &buf, size.0, size.1, image::ExtendedColorType::Rgb8).map_err(|e| {
-        match e {
+    let file = std::fs::File::create(path).map_err(|e| SimError::io(path, e))?;
+    let encoder = PngEncoder::new_with_quality(
+        std::io::BufWriter::new(file),
+        CompressionType::Best,
+        FilterType::Adaptive,
+    );
+    encoder
+        .write_image(&buf, size.0, size.1, ExtendedColorType::Rgb8)
+        .map_err(|e| match e {
             image::ImageError::IoError(io) => SimError::io(path, io),
             other => plot_err(fig, other),
-        }
-    })
+        })
 }
 
 /// Renders `fig` as an SVG file.
