@@ -17,6 +17,8 @@ use crate::rng::SeededRng;
 
 /// Cost changes below this fraction of one pair's truncation cost do not count.
 const COST_QUANTUM: f64 = 0.01;
+/// Lanes of the fitness loop.
+const LANES: usize = 8;
 /// Tries per seed when looking for a triangle.
 const SEED_TRIES: usize = 8;
 
@@ -31,12 +33,16 @@ pub(super) struct PairGraph {
     /// Consistent pairs `(i, j, common neighbours)` in local indices; the first `scored`
     /// are the best ranked, in rank order.
     pairs: Vec<(u32, u32, u32)>,
-    /// Scored pairs: source differences `a = s_i - s_j`, metres.
-    a: [Vec<f64>; 3],
+    /// Scored pairs: source differences `a = s_i - s_j`, metres (single precision: the
+    /// fitness loop vectorises).
+    a: [Vec<f32>; 3],
     /// Scored pairs: destination differences `b = d_i - d_j`, metres.
-    b: [Vec<f64>; 3],
-    /// Scored pairs: squared tolerance `(δ_i + δ_j)^2`, m².
-    tol2: Vec<f64>,
+    b: [Vec<f32>; 3],
+    /// Scored pairs: reciprocal squared tolerance `1 / (δ_i + δ_j)^2`, 1/m²; padding pairs
+    /// (all zero) follow the real ones up to a multiple of `LANES`.
+    inv_tol2: Vec<f32>,
+    /// Number of padding pairs.
+    padding: usize,
 }
 
 impl PairGraph {
@@ -54,17 +60,44 @@ impl PairGraph {
         let mut rows = vec![0u64; m * words];
         let mut pairs = Vec::new();
         let (src, dst) = (data.src(), data.dst());
+        // Single precision, structure of arrays: the inner loop vectorises. Lengths of
+        // tens of metres keep ~5 µm of precision, far below any useful δ.
+        let column =
+            |f: &dyn Fn(usize) -> f64| points.iter().map(|&g| f(g) as f32).collect::<Vec<f32>>();
+        let (sx, sy, sz) = (
+            column(&|g| src[g].x),
+            column(&|g| src[g].y),
+            column(&|g| src[g].z),
+        );
+        let (dx, dy, dz) = (
+            column(&|g| dst[g].x),
+            column(&|g| dst[g].y),
+            column(&|g| dst[g].z),
+        );
+        let tl = column(&|g| tol.at(g));
+        let min_len = min_len_m as f32;
+        let mut consistent = vec![false; m];
         for li in 0..m {
-            let (gi, ti) = (points[li], tol.at(points[li]));
-            for lj in li + 1..m {
-                let gj = points[lj];
-                let la = (src[gi] - src[gj]).norm();
-                let lb = (dst[gi] - dst[gj]).norm();
-                if la >= min_len_m && (la - lb).abs() < ti + tol.at(gj) {
-                    rows[li * words + lj / 64] |= 1 << (lj % 64);
-                    rows[lj * words + li / 64] |= 1 << (li % 64);
-                    pairs.push((li as u32, lj as u32, 0));
-                }
+            let j0 = li + 1;
+            let row = &mut consistent[j0..];
+            let (ax, ay, az, ti) = (sx[li], sy[li], sz[li], tl[li]);
+            let (bx, by, bz) = (dx[li], dy[li], dz[li]);
+            let others = sx[j0..]
+                .iter()
+                .zip(&sy[j0..])
+                .zip(&sz[j0..])
+                .zip(dx[j0..].iter().zip(&dy[j0..]).zip(&dz[j0..]))
+                .zip(&tl[j0..]);
+            for (flag, ((((x, y), z), ((u, v), w)), t)) in row.iter_mut().zip(others) {
+                let la = ((ax - x) * (ax - x) + (ay - y) * (ay - y) + (az - z) * (az - z)).sqrt();
+                let lb = ((bx - u) * (bx - u) + (by - v) * (by - v) + (bz - w) * (bz - w)).sqrt();
+                *flag = (la >= min_len) & ((la - lb).abs() < ti + t);
+            }
+            for (k, _) in row.iter().enumerate().filter(|(_, f)| **f) {
+                let lj = j0 + k;
+                rows[li * words + lj / 64] |= 1 << (lj % 64);
+                rows[lj * words + li / 64] |= 1 << (li % 64);
+                pairs.push((li as u32, lj as u32, 0));
             }
         }
         for p in &mut pairs {
@@ -81,16 +114,26 @@ impl PairGraph {
             pairs,
             a: Default::default(),
             b: Default::default(),
-            tol2: Vec::with_capacity(scored),
+            inv_tol2: Vec::with_capacity(scored.next_multiple_of(LANES)),
+            padding: scored.next_multiple_of(LANES) - scored,
         };
         for k in 0..scored {
             let (gi, gj) = graph.global(k);
             let (da, db) = (src[gi] - src[gj], dst[gi] - dst[gj]);
             for c in 0..3 {
-                graph.a[c].push(da[c]);
-                graph.b[c].push(db[c]);
+                graph.a[c].push(da[c] as f32);
+                graph.b[c].push(db[c] as f32);
             }
-            graph.tol2.push((tol.at(gi) + tol.at(gj)).powi(2));
+            graph
+                .inv_tol2
+                .push((tol.at(gi) + tol.at(gj)).powi(-2) as f32);
+        }
+        for _ in 0..graph.padding {
+            for c in 0..3 {
+                graph.a[c].push(0.0);
+                graph.b[c].push(0.0);
+            }
+            graph.inv_tol2.push(0.0);
         }
         graph
     }
@@ -103,15 +146,15 @@ impl PairGraph {
 
     /// Number of scored pairs.
     pub(super) fn scored(&self) -> usize {
-        self.tol2.len()
+        self.inv_tol2.len() - self.padding
     }
 
-    /// Residual `|b - R a|^2` of scored pair `k`, m².
+    /// Normalised residual `|b - R a|^2 / τ^2` of scored pair `k` (supports when < 1).
     #[inline]
-    fn residual2(&self, m: &Matrix3<f64>, k: usize) -> f64 {
-        let a = Vector3::new(self.a[0][k], self.a[1][k], self.a[2][k]);
-        let b = Vector3::new(self.b[0][k], self.b[1][k], self.b[2][k]);
-        (b - m * a).norm_squared()
+    fn normalised_residual2(&self, m: &Matrix3<f64>, k: usize) -> f64 {
+        let a = Vector3::new(self.a[0][k], self.a[1][k], self.a[2][k]).cast::<f64>();
+        let b = Vector3::new(self.b[0][k], self.b[1][k], self.b[2][k]).cast::<f64>();
+        (b - m * a).norm_squared() * f64::from(self.inv_tol2[k])
     }
 
     /// The particle score of a rotation: (scored pairs not supporting it, normalised
@@ -120,21 +163,43 @@ impl PairGraph {
     /// swarm's stall test can stop it.
     #[inline]
     pub(super) fn score(&self, q: &UnitQuaternion<f64>) -> (usize, f64) {
-        let m: Matrix3<f64> = q.to_rotation_matrix().into_inner();
+        let m: Matrix3<f32> = q.to_rotation_matrix().into_inner().cast::<f32>();
         let [ax, ay, az] = &self.a;
         let [bx, by, bz] = &self.b;
-        let tol2 = &self.tol2;
-        let mut support = 0usize;
-        let mut cost = 0.0;
-        for k in 0..tol2.len() {
-            let ex = bx[k] - (m[(0, 0)] * ax[k] + m[(0, 1)] * ay[k] + m[(0, 2)] * az[k]);
-            let ey = by[k] - (m[(1, 0)] * ax[k] + m[(1, 1)] * ay[k] + m[(1, 2)] * az[k]);
-            let ez = bz[k] - (m[(2, 0)] * ax[k] + m[(2, 1)] * ay[k] + m[(2, 2)] * az[k]);
-            let e2 = ex * ex + ey * ey + ez * ez;
-            support += usize::from(e2 < tol2[k]);
-            cost += (e2 / tol2[k]).min(1.0);
+        // Independent lanes (the arrays are padded to a multiple of LANES), so the
+        // compiler can vectorise the sums without reassociating floating point.
+        let mut support = [0u32; LANES];
+        let mut cost = [0.0f32; LANES];
+        let chunks = ax
+            .as_chunks::<LANES>()
+            .0
+            .iter()
+            .zip(ay.as_chunks::<LANES>().0)
+            .zip(az.as_chunks::<LANES>().0);
+        let chunks = chunks.zip(
+            bx.as_chunks::<LANES>()
+                .0
+                .iter()
+                .zip(by.as_chunks::<LANES>().0)
+                .zip(bz.as_chunks::<LANES>().0),
+        );
+        for ((((x, y), z), ((u, v), w)), inv) in chunks.zip(self.inv_tol2.as_chunks::<LANES>().0) {
+            for l in 0..LANES {
+                let ex = u[l] - (m[(0, 0)] * x[l] + m[(0, 1)] * y[l] + m[(0, 2)] * z[l]);
+                let ey = v[l] - (m[(1, 0)] * x[l] + m[(1, 1)] * y[l] + m[(1, 2)] * z[l]);
+                let ez = w[l] - (m[(2, 0)] * x[l] + m[(2, 1)] * y[l] + m[(2, 2)] * z[l]);
+                let r = (ex * ex + ey * ey + ez * ez) * inv[l];
+                support[l] += u32::from(r < 1.0);
+                cost[l] += r.min(1.0);
+            }
         }
-        (tol2.len() - support, (cost / COST_QUANTUM).round())
+        // Padding pairs have zero residual: they "support" every rotation.
+        let support = support.iter().sum::<u32>() as usize - self.padding;
+        let cost: f32 = cost.iter().sum();
+        (
+            self.scored() - support,
+            (f64::from(cost) / COST_QUANTUM).round(),
+        )
     }
 
     /// Up to `k` points (global indices) taking part in the most scored pairs that support
@@ -142,7 +207,7 @@ impl PairGraph {
     pub(super) fn anchors(&self, m: &Matrix3<f64>, k: usize) -> Vec<usize> {
         let mut count = vec![0u32; self.points.len()];
         for p in 0..self.scored() {
-            if self.residual2(m, p) < self.tol2[p] {
+            if self.normalised_residual2(m, p) < 1.0 {
                 let (i, j, _) = self.pairs[p];
                 count[i as usize] += 1;
                 count[j as usize] += 1;
