@@ -31,11 +31,15 @@ enum Command {
     /// Estimate the rigid motion dst = R src + t of a correspondence CSV; prints one
     /// JSON object.
     Register(commands::register::RegisterArgs),
+    /// Run the estimators on a folder of scenario CSV + truth JSON files and print
+    /// success, accuracy and time per cell as Markdown tables.
+    Bench(commands::bench::BenchArgs),
 }
 
 fn run(cli: Cli) -> Result<(), CliError> {
     match cli.command {
         Command::Register(args) => commands::register::run(&args),
+        Command::Bench(args) => commands::bench::run(&args),
     }
 }
 

@@ -2,4 +2,5 @@
 //!
 //! [`CliError`]: crate::error::CliError
 
+pub mod bench;
 pub mod register;

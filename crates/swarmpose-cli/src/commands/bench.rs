@@ -1,0 +1,294 @@
+//! `swarmpose bench SUITE_DIR`: our estimators on a folder of scenario files (CSV +
+//! truth JSON, the format of `gen_scenarios.py`), tabulated per cell like the peers'
+//! `RESULTS.md`, so the comparison can be repeated by anyone.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use clap::Args;
+use swarmpose_core::geometry::rotation_angle_between;
+use swarmpose_core::{
+    Estimator, MsacConfig, MsacEstimator, PsoEstimator, PsoEstimatorConfig, PsoPaperConfig,
+    PsoPaperEstimator, SvdEstimator,
+};
+use swarmpose_data::{correspondence_csv, truth};
+
+use crate::error::CliError;
+
+/// Largest rotation error of a success, degrees (as the peers).
+const SUCCESS_ROTATION_DEG: f64 = 2.0;
+/// Largest translation error of a success, metres (as the peers).
+const SUCCESS_TRANSLATION_M: f64 = 0.2;
+/// Every estimator the bench knows, in table order.
+const ALL_METHODS: [&str; 5] = ["pso", "pso-auto", "msac", "pso-paper", "svd"];
+
+/// Arguments of `swarmpose bench`.
+#[derive(Debug, Args)]
+#[command(after_help = "\
+Each NAME.csv in SUITE_DIR needs its truth NAME.json beside it (gen_scenarios.py writes \
+both). Estimators run one at a time on one thread; the time is that of the estimation call \
+only. Thresholds: the peers' oracle max(3.368 sigma, 0.01) m from the truth's noise_sigma, \
+except pso-auto, which estimates its own. Success: rotation error < 2 deg and translation \
+error < 0.2 m. Prints Markdown tables per outlier mode and noise level: success rate, \
+median and 90th-percentile rotation error, median translation error, median time.")]
+pub struct BenchArgs {
+    /// Folder of scenario CSV + truth JSON files.
+    #[arg(value_name = "SUITE_DIR")]
+    pub suite: PathBuf,
+
+    /// Estimators, comma separated, from pso, pso-auto, msac, pso-paper, svd.
+    #[arg(long, value_delimiter = ',', default_value = "pso,pso-auto,msac")]
+    pub methods: Vec<String>,
+
+    /// Only scenario files whose name contains this text (e.g. "random_n0.020").
+    #[arg(long, value_name = "TEXT", default_value = "")]
+    pub filter: String,
+
+    /// Seed of every estimation (the run index is added).
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub seed: u64,
+}
+
+/// One estimation judged against the truth.
+struct Outcome {
+    success: bool,
+    rotation_deg: f64,
+    translation_m: f64,
+    elapsed_ms: f64,
+}
+
+/// The peers' oracle threshold for noise σ (metres).
+fn oracle_threshold(sigma: f64) -> f64 {
+    (3.368 * sigma).max(0.01)
+}
+
+fn estimator(name: &str, sigma: f64) -> Option<Box<dyn Estimator>> {
+    let thr = oracle_threshold(sigma);
+    Some(match name {
+        "pso" => Box::new(PsoEstimator::new(
+            PsoEstimatorConfig::default().with_threshold(thr),
+        )),
+        "pso-auto" => Box::new(PsoEstimator::default()),
+        "msac" => Box::new(MsacEstimator::new(
+            MsacConfig::default().with_threshold(thr),
+        )),
+        "pso-paper" => Box::new(PsoPaperEstimator::new(
+            PsoPaperConfig::default().with_threshold(thr),
+        )),
+        "svd" => Box::new(SvdEstimator),
+        _ => return None,
+    })
+}
+
+fn scenario_files(dir: &Path, filter: &str) -> Result<Vec<PathBuf>, CliError> {
+    let entries = std::fs::read_dir(dir)
+        .map_err(|e| CliError::usage(format!("{}: cannot read the folder: {e}", dir.display())))?;
+    let mut files: Vec<PathBuf> = entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "csv"))
+        .filter(|p| {
+            p.file_name()
+                .is_some_and(|n| n.to_string_lossy().contains(filter))
+        })
+        .collect();
+    files.sort();
+    if files.is_empty() {
+        return Err(CliError::usage(format!(
+            "{}: no scenario .csv files{}",
+            dir.display(),
+            if filter.is_empty() {
+                String::new()
+            } else {
+                format!(" matching \"{filter}\"")
+            }
+        )));
+    }
+    Ok(files)
+}
+
+/// The `q`-quantile (nearest rank) of `v`, NaN when empty.
+fn quantile(v: &mut [f64], q: f64) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    let k = ((q * v.len() as f64).ceil() as usize).clamp(1, v.len()) - 1;
+    v[k]
+}
+
+type CellKey = (String, u64); // (mode, noise in µm)
+
+/// Runs `bench`.
+///
+/// # Errors
+/// An unknown method, an unreadable folder or scenario file.
+pub fn run(args: &BenchArgs) -> Result<(), CliError> {
+    for m in &args.methods {
+        if !ALL_METHODS.contains(&m.as_str()) {
+            return Err(CliError::usage(format!(
+                "unknown method \"{m}\": use {}",
+                ALL_METHODS.join(", ")
+            )));
+        }
+    }
+    let files = scenario_files(&args.suite, &args.filter)?;
+    // results[(mode, noise)][fraction in ppm][method] = outcomes
+    let mut results: BTreeMap<CellKey, BTreeMap<u64, BTreeMap<String, Vec<Outcome>>>> =
+        BTreeMap::new();
+    let started = Instant::now();
+    for (run, csv) in files.iter().enumerate() {
+        let data =
+            correspondence_csv::read_path(csv).map_err(|e| CliError::usage(e.to_string()))?;
+        let truth_path = truth::path_for_csv(csv);
+        let t = truth::read(&truth_path).map_err(|e| CliError::usage(e.to_string()))?;
+        let true_pose = t
+            .isometry()
+            .map_err(|e| CliError::usage(format!("{}: {e}", truth_path.display())))?;
+        let cell = (t.mode.clone(), (t.noise_sigma * 1e6).round() as u64);
+        let fraction = (t.outlier_fraction * 1e6).round() as u64;
+        for name in &args.methods {
+            let Some(est) = estimator(name, t.noise_sigma) else {
+                continue;
+            };
+            let t0 = Instant::now();
+            let result = est.estimate_seeded(&data, args.seed.wrapping_add(run as u64));
+            let outer_ms = t0.elapsed().as_secs_f64() * 1e3;
+            let outcome = match result {
+                Ok(e) => {
+                    let r = rotation_angle_between(&e.transform.rotation, &true_pose.rotation)
+                        .to_degrees();
+                    let tr = (e.transform.translation.vector - true_pose.translation.vector).norm();
+                    Outcome {
+                        success: r < SUCCESS_ROTATION_DEG && tr < SUCCESS_TRANSLATION_M,
+                        rotation_deg: r,
+                        translation_m: tr,
+                        elapsed_ms: e.diagnostics.elapsed.as_secs_f64() * 1e3,
+                    }
+                }
+                Err(_) => Outcome {
+                    success: false,
+                    rotation_deg: f64::NAN,
+                    translation_m: f64::NAN,
+                    elapsed_ms: outer_ms,
+                },
+            };
+            results
+                .entry(cell.clone())
+                .or_default()
+                .entry(fraction)
+                .or_default()
+                .entry(name.clone())
+                .or_default()
+                .push(outcome);
+        }
+    }
+    print!("{}", tables(&results, &args.methods));
+    println!(
+        "\n{} scenarios from {}, {} estimators, {:.1} s wall time.",
+        files.len(),
+        args.suite.display(),
+        args.methods.len(),
+        started.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+type Results = BTreeMap<CellKey, BTreeMap<u64, BTreeMap<String, Vec<Outcome>>>>;
+
+/// The Markdown tables: per (mode, noise), one table per statistic.
+fn tables(results: &Results, methods: &[String]) -> String {
+    type Stat = fn(&[Outcome]) -> String;
+    let stats: [(&str, Stat); 5] = [
+        ("Success rate (%)", |o| {
+            format!(
+                "{:.0}",
+                100.0 * o.iter().filter(|x| x.success).count() as f64 / o.len() as f64
+            )
+        }),
+        ("Median rotation error (deg)", |o| {
+            fmt(quantile(&mut ok_values(o, |x| x.rotation_deg), 0.5))
+        }),
+        ("90th-percentile rotation error (deg)", |o| {
+            fmt(quantile(&mut ok_values(o, |x| x.rotation_deg), 0.9))
+        }),
+        ("Median translation error (m)", |o| {
+            fmt(quantile(&mut ok_values(o, |x| x.translation_m), 0.5))
+        }),
+        ("Median time (ms, estimation call, 1 thread)", |o| {
+            fmt(quantile(
+                &mut o.iter().map(|x| x.elapsed_ms).collect::<Vec<_>>(),
+                0.5,
+            ))
+        }),
+    ];
+    let mut out = String::new();
+    for ((mode, noise_um), by_fraction) in results {
+        let fractions: Vec<String> = by_fraction
+            .keys()
+            .map(|f| format!("{}", *f as f64 / 1e6))
+            .collect();
+        for (title, stat) in &stats {
+            out += &format!(
+                "\n## {title} vs outlier fraction - {mode} outliers, noise {} m\n\n",
+                *noise_um as f64 / 1e6
+            );
+            out += &format!("| method | {} |\n", fractions.join(" | "));
+            out += &format!("|---|{}\n", "---|".repeat(fractions.len()));
+            for m in methods {
+                let cells: Vec<String> = by_fraction
+                    .values()
+                    .map(|by_method| match by_method.get(m) {
+                        Some(o) if !o.is_empty() => {
+                            let n = if o.len() == 50 {
+                                String::new()
+                            } else {
+                                format!(" (n={})", o.len())
+                            };
+                            format!("{}{n}", stat(o))
+                        }
+                        _ => "-".into(),
+                    })
+                    .collect();
+                out += &format!("| {m} | {} |\n", cells.join(" | "));
+            }
+        }
+    }
+    out
+}
+
+/// The values of the runs that returned a pose.
+fn ok_values(o: &[Outcome], f: impl Fn(&Outcome) -> f64) -> Vec<f64> {
+    o.iter().map(f).filter(|v| v.is_finite()).collect()
+}
+
+/// Three significant figures, or "-" for NaN.
+fn fmt(v: f64) -> String {
+    if !v.is_finite() {
+        "-".into()
+    } else if v >= 100.0 {
+        format!("{v:.0}")
+    } else if v >= 10.0 {
+        format!("{v:.1}")
+    } else if v >= 1.0 {
+        format!("{v:.2}")
+    } else {
+        format!("{v:.3}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn quantiles_and_format() {
+        let mut v = vec![5.0, 1.0, 3.0, 2.0, 4.0];
+        assert_eq!(quantile(&mut v, 0.5), 3.0);
+        assert_eq!(quantile(&mut v, 0.9), 5.0);
+        assert!(quantile(&mut [], 0.5).is_nan());
+        assert_eq!(fmt(0.12345), "0.123");
+        assert_eq!(fmt(1234.0), "1234");
+        assert_eq!(fmt(f64::NAN), "-");
+    }
+}

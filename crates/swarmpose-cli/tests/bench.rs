@@ -1,0 +1,93 @@
+//! `swarmpose bench` on a small suite written here in the generator's format.
+
+mod common;
+
+use common::{TempDir, check_error, swarmpose};
+use swarmpose_core::geometry::quaternion_wxyz;
+use swarmpose_core::synthetic::SyntheticSpec;
+use swarmpose_data::truth::{ScenarioTruth, write};
+
+/// Writes `runs` scenarios per outlier fraction, noise 0.02 m, in `gen_scenarios.py`'s
+/// file format.
+fn suite(dir: &TempDir, fractions: &[f64], runs: u64) {
+    for &f in fractions {
+        for run in 0..runs {
+            let spec = SyntheticSpec {
+                outlier_fraction: f,
+                n: 120,
+                ..Default::default()
+            };
+            let s = spec.generate(run).expect("valid spec");
+            let name = format!("random_n0.020_o{f:.2}_r{run:03}");
+            swarmpose_data::correspondence_csv::write_path(
+                dir.0.join(format!("{name}.csv")),
+                &s.data,
+            )
+            .expect("write csv");
+            let t = s.truth.translation.vector;
+            let truth = ScenarioTruth {
+                rotation_wxyz: quaternion_wxyz(&s.truth.rotation),
+                translation: [t.x, t.y, t.z],
+                n_outliers: s.inlier.iter().filter(|b| !**b).count(),
+                n: s.inlier.len(),
+                inlier: s.inlier.clone(),
+                noise_sigma: 0.02,
+                outlier_fraction: f,
+                seed: run,
+                mode: "random".into(),
+                n_scene_points_drawn: None,
+                rotation_angle_deg: None,
+                outlier_rotation_wxyz: None,
+                outlier_translation: None,
+            };
+            write(dir.0.join(format!("{name}.json")), &truth).expect("write truth");
+        }
+    }
+}
+
+#[test]
+fn prints_tables_per_cell() {
+    let dir = TempDir::new("bench");
+    suite(&dir, &[0.0, 0.5], 4);
+    let path = dir.0.to_string_lossy().to_string();
+    let out = swarmpose(&["bench", &path, "--methods", "pso,msac,svd"], None);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("## Success rate (%) vs outlier fraction - random outliers, noise 0.02 m")
+    );
+    assert!(text.contains("| method | 0 | 0.5 |"), "{text}");
+    // pso and msac solve every scenario; svd fails with half the matches wrong.
+    assert!(text.contains("| pso | 100 (n=4) | 100 (n=4) |"), "{text}");
+    assert!(text.contains("| msac | 100 (n=4) | 100 (n=4) |"), "{text}");
+    assert!(text.contains("| svd | 100 (n=4) | 0 (n=4) |"), "{text}");
+    assert!(text.contains("8 scenarios"));
+}
+
+#[test]
+fn bad_arguments_are_one_line_errors() {
+    let dir = TempDir::new("bench-bad");
+    let path = dir.0.to_string_lossy().to_string();
+    check_error(
+        &swarmpose(&["bench", &path], None),
+        &["no scenario .csv files"],
+    );
+    suite(&dir, &[0.0], 1);
+    check_error(
+        &swarmpose(&["bench", &path, "--methods", "ransac"], None),
+        &["unknown method"],
+    );
+    std::fs::remove_file(dir.0.join("random_n0.020_o0.00_r000.json")).expect("remove truth");
+    check_error(
+        &swarmpose(&["bench", &path], None),
+        &["random_n0.020_o0.00_r000.json"],
+    );
+    check_error(
+        &swarmpose(&["bench", "/nonexistent/suite"], None),
+        &["/nonexistent/suite"],
+    );
+}
