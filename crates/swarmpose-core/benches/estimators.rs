@@ -1,5 +1,6 @@
 //! Criterion benchmarks of the estimators on synthetic data (noise 0.02 m, threshold
-//! 0.07 m): 200 and 2000 correspondences at 0 % and 50 % random outliers, one thread.
+//! 0.07 m): 200 and 2000 correspondences at 0 % and 50 % random outliers, one thread; and
+//! `pso` at 90 / 95 % outliers (200 correspondences) and 90 % (5000).
 //!
 //! `cargo bench -p swarmpose-core --bench estimators`
 
@@ -51,5 +52,34 @@ fn bench(c: &mut Criterion) {
     }
 }
 
-criterion_group!(benches, bench);
+/// The robust estimator where the peers are slow: 200 correspondences at 90 and 95 %
+/// outliers, and 5000 at 90 %.
+fn bench_high_outliers(c: &mut Criterion) {
+    let mut group = c.benchmark_group("pso_high_outliers");
+    group.sample_size(30);
+    for (n, outliers) in [(200usize, 0.9), (200, 0.95), (5000, 0.9)] {
+        let spec = SyntheticSpec {
+            n,
+            outlier_fraction: outliers,
+            ..Default::default()
+        };
+        let data = spec.generate(42).expect("valid spec").data;
+        let pso = PsoEstimator::new(PsoEstimatorConfig::default().with_threshold(0.07));
+        let auto = PsoEstimator::default();
+        let id = format!("n{n}_outliers{:.0}", outliers * 100.0);
+        group.bench_with_input(BenchmarkId::new("pso", &id), &data, |b, d| {
+            b.iter(|| std::hint::black_box(pso.estimate_seeded(d, 7)));
+        });
+        group.bench_with_input(
+            BenchmarkId::new("pso_auto_threshold", &id),
+            &data,
+            |b, d| {
+                b.iter(|| std::hint::black_box(auto.estimate_seeded(d, 7)));
+            },
+        );
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench, bench_high_outliers);
 criterion_main!(benches);
