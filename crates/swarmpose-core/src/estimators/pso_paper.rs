@@ -54,11 +54,12 @@ impl PsoPaperConfig {
 ///
 /// 1. Centre both sets on their centroids over **all** correspondences, eq. (7)-(8):
 ///    `r_j = p_j - p̄`, `r'_j = p'_j - p̄'`.
-/// 2. Swarm over rotation vectors in `[-π, π]^3` (see [`crate::geometry::rotation_from_particle`]);
-///    a particle's fitness is eq. (13) summed over all correspondences,
-///    `f(q) = Σ_j |r'_j - q r_j q^-1|^2`, and its support is the number of `j` with
-///    residual below δ, eq. (15). The best particle has the most support, ties broken
-///    by lower fitness.
+/// 2. Swarm over rotation vectors in `[-π, π]^3` (see [`crate::geometry::rotation_from_particle`])
+///    minimising eq. (13) summed over all correspondences,
+///    `f(q) = Σ_j |r'_j - q r_j q^-1|^2`. Each particle stores the support of its best
+///    position, the number of `j` with residual below δ, eq. (15); the best particle
+///    has the most support, ties broken by lower fitness. (Letting support drive the
+///    swarm instead traps it: a point near the centroid "supports" any rotation.)
 /// 3. The best particle's supporting features are refined by SVD (Arun); fewer than 4 is
 ///    [`PoseError::InsufficientSupport`].
 ///
@@ -103,26 +104,37 @@ impl Estimator for PsoPaperEstimator {
         let (r, r_prime) = centred(data);
         let thr2 = cfg.threshold_m * cfg.threshold_m;
         let n = data.len();
-        // Score: (features not supporting, eq. 13 fitness), compared lexicographically.
-        let fitness = |x: &[f64; 3]| -> (usize, f64) {
-            let m: Matrix3<f64> = rotation_from_particle(x).to_rotation_matrix().into_inner();
-            let mut f = 0.0;
-            let mut support = 0usize;
-            for (a, b) in r.iter().zip(&r_prime) {
-                let e2 = (b - m * a).norm_squared();
-                f += e2;
-                support += usize::from(e2 < thr2);
-            }
-            (n - support, f)
+        let rotation_of = |x: &[f64; 3]| -> Matrix3<f64> {
+            rotation_from_particle(x).to_rotation_matrix().into_inner()
+        };
+        // The swarm minimises eq. (13) summed over all correspondences.
+        let fitness = |x: &[f64; 3]| -> f64 {
+            let m = rotation_of(x);
+            r.iter()
+                .zip(&r_prime)
+                .map(|(a, b)| (b - m * a).norm_squared())
+                .sum()
+        };
+        let support_of = |m: &Matrix3<f64>| -> Vec<usize> {
+            (0..n)
+                .filter(|&j| (r_prime[j] - m * r[j]).norm_squared() < thr2)
+                .collect()
         };
         let swarm = ParticleSwarm::new(cfg.pso.clone());
         let out = swarm.minimize([-PI; 3], [PI; 3], &[], rng, fitness)?;
-        let m = rotation_from_particle(&out.best_position)
-            .to_rotation_matrix()
-            .into_inner();
-        let inliers: Vec<usize> = (0..n)
-            .filter(|&j| (r_prime[j] - m * r[j]).norm_squared() < thr2)
-            .collect();
+        // Each particle keeps its support, eq. (15); the best particle has the most, ties
+        // broken by the lower fitness.
+        let mut inliers: Vec<usize> = Vec::new();
+        let mut best_fitness = f64::INFINITY;
+        for (x, f) in &out.personal_bests {
+            let support = support_of(&rotation_of(x));
+            if support.len() > inliers.len()
+                || (support.len() == inliers.len() && *f < best_fitness)
+            {
+                inliers = support;
+                best_fitness = *f;
+            }
+        }
         check_support(data, &inliers)?;
         let transform = arun_on(data, &inliers)?;
         Ok(Estimate {

@@ -34,12 +34,15 @@ fn scenario(noise: f64, outliers: f64, seed: u64) -> SyntheticScenario {
 
 #[test]
 fn every_estimator_is_exact_on_clean_data() {
-    for seed in 0..5 {
+    // (With a δ much tighter than the scene, e.g. 0.01 m, pso-paper fails 3-7 % of clean
+    // runs: a point near the centroid "supports" any rotation, and the support-first
+    // choice of eq. (15) then prefers a wrong particle. See the notes.)
+    for seed in 0..20 {
         let s = scenario(0.0, 0.0, seed);
         for e in all_estimators() {
             let out = e
                 .estimate_seeded(&s.data, seed)
-                .expect("clean data is solvable");
+                .unwrap_or_else(|err| panic!("{} seed {seed}: {err}", e.name()));
             let (rot_deg, trans_m) = errors(&out.transform, &s.truth);
             assert!(
                 rot_deg < 1e-7 && trans_m < 1e-9,
@@ -227,9 +230,10 @@ fn pso_paper_degrades_with_outliers_as_recorded() {
     // generator's visibility test) and no inlier passes δ at the truth.
     assert!(table[1].1 > 0.15, "bias at 10 %: {}", table[1].1);
     assert!(table[1].2 < 1.0, "inliers passing at 10 %: {}", table[1].2);
-    // 30 % and 50 %: the bias grows and the method fails most runs (measured: 6/20, 3/20).
+    // The swarm converges on the biased least-squares rotation: measured 1/20 at 10 %,
+    // 0/20 at 30 % and 50 %, while the bias keeps growing.
     assert!(table[2].1 > 0.3 && table[3].1 > table[2].1);
-    assert!(table[1].3 < runs as usize && table[2].3 <= 10 && table[3].3 <= 8);
+    assert!(table[1].3 <= 4 && table[2].3 <= 2 && table[3].3 <= 2);
     // The robust variant solves the same scenarios.
     for run in 0..runs {
         let s = scenario(0.02, 0.5, 500 + run);

@@ -95,6 +95,8 @@ pub struct PsoOutcome<const D: usize, S> {
     pub iterations: usize,
     /// Fitness evaluations, the initial ones included.
     pub evaluations: u64,
+    /// Every particle's best position `p_i` and its score, in particle order.
+    pub personal_bests: Vec<([f64; D], S)>,
 }
 
 /// A particle swarm over a box `[lower, upper]` of `R^D`.
@@ -218,6 +220,7 @@ impl ParticleSwarm {
             best_score: global_score,
             iterations,
             evaluations,
+            personal_bests: best_pos.into_iter().zip(best_score).collect(),
         })
     }
 }
