@@ -15,6 +15,7 @@
 //! | [`temporal`] | mutual nearest neighbours between frames, circular check |
 //! | [`frontend`] | two stereo frames to `swarmpose_core::Correspondences` |
 //! | [`rectify`] | radial-tangential undistortion and stereo rectification maps, remap |
+//! | [`render`] | a tiny renderer of textured planes (tests without data) |
 //! | [`draw`] | match drawings (the paper's figure 9) |
 #![deny(missing_docs)]
 #![warn(clippy::unwrap_used)]
@@ -26,5 +27,6 @@ pub mod frontend;
 pub mod image;
 pub mod orb;
 pub mod rectify;
+pub mod render;
 pub mod stereo;
 pub mod temporal;

@@ -5,6 +5,10 @@
 //! ([`StereoFrame`]). Per pair of frames: match the left features of the triangulated
 //! points ([`Frontend::match_frames`]), optionally confirmed by the right images.
 
+mod refine;
+
+pub use refine::refine_weighted;
+
 use nalgebra::Point3;
 use swarmpose_core::{Correspondences, PoseError};
 
@@ -30,6 +34,8 @@ pub struct StereoFrame<D> {
     pub points: Vec<Point3<f64>>,
     /// Sub-pixel disparities, pixels.
     pub disparities_px: Vec<f32>,
+    /// Noise level of each point, metres.
+    pub sigmas_m: Vec<f64>,
     /// Features detected in the left image before stereo matching.
     pub n_left_features: usize,
     /// Features detected in the right image.
@@ -45,6 +51,7 @@ impl<D> Default for StereoFrame<D> {
             right_descriptors: Vec::new(),
             points: Vec::new(),
             disparities_px: Vec::new(),
+            sigmas_m: Vec::new(),
             n_left_features: 0,
             n_right_features: 0,
         }
@@ -70,7 +77,8 @@ impl<D> StereoFrame<D> {
 pub struct FrameMatches {
     /// `src[k]`: the point in frame J's left camera frame; `dst[k]`: the same feature in
     /// frame I's left camera frame (metres). The motion `dst = R src + t` is the pose of
-    /// camera J in camera I.
+    /// camera J in camera I. Each carries its noise level
+    /// ([`Correspondences::noise_sigma`]): the root sum of squares of both points'.
     pub correspondences: Correspondences,
     /// Left-image pixel `(u, v)` of each correspondence in frame J.
     pub src_pixels: Vec<(f32, f32)>,
@@ -87,6 +95,9 @@ pub struct FrameMatches {
 pub struct Frontend<E> {
     /// The detector/descriptor.
     pub extractor: E,
+    /// A different detector for the right image (e.g. more, unbucketed corners, so
+    /// every left feature finds its partner); `None` uses [`Frontend::extractor`].
+    pub right_extractor: Option<E>,
     /// The rectified stereo camera.
     pub rig: RectifiedStereo,
     /// Stereo matching.
@@ -102,8 +113,13 @@ impl Frontend<OrbExtractor> {
     /// The fast binary front end with default settings.
     #[must_use]
     pub fn orb(rig: RectifiedStereo) -> Self {
+        let extractor = OrbExtractor::default();
+        let mut right = extractor.clone();
+        right.config.bucketing = None;
+        right.config.max_features = usize::MAX;
         Self {
-            extractor: OrbExtractor::default(),
+            extractor,
+            right_extractor: Some(right),
             rig,
             stereo: StereoConfig::default(),
             temporal: TemporalConfig::default(),
@@ -119,6 +135,7 @@ impl<E: FeatureExtractor> Frontend<E> {
     pub fn float_descriptor(extractor: E, rig: RectifiedStereo) -> Self {
         Self {
             extractor,
+            right_extractor: None,
             rig,
             stereo: StereoConfig {
                 max_distance: 0.35,
@@ -134,10 +151,24 @@ impl<E: FeatureExtractor> Frontend<E> {
         }
     }
 
-    /// Extracts (and buckets) the features of one image.
+    /// Extracts (and buckets) the features of one left image.
     #[must_use]
     pub fn extract(&self, image: GrayView<'_>) -> Features<E::Descriptor> {
-        let f = self.extractor.extract(image);
+        self.extract_with(&self.extractor, image)
+    }
+
+    /// Extracts the features of one right image: all of them, not bucketed, so that
+    /// every left feature can find its partner.
+    #[must_use]
+    pub fn extract_right(&self, image: GrayView<'_>) -> Features<E::Descriptor> {
+        self.right_extractor
+            .as_ref()
+            .unwrap_or(&self.extractor)
+            .extract(image)
+    }
+
+    fn extract_with(&self, extractor: &E, image: GrayView<'_>) -> Features<E::Descriptor> {
+        let f = extractor.extract(image);
         match &self.bucketing {
             Some(b) => bucket_features(&f, image.width, image.height, b),
             None => f,
@@ -166,6 +197,7 @@ impl<E: FeatureExtractor> Frontend<E> {
             f.right_descriptors.push(right.descriptors[m.right].clone());
             f.points.push(m.point);
             f.disparities_px.push(m.disparity_px);
+            f.sigmas_m.push(m.sigma_m);
         }
         f
     }
@@ -178,7 +210,7 @@ impl<E: FeatureExtractor> Frontend<E> {
         right: GrayView<'_>,
     ) -> StereoFrame<E::Descriptor> {
         let lf = self.extract(left);
-        let rf = self.extract(right);
+        let rf = self.extract_right(right);
         self.stereo_from_features(&lf, &rf, left, right)
     }
 
@@ -226,8 +258,12 @@ pub fn match_frames<D: Descriptor>(
     let src_pts = pairs.iter().map(|&(_, j)| src.points[j]).collect();
     let dst_pts = pairs.iter().map(|&(i, _)| dst.points[i]).collect();
     let px = |k: &Keypoint| (k.x, k.y);
+    let sigma = pairs
+        .iter()
+        .map(|&(i, j)| dst.sigmas_m[i].hypot(src.sigmas_m[j]))
+        .collect();
     Ok(FrameMatches {
-        correspondences: Correspondences::new(src_pts, dst_pts)?,
+        correspondences: Correspondences::new(src_pts, dst_pts)?.with_noise_sigma(sigma)?,
         src_pixels: pairs
             .iter()
             .map(|&(_, j)| px(&src.left_keypoints[j]))

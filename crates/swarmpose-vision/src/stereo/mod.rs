@@ -10,7 +10,7 @@ use nalgebra::Point3;
 pub use rig::RectifiedStereo;
 
 use crate::features::{Descriptor, Features, GrayView, Keypoint};
-use subpixel::refine_disparity;
+use subpixel::{refine_disparity, refine_disparity_lk};
 
 /// Settings of [`match_stereo`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -32,8 +32,16 @@ pub struct StereoConfig {
     /// Half size of the block refining the disparity, pixels (`r` gives a `(2r+1)²`
     /// window); 0 keeps the keypoints' disparity [3].
     pub subpixel_radius: usize,
+    /// After the parabola, refine the disparity by Gauss-Newton on the same window
+    /// ([`subpixel::refine_disparity_lk`]) [true].
+    pub gauss_newton: bool,
     /// Points deeper than this are dropped, metres [80].
     pub max_depth_m: f64,
+    /// Assumed standard deviation of a disparity, pixels, for the per-point noise
+    /// [0.25].
+    pub disparity_sigma_px: f64,
+    /// Assumed standard deviation of a keypoint position, pixels [0.5].
+    pub position_sigma_px: f64,
 }
 
 impl Default for StereoConfig {
@@ -46,7 +54,10 @@ impl Default for StereoConfig {
             ratio: 0.9,
             left_right_check: true,
             subpixel_radius: 3,
+            gauss_newton: true,
             max_depth_m: 80.0,
+            disparity_sigma_px: 0.25,
+            position_sigma_px: 0.5,
         }
     }
 }
@@ -62,6 +73,9 @@ pub struct StereoMatch {
     pub disparity_px: f32,
     /// The point, metres, in the left camera frame.
     pub point: Point3<f64>,
+    /// Its noise level, metres: the root sum of squares of the depth and the lateral
+    /// standard deviations ([`RectifiedStereo::point_sigma`]).
+    pub sigma_m: f64,
 }
 
 /// Indices of `kps` sorted by row, with the rows, for range queries.
@@ -165,7 +179,27 @@ pub fn match_stereo<D: Descriptor>(
                 2,
                 config.subpixel_radius,
             ) {
-                Some(d) => d + (lk.x - lk.x.round()),
+                Some(d) => {
+                    let xl = lk.x.round().max(0.0) as usize;
+                    let y = lk.y.round().max(0.0) as usize;
+                    let d = if config.gauss_newton {
+                        match refine_disparity_lk(
+                            left_img,
+                            right_img,
+                            xl,
+                            y,
+                            d,
+                            config.subpixel_radius,
+                            8,
+                        ) {
+                            Some(d) => d,
+                            None => continue,
+                        }
+                    } else {
+                        d
+                    };
+                    d + (lk.x - lk.x.round())
+                }
                 None => continue,
             }
         } else {
@@ -186,6 +220,7 @@ pub fn match_stereo<D: Descriptor>(
             right: ri,
             disparity_px: disparity,
             point,
+            sigma_m: rig.point_sigma(point.z, config.disparity_sigma_px, config.position_sigma_px),
         });
     }
     out

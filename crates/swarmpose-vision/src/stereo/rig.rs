@@ -48,4 +48,14 @@ impl RectifiedStereo {
     pub fn depth_sigma(&self, z_m: f64, sigma_d_px: f64) -> f64 {
         z_m * z_m * sigma_d_px / (self.fx * self.baseline_m)
     }
+
+    /// Isotropic noise level of a triangulated point at depth `z_m`, metres: the root
+    /// sum of squares of the depth deviation ([`RectifiedStereo::depth_sigma`]) and of
+    /// the two lateral deviations `z σ_p / f` for a keypoint deviation `sigma_p_px`.
+    #[must_use]
+    pub fn point_sigma(&self, z_m: f64, sigma_d_px: f64, sigma_p_px: f64) -> f64 {
+        let dz = self.depth_sigma(z_m, sigma_d_px);
+        let lateral = z_m * sigma_p_px / self.fx;
+        (dz * dz + 2.0 * lateral * lateral).sqrt()
+    }
 }
