@@ -3,7 +3,22 @@
 //! The paper's simulation (section 6) as a library: seeded camera scenarios
 //! ([`scenario`], [`outliers`]), their export in `gen_scenarios.py`'s files ([`export`]),
 //! an experiment runner over every estimator ([`runner`]), and the tables and figures of
-//! the results ([`report`], [`plots`]).
+//! the results ([`report`], [`plots`]). [`simulate()`] is the whole job of
+//! `swarmpose simulate`.
+//!
+//! ```
+//! use swarmpose_core::{Estimator, MsacConfig, MsacEstimator};
+//! use swarmpose_sim::{OutlierMode, SceneSpec, oracle_threshold};
+//!
+//! // Run seed 7: 2 cm noise, 60 % wrong matches, only points both cameras see.
+//! let s = SceneSpec::default().scenario(7, 0.02, 0.6, OutlierMode::Random)?;
+//! assert_eq!(s.n_outliers(), (0.6 * s.data.len() as f64).round() as usize);
+//! let msac = MsacEstimator::new(MsacConfig::default().with_threshold(oracle_threshold(0.02)));
+//! let est = msac.estimate_seeded(&s.data, 1)?;
+//! let t_err = (est.transform.translation.vector - s.truth.translation.vector).norm();
+//! assert!(t_err < 0.2);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 #![deny(missing_docs)]
 #![warn(clippy::unwrap_used)]
 
