@@ -22,8 +22,27 @@
 //! row-major order of `(v, u)`), and the 64-vector is scaled to unit Euclidean length,
 //! which makes it invariant to contrast. Upright SURF uses `θ = 0`.
 
+use std::sync::LazyLock;
+
 use super::integral::{IntegralImage, haar, nearest_corner};
 use crate::features::FloatDescriptor64;
+
+/// Window coordinate of sample `k` in units of `s`: `k − 9.5`.
+#[inline]
+fn sample_unit(k: usize) -> f32 {
+    k as f32 - 9.5
+}
+
+/// `exp(−(u² + v²) / (2 · 3.3²))` for the 20 × 20 samples (units of `s`), row-major in
+/// `(v, u)`; computed once.
+static WEIGHTS: LazyLock<[f32; 400]> = LazyLock::new(|| {
+    let mut w = [0.0f32; 400];
+    for (i, w) in w.iter_mut().enumerate() {
+        let (u, v) = (sample_unit(i % 20), sample_unit(i / 20));
+        *w = (-(u * u + v * v) / (2.0 * 3.3 * 3.3)).exp();
+    }
+    w
+});
 
 /// The unit-length descriptor of the keypoint at `(x, y)` with scale `scale` and
 /// orientation `angle` (radians); all zeros when the window holds no gradient at all.
@@ -37,18 +56,16 @@ pub(crate) fn describe(
 ) -> FloatDescriptor64 {
     let (sin, cos) = angle.sin_cos();
     let half = (scale.round() as usize).max(1);
-    let inv_two_sigma2 = 1.0 / (2.0 * 3.3 * 3.3);
+    let weights = &*WEIGHTS;
     let mut d = [0.0f32; 64];
     for l in 0..20usize {
-        let v_units = l as f32 - 9.5;
-        let v = v_units * scale;
+        let v = sample_unit(l) * scale;
         for k in 0..20usize {
-            let u_units = k as f32 - 9.5;
-            let u = u_units * scale;
+            let u = sample_unit(k) * scale;
             let px = x + u * cos - v * sin;
             let py = y + u * sin + v * cos;
             let (dx, dy) = haar(integral, nearest_corner(px), nearest_corner(py), half);
-            let weight = (-(u_units * u_units + v_units * v_units) * inv_two_sigma2).exp();
+            let weight = weights[l * 20 + k];
             let du = weight * (dx * cos + dy * sin);
             let dv = weight * (-dx * sin + dy * cos);
             let cell = 4 * ((l / 5) * 4 + k / 5);

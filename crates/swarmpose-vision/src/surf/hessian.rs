@@ -98,9 +98,6 @@ impl ResponseLayer {
         let q_tr = at(r + 1, r - l);
         let q_bl = at(r - l, r + 1);
         let q_br = at(r + 1, r + 1);
-        let sum = |base: usize, b: (usize, usize, usize)| -> i64 {
-            i64::from(integral.box_sum_at(base + b.0, b.1, b.2))
-        };
         let norm = 1.0 / (255.0 * (filter * filter) as f32);
 
         let c_lo = r.div_ceil(step);
@@ -108,24 +105,38 @@ impl ResponseLayer {
         // Last valid sample: c · step + r ≤ w − 1.
         let c_hi = (w - 1 - r) / step;
         let r_hi = (h - 1 - r) / step;
+        if c_hi < c_lo || r_hi < r_lo {
+            return;
+        }
+        let n = c_hi + 1 - c_lo;
+        // Row accumulators of the unnormalised box-filter responses (exact integers).
+        let (mut dxx, mut dyy, mut dxy) = (vec![0i32; n], vec![0i32; n], vec![0i32; n]);
+        let sums = integral.raw();
         for row in r_lo..=r_hi {
-            let y = row * step;
-            let row_base = (y - r) * stride;
-            let out = row * self.cols;
-            for col in c_lo..=c_hi {
-                let base = row_base + col * step - r;
-                let dyy = (sum(base, yy_whole) - 3 * sum(base, yy_mid)) as f32 * norm;
-                let dxx = (sum(base, xx_whole) - 3 * sum(base, xx_mid)) as f32 * norm;
-                let tl = integral.box_sum_at(base + q_tl, lobe, l);
-                let tr = integral.box_sum_at(base + q_tr, lobe, l);
-                let bl = integral.box_sum_at(base + q_bl, lobe, l);
-                let br = integral.box_sum_at(base + q_br, lobe, l);
-                let dxy = ((i64::from(tl) + i64::from(br)) - (i64::from(tr) + i64::from(bl)))
-                    as f32
-                    * norm;
-                let det = dxx * dyy - 0.81 * dxy * dxy;
-                self.det[out + col] = det;
-                self.laplacian_positive[out + col] = dxx + dyy > 0.0;
+            // Top-left corner of the filter window of the first sample of the row.
+            let base = (row * step - r) * stride + c_lo * step - r;
+            dxx.fill(0);
+            dyy.fill(0);
+            dxy.fill(0);
+            let boxes = |out: &mut [i32], b: (usize, usize, usize), weight: i32| {
+                add_box_row(sums, base + b.0, b.1, b.2, step, weight, out);
+            };
+            boxes(&mut dyy, yy_whole, 1);
+            boxes(&mut dyy, yy_mid, -3);
+            boxes(&mut dxx, xx_whole, 1);
+            boxes(&mut dxx, xx_mid, -3);
+            boxes(&mut dxy, (q_tl, lobe, l), 1);
+            boxes(&mut dxy, (q_br, lobe, l), 1);
+            boxes(&mut dxy, (q_tr, lobe, l), -1);
+            boxes(&mut dxy, (q_bl, lobe, l), -1);
+            let start = row * self.cols + c_lo;
+            let det = &mut self.det[start..start + n];
+            let lap = &mut self.laplacian_positive[start..start + n];
+            for ((((d, p), &xx), &yy), &xy) in det.iter_mut().zip(lap).zip(&dxx).zip(&dyy).zip(&dxy)
+            {
+                let (xx, yy, xy) = (xx as f32 * norm, yy as f32 * norm, xy as f32 * norm);
+                *d = xx * yy - 0.81 * xy * xy;
+                *p = xx + yy > 0.0;
             }
         }
     }
@@ -146,6 +157,46 @@ impl ResponseLayer {
         let lo = r.div_ceil(self.step);
         let hi = (extent - 1 - r) / self.step;
         (lo <= hi).then_some((lo, hi))
+    }
+}
+
+/// Adds `weight ×` the box sums of `n = out.len()` boxes of `cols` columns and
+/// `rows_offset / stride` rows whose top-left table indices are `top_left + i · step`:
+/// one box filter term along a row of samples, written as slice zips so that the
+/// compiler can drop the bounds checks and vectorise the `step = 1` case.
+fn add_box_row(
+    sums: &[u32],
+    top_left: usize,
+    rows_offset: usize,
+    cols: usize,
+    step: usize,
+    weight: i32,
+    out: &mut [i32],
+) {
+    let n = out.len();
+    if n == 0 {
+        return;
+    }
+    let span = (n - 1) * step + 1;
+    let bottom_left = top_left + rows_offset;
+    let a = &sums[top_left..top_left + span];
+    let b = &sums[top_left + cols..top_left + cols + span];
+    let c = &sums[bottom_left..bottom_left + span];
+    let d = &sums[bottom_left + cols..bottom_left + cols + span];
+    if step == 1 {
+        for ((((o, a), b), c), d) in out.iter_mut().zip(a).zip(b).zip(c).zip(d) {
+            *o += weight * d.wrapping_sub(*b).wrapping_sub(*c).wrapping_add(*a) as i32;
+        }
+    } else {
+        let quads = a
+            .iter()
+            .step_by(step)
+            .zip(b.iter().step_by(step))
+            .zip(c.iter().step_by(step))
+            .zip(d.iter().step_by(step));
+        for (o, (((a, b), c), d)) in out.iter_mut().zip(quads) {
+            *o += weight * d.wrapping_sub(*b).wrapping_sub(*c).wrapping_add(*a) as i32;
+        }
     }
 }
 
@@ -203,13 +254,14 @@ pub(crate) fn detect(
         }
         for mid in 1..=intervals {
             let (below, centre, above) = (&layers[mid - 1], &layers[mid], &layers[mid + 1]);
+            let layers = &layers[..per_octave];
             for row in r_lo + 1..r_hi {
                 for col in c_lo + 1..c_hi {
                     let v = centre.at(col, row);
                     if v <= threshold || !is_local_max(v, below, centre, above, col, row) {
                         continue;
                     }
-                    if let Some(d) = refine(below, centre, above, col, row, octave) {
+                    if let Some(d) = refine(layers, mid, col, row, octave) {
                         out.push(d);
                     }
                 }
@@ -241,23 +293,21 @@ fn is_local_max(
     true
 }
 
-/// Fits a 3D quadratic to the 3×3×3 block and moves to its extremum:
+/// Gradient `g` and Hessian `H` of the response over (column, row, layer) at
+/// `(col, row)` of layer `mid`, by central differences, with the response `D` itself:
 ///
 /// ```text
-/// D(x + δ) ≈ D + gᵀδ + ½ δᵀHδ,   δ* = −H⁻¹ g,   D(δ*) = D + ½ gᵀδ*,
+/// g = (∂D/∂c, ∂D/∂r, ∂D/∂l),   H_ij = ∂²D/∂i∂j,
+/// ∂D/∂c ≈ (D(c+1) − D(c−1)) / 2,   ∂²D/∂c² ≈ D(c+1) + D(c−1) − 2D,
+/// ∂²D/∂c∂r ≈ (D(c+1, r+1) − D(c−1, r+1) − D(c+1, r−1) + D(c−1, r−1)) / 4, …
 /// ```
-///
-/// with `g` and `H` from central differences over (column, row, layer). Returns `None`
-/// when `H` is singular or any component of `δ*` exceeds 0.5 (the extremum belongs to a
-/// neighbouring sample).
-fn refine(
-    below: &ResponseLayer,
-    centre: &ResponseLayer,
-    above: &ResponseLayer,
+fn derivatives(
+    layers: &[ResponseLayer],
+    mid: usize,
     col: usize,
     row: usize,
-    octave: usize,
-) -> Option<Detection> {
+) -> (f64, nalgebra::Vector3<f64>, nalgebra::Matrix3<f64>) {
+    let (below, centre, above) = (&layers[mid - 1], &layers[mid], &layers[mid + 1]);
     let c = |l: &ResponseLayer, dc: isize, dr: isize| -> f64 {
         f64::from(l.at(col.wrapping_add_signed(dc), row.wrapping_add_signed(dr)))
     };
@@ -274,12 +324,34 @@ fn refine(
     let dxs = (c(above, 1, 0) - c(above, -1, 0) - c(below, 1, 0) + c(below, -1, 0)) / 4.0;
     let dys = (c(above, 0, 1) - c(above, 0, -1) - c(below, 0, 1) + c(below, 0, -1)) / 4.0;
     let hessian = nalgebra::Matrix3::new(dxx, dxy, dxs, dxy, dyy, dys, dxs, dys, dss);
+    (v, g, hessian)
+}
+
+/// Fits a 3D quadratic to the 3×3×3 block around the maximum at `(col, row)` of layer
+/// `mid` and moves to its extremum:
+///
+/// ```text
+/// D(x + δ) ≈ D + gᵀδ + ½ δᵀHδ,   δ* = −H⁻¹ g,   D(δ*) = D + ½ gᵀδ*,
+/// ```
+///
+/// with `g` and `H` from [`derivatives`]. Returns `None` when `H` is singular or any
+/// component of `δ*` exceeds 0.5 (the extremum is closer to a neighbouring sample, which
+/// is not a maximum: the fit is unreliable).
+fn refine(
+    layers: &[ResponseLayer],
+    mid: usize,
+    col: usize,
+    row: usize,
+    octave: usize,
+) -> Option<Detection> {
+    let (v, g, hessian) = derivatives(layers, mid, col, row);
     let offset = -(hessian.try_inverse()? * g);
     if offset.iter().any(|o| !o.is_finite() || o.abs() > 0.5) {
         return None;
     }
+    let centre = &layers[mid];
     let step = centre.step as f64;
-    let filter_step = (above.filter - centre.filter) as f64;
+    let filter_step = (layers[mid + 1].filter - centre.filter) as f64;
     let filter = centre.filter as f64 + offset.z * filter_step;
     Some(Detection {
         x: ((col as f64 + offset.x) * step) as f32,

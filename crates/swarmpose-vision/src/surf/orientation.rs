@@ -22,6 +22,7 @@
 //! Angles are measured from `+x` towards `+y` (image axes, `y` down).
 
 use std::f32::consts::{PI, TAU};
+use std::sync::LazyLock;
 
 use super::integral::{IntegralImage, haar, nearest_corner};
 
@@ -31,6 +32,23 @@ const SAMPLES: usize = 109;
 /// Width of the sliding window, radians.
 const WINDOW: f32 = PI / 3.0;
 
+/// The sample offsets `(i, j)` with `i² + j² < 36` and their weights
+/// `exp(−(i² + j²) / 8)`; computed once.
+static SAMPLE_GRID: LazyLock<[(i32, i32, f32); SAMPLES]> = LazyLock::new(|| {
+    let mut grid = [(0, 0, 0.0f32); SAMPLES];
+    let mut n = 0;
+    for j in -6i32..=6 {
+        for i in -6i32..=6 {
+            let r2 = i * i + j * j;
+            if r2 < 36 && n < SAMPLES {
+                grid[n] = (i, j, (-(r2 as f32) / 8.0).exp());
+                n += 1;
+            }
+        }
+    }
+    grid
+});
+
 /// Dominant orientation, radians in `(−π, π]`, of the keypoint at `(x, y)` with scale
 /// `scale`; 0 when there is no gradient at all.
 #[must_use]
@@ -39,21 +57,14 @@ pub(crate) fn orientation(integral: &IntegralImage, x: f32, y: f32, scale: f32) 
     let mut responses = [(0.0f32, 0.0f32, 0.0f32); SAMPLES];
     let mut n = 0;
     let half = ((2.0 * scale).round() as usize).max(1);
-    for j in -6i32..=6 {
-        for i in -6i32..=6 {
-            let r2 = i * i + j * j;
-            if r2 >= 36 {
-                continue;
-            }
-            let weight = (-(r2 as f32) / 8.0).exp();
-            let cx = nearest_corner(x + i as f32 * scale);
-            let cy = nearest_corner(y + j as f32 * scale);
-            let (dx, dy) = haar(integral, cx, cy, half);
-            let (dx, dy) = (dx * weight, dy * weight);
-            if dx != 0.0 || dy != 0.0 {
-                responses[n] = (dy.atan2(dx), dx, dy);
-                n += 1;
-            }
+    for &(i, j, weight) in SAMPLE_GRID.iter() {
+        let cx = nearest_corner(x + i as f32 * scale);
+        let cy = nearest_corner(y + j as f32 * scale);
+        let (dx, dy) = haar(integral, cx, cy, half);
+        let (dx, dy) = (dx * weight, dy * weight);
+        if dx != 0.0 || dy != 0.0 {
+            responses[n] = (dy.atan2(dx), dx, dy);
+            n += 1;
         }
     }
     let responses = &mut responses[..n];
@@ -144,6 +155,8 @@ mod tests {
 
     #[test]
     fn sample_count_is_109() {
+        assert!(SAMPLE_GRID.iter().all(|&(i, j, _)| i * i + j * j < 36));
+        assert_eq!(SAMPLE_GRID[SAMPLES - 1], (3, 5, (-34.0f32 / 8.0).exp()));
         let count = (-6i32..=6)
             .flat_map(|j| (-6i32..=6).map(move |i| i * i + j * j))
             .filter(|&r2| r2 < 36)
