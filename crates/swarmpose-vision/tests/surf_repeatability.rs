@@ -224,15 +224,15 @@ impl Setup {
 
 /// The acceptance criterion: >= 60 % under rotation 30° and scale 0.8.
 ///
-/// Not met: this faithful SURF repeats 39 % of the keypoints of this frame within 2 px
-/// under that warp (53 % under the scale alone, 42 % under the rotation alone). Smooth
+/// Not met: this faithful SURF repeats 43 % of the keypoints of this frame within 2 px
+/// under that warp (56 % under the scale alone, 47 % under the rotation alone). Smooth
 /// synthetic textures reach 65-80 % under the same warps, and an exact 90° rotation
 /// gives 99 % (see `surf_repeatability_regression`), so the shortfall comes from the
 /// frame (foliage and grass, whose box-filter maxima move or vanish under resampling and
 /// rotation) and from the 2 px tolerance at large scales, not from a defect found in the
 /// detector.
 #[test]
-#[ignore = "acceptance criterion not met: 39 % measured on this frame (see the doc comment)"]
+#[ignore = "acceptance criterion not met: 43 % measured on this frame (see the doc comment)"]
 fn surf_detects_repeatably_under_a_known_similarity() {
     let Some(setup) = Setup::kitti() else {
         return;
@@ -255,14 +255,10 @@ fn surf_repeatability_regression() {
     let both = setup.run("rotation and scale", 0.8, 30.0);
     let scale_only = setup.run("scale only", 0.8, 0.0);
     let rotation_only = setup.run("rotation only", 1.0, 30.0);
-    assert!(both >= 0.35, "rotation and scale: {:.1} %", 100.0 * both);
+    assert!(both >= 0.38, "rotation and scale: {:.1} %", 100.0 * both);
+    assert!(scale_only >= 0.5, "scale only: {:.1} %", 100.0 * scale_only);
     assert!(
-        scale_only >= 0.47,
-        "scale only: {:.1} %",
-        100.0 * scale_only
-    );
-    assert!(
-        rotation_only >= 0.37,
+        rotation_only >= 0.42,
         "rotation only: {:.1} %",
         100.0 * rotation_only
     );

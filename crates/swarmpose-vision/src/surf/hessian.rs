@@ -38,9 +38,10 @@
 //! Octave `o` (from 0) holds `intervals + 2` filters of sizes
 //! `L(o, i) = 3 · (2^(o+1) · (i + 1) + 1)` — 9, 15, 21, 27; 15, 27, 39, 51; 27, 51, 75, 99;
 //! … — sampled every `step · 2^o` pixels. Maxima are searched in the inner `intervals`
-//! layers of each octave.
+//! layers of each octave and refined by [`super::refine`].
 
 use super::integral::IntegralImage;
+use super::refine::{Block, refine};
 
 /// Filter size `L` of layer `layer` (0-based, `0..intervals + 2`) in octave `octave`:
 /// `3 · (2^(octave+1) · (layer + 1) + 1)`.
@@ -143,7 +144,7 @@ impl ResponseLayer {
 
     /// Response at grid position `(col, row)`; the caller keeps it inside the grid.
     #[inline]
-    fn at(&self, col: usize, row: usize) -> f32 {
+    pub(super) fn at(&self, col: usize, row: usize) -> f32 {
         self.det[row * self.cols + col]
     }
 
@@ -261,7 +262,18 @@ pub(crate) fn detect(
                     if v <= threshold || !is_local_max(v, below, centre, above, col, row) {
                         continue;
                     }
-                    if let Some(d) = refine(layers, mid, col, row, octave) {
+                    let block = Block { mid, col, row };
+                    let bounds = Block {
+                        mid: intervals,
+                        col: c_hi - 1,
+                        row: r_hi - 1,
+                    };
+                    let lower = Block {
+                        mid: 1,
+                        col: c_lo + 1,
+                        row: r_lo + 1,
+                    };
+                    if let Some(d) = refine(layers, block, lower, bounds, octave) {
                         out.push(d);
                     }
                 }
@@ -272,7 +284,7 @@ pub(crate) fn detect(
 
 /// True when `v = centre(col, row)` is strictly larger than its 26 neighbours.
 #[inline]
-fn is_local_max(
+pub(super) fn is_local_max(
     v: f32,
     below: &ResponseLayer,
     centre: &ResponseLayer,
@@ -291,76 +303,6 @@ fn is_local_max(
         }
     }
     true
-}
-
-/// Gradient `g` and Hessian `H` of the response over (column, row, layer) at
-/// `(col, row)` of layer `mid`, by central differences, with the response `D` itself:
-///
-/// ```text
-/// g = (∂D/∂c, ∂D/∂r, ∂D/∂l),   H_ij = ∂²D/∂i∂j,
-/// ∂D/∂c ≈ (D(c+1) − D(c−1)) / 2,   ∂²D/∂c² ≈ D(c+1) + D(c−1) − 2D,
-/// ∂²D/∂c∂r ≈ (D(c+1, r+1) − D(c−1, r+1) − D(c+1, r−1) + D(c−1, r−1)) / 4, …
-/// ```
-fn derivatives(
-    layers: &[ResponseLayer],
-    mid: usize,
-    col: usize,
-    row: usize,
-) -> (f64, nalgebra::Vector3<f64>, nalgebra::Matrix3<f64>) {
-    let (below, centre, above) = (&layers[mid - 1], &layers[mid], &layers[mid + 1]);
-    let c = |l: &ResponseLayer, dc: isize, dr: isize| -> f64 {
-        f64::from(l.at(col.wrapping_add_signed(dc), row.wrapping_add_signed(dr)))
-    };
-    let v = c(centre, 0, 0);
-    let g = nalgebra::Vector3::new(
-        (c(centre, 1, 0) - c(centre, -1, 0)) / 2.0,
-        (c(centre, 0, 1) - c(centre, 0, -1)) / 2.0,
-        (c(above, 0, 0) - c(below, 0, 0)) / 2.0,
-    );
-    let dxx = c(centre, 1, 0) + c(centre, -1, 0) - 2.0 * v;
-    let dyy = c(centre, 0, 1) + c(centre, 0, -1) - 2.0 * v;
-    let dss = c(above, 0, 0) + c(below, 0, 0) - 2.0 * v;
-    let dxy = (c(centre, 1, 1) - c(centre, -1, 1) - c(centre, 1, -1) + c(centre, -1, -1)) / 4.0;
-    let dxs = (c(above, 1, 0) - c(above, -1, 0) - c(below, 1, 0) + c(below, -1, 0)) / 4.0;
-    let dys = (c(above, 0, 1) - c(above, 0, -1) - c(below, 0, 1) + c(below, 0, -1)) / 4.0;
-    let hessian = nalgebra::Matrix3::new(dxx, dxy, dxs, dxy, dyy, dys, dxs, dys, dss);
-    (v, g, hessian)
-}
-
-/// Fits a 3D quadratic to the 3×3×3 block around the maximum at `(col, row)` of layer
-/// `mid` and moves to its extremum:
-///
-/// ```text
-/// D(x + δ) ≈ D + gᵀδ + ½ δᵀHδ,   δ* = −H⁻¹ g,   D(δ*) = D + ½ gᵀδ*,
-/// ```
-///
-/// with `g` and `H` from [`derivatives`]. Returns `None` when `H` is singular or any
-/// component of `δ*` exceeds 0.5 (the extremum is closer to a neighbouring sample, which
-/// is not a maximum: the fit is unreliable).
-fn refine(
-    layers: &[ResponseLayer],
-    mid: usize,
-    col: usize,
-    row: usize,
-    octave: usize,
-) -> Option<Detection> {
-    let (v, g, hessian) = derivatives(layers, mid, col, row);
-    let offset = -(hessian.try_inverse()? * g);
-    if offset.iter().any(|o| !o.is_finite() || o.abs() > 0.5) {
-        return None;
-    }
-    let centre = &layers[mid];
-    let step = centre.step as f64;
-    let filter_step = (layers[mid + 1].filter - centre.filter) as f64;
-    let filter = centre.filter as f64 + offset.z * filter_step;
-    Some(Detection {
-        x: ((col as f64 + offset.x) * step) as f32,
-        y: ((row as f64 + offset.y) * step) as f32,
-        scale: (1.2 * filter / 9.0) as f32,
-        response: (v + 0.5 * g.dot(&offset)) as f32,
-        laplacian_positive: centre.laplacian_positive[row * centre.cols + col],
-        octave: octave as u8,
-    })
 }
 
 #[cfg(test)]

@@ -23,6 +23,7 @@ mod descriptor;
 mod hessian;
 pub mod integral;
 mod orientation;
+mod refine;
 #[cfg(test)]
 mod test_images;
 
