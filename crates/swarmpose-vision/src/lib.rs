@@ -29,4 +29,5 @@ pub mod orb;
 pub mod rectify;
 pub mod render;
 pub mod stereo;
+pub mod surf;
 pub mod temporal;
