@@ -4,7 +4,7 @@
 
 use nalgebra::{Isometry3, Point3, Vector3};
 use swarmpose_core::{Estimator, PsoEstimator, PsoEstimatorConfig};
-use swarmpose_vision::frontend::{Frontend, refine_weighted};
+use swarmpose_vision::frontend::{CHI2_3_99, Frontend, refine_stereo};
 use swarmpose_vision::image::GrayImage;
 use swarmpose_vision::render::{TexturedPlane, depth_at, render};
 use swarmpose_vision::stereo::RectifiedStereo;
@@ -96,7 +96,15 @@ fn front_end_recovers_a_known_motion() {
     let est = PsoEstimator::new(PsoEstimatorConfig::default())
         .estimate_seeded(&m.correspondences, 1)
         .expect("estimate");
-    let (pose, _) = refine_weighted(&m.correspondences, &est.transform, 3.0, 10).expect("refine");
+    let (pose, _) = refine_stereo(
+        &m.correspondences,
+        &m.src_covariances,
+        &m.dst_covariances,
+        &est.transform,
+        CHI2_3_99,
+        10,
+    )
+    .expect("refine");
     let truth = pose_i.inverse() * pose_j;
     let d = truth.inverse() * pose;
     let (deg, cm) = (
@@ -104,8 +112,11 @@ fn front_end_recovers_a_known_motion() {
         d.translation.vector.norm() * 100.0,
     );
     eprintln!(
-        "{} correspondences; error {deg:.3} deg, {cm:.2} cm",
-        m.correspondences.len()
+        "{} correspondences; error {deg:.3} deg, {cm:.2} cm; t {:?} (truth {:?}); PSO alone t {:?}",
+        m.correspondences.len(),
+        pose.translation.vector.as_slice(),
+        truth.translation.vector.as_slice(),
+        est.transform.translation.vector.as_slice(),
     );
     assert!(deg < 0.5 && cm < 5.0, "{deg} deg {cm} cm");
 }

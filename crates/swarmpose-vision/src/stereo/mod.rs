@@ -76,6 +76,8 @@ pub struct StereoMatch {
     /// Its noise level, metres: the root sum of squares of the depth and the lateral
     /// standard deviations ([`RectifiedStereo::point_sigma`]).
     pub sigma_m: f64,
+    /// Its covariance, m² ([`RectifiedStereo::point_covariance`]).
+    pub covariance: nalgebra::Matrix3<f64>,
 }
 
 /// Indices of `kps` sorted by row, with the rows, for range queries.
@@ -221,6 +223,13 @@ pub fn match_stereo<D: Descriptor>(
             disparity_px: disparity,
             point,
             sigma_m: rig.point_sigma(point.z, config.disparity_sigma_px, config.position_sigma_px),
+            covariance: rig.point_covariance(
+                f64::from(lk.x),
+                f64::from(lk.y),
+                f64::from(disparity),
+                config.position_sigma_px,
+                config.disparity_sigma_px,
+            ),
         });
     }
     out

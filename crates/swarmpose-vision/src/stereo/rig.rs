@@ -58,4 +58,39 @@ impl RectifiedStereo {
         let lateral = z_m * sigma_p_px / self.fx;
         (dz * dz + 2.0 * lateral * lateral).sqrt()
     }
+
+    /// Covariance, m², of the point triangulated at left pixel `(u, v)` with disparity
+    /// `d`, for independent errors of `sigma_p_px` on `u` and `v` and `sigma_d_px` on
+    /// `d` (first-order propagation): elongated along the viewing ray.
+    #[must_use]
+    pub fn point_covariance(
+        &self,
+        u: f64,
+        v: f64,
+        d: f64,
+        sigma_p_px: f64,
+        sigma_d_px: f64,
+    ) -> nalgebra::Matrix3<f64> {
+        let b = self.baseline_m;
+        let x = (u - self.cx) * b / d;
+        let y = (v - self.cy) * b * self.fx / (self.fy * d);
+        let z = self.fx * b / d;
+        let j = nalgebra::Matrix3::new(
+            b / d,
+            0.0,
+            -x / d,
+            0.0,
+            b * self.fx / (self.fy * d),
+            -y / d,
+            0.0,
+            0.0,
+            -z / d,
+        );
+        let s = nalgebra::Matrix3::from_diagonal(&nalgebra::Vector3::new(
+            sigma_p_px * sigma_p_px,
+            sigma_p_px * sigma_p_px,
+            sigma_d_px * sigma_d_px,
+        ));
+        j * s * j.transpose()
+    }
 }
