@@ -13,8 +13,9 @@ pub struct Keypoint {
     /// Characteristic scale, pixels (for SURF `1.2 * filter size / 9`; for a
     /// single-scale corner the patch radius).
     pub scale: f32,
-    /// Orientation, radians, counter-clockwise from the `+x` axis in image coordinates;
-    /// 0 for upright (non-oriented) features.
+    /// Orientation, radians, `atan2(dy, dx)` in image coordinates: measured from `+x`
+    /// towards `+y` (clockwise on screen, since `y` points down); 0 for upright
+    /// (non-oriented) features.
     pub angle: f32,
     /// Detector response: larger is stronger.
     pub response: f32,
