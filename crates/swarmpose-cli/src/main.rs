@@ -34,12 +34,16 @@ enum Command {
     /// Run the estimators on a folder of scenario CSV + truth JSON files and print
     /// success, accuracy and time per cell as Markdown tables.
     Bench(commands::bench::BenchArgs),
+    /// Stereo front end: the 3D-3D correspondences of two frames of a stereo sequence as
+    /// a CSV for `register` (src = frame J, dst = frame I).
+    Correspondences(commands::correspondences::CorrespondencesArgs),
 }
 
 fn run(cli: Cli) -> Result<(), CliError> {
     match cli.command {
         Command::Register(args) => commands::register::run(&args),
         Command::Bench(args) => commands::bench::run(&args),
+        Command::Correspondences(args) => commands::correspondences::run(&args),
     }
 }
 

@@ -3,4 +3,5 @@
 //! [`CliError`]: crate::error::CliError
 
 pub mod bench;
+pub mod correspondences;
 pub mod register;

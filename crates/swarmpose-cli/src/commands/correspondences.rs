@@ -1,0 +1,176 @@
+//! `swarmpose correspondences SEQUENCE_DIR --frames I J --out FILE.csv`: the stereo front
+//! end on two frames of a sequence, written as a correspondence CSV for `register`
+//! (src = frame J, dst = frame I, both in their left camera frames, metres), so that
+//! `dst = R src + t` is the pose of camera J in camera I. `--draw` draws the matches
+//! (the paper's figure 9); with `--inliers` (the JSON printed by `register`) inliers and
+//! outliers get different colours.
+
+use std::path::{Path, PathBuf};
+
+use clap::{Args, ValueEnum};
+use swarmpose_data::correspondence_csv;
+use swarmpose_datasets::{DatasetError, StereoPair, StereoSequence, open};
+use swarmpose_vision::draw::draw_matches;
+use swarmpose_vision::features::FeatureExtractor;
+use swarmpose_vision::frontend::{FrameMatches, Frontend};
+use swarmpose_vision::surf::Surf;
+
+use crate::error::CliError;
+
+/// The detector/descriptor of the front end.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Detector {
+    /// FAST corners with BRIEF descriptors (fast, real-time).
+    Orb,
+    /// Upright SURF (as in the paper; slower).
+    Surf,
+}
+
+/// Arguments of `swarmpose correspondences`.
+#[derive(Debug, Args)]
+#[command(after_help = "\
+SEQUENCE_DIR is a KITTI odometry sequence (image_0/, image_1/, calib.txt), a Karlsruhe \
+sequence (I1_*.png, I2_*.png, calib.txt) or a EuRoC MAV sequence (mav0/cam0, mav0/cam1; \
+rectified on load). Frames are 0-based indices. The CSV has the header \
+src_x,src_y,src_z,dst_x,dst_y,dst_z: src in the left camera frame of frame J, dst in that \
+of frame I (x right, y down, z forward, metres). A one-line summary goes to standard \
+error.
+
+Exit status: 0 on success; 2 for bad options or an unreadable or malformed sequence; 1 \
+when an output cannot be written.")]
+pub struct CorrespondencesArgs {
+    /// Sequence directory.
+    #[arg(value_name = "SEQUENCE_DIR")]
+    pub sequence: PathBuf,
+
+    /// The two frames: I (destination) and J (source).
+    #[arg(long, num_args = 2, value_names = ["I", "J"], required = true)]
+    pub frames: Vec<usize>,
+
+    /// Output correspondence CSV.
+    #[arg(long, value_name = "FILE.csv")]
+    pub out: PathBuf,
+
+    /// Also draw the matches: frame I left, frame J right, a line per match.
+    #[arg(long, value_name = "FILE.png")]
+    pub draw: Option<PathBuf>,
+
+    /// The JSON report of `swarmpose register` on the CSV: its inliers are drawn in
+    /// green, the outliers in red (otherwise every match is yellow).
+    #[arg(long, value_name = "REPORT.json", requires = "draw")]
+    pub inliers: Option<PathBuf>,
+
+    /// Detector and descriptor.
+    #[arg(long, value_enum, default_value_t = Detector::Orb)]
+    pub detector: Detector,
+
+    /// Keep only the matches confirmed by the right images (left t -> right t -> right
+    /// t-1 -> left t-1 -> left t closes).
+    #[arg(long)]
+    pub circular_check: bool,
+}
+
+fn dataset_error(e: DatasetError) -> CliError {
+    CliError::usage(e.to_string())
+}
+
+/// Runs the front end on frames `i` and `j`.
+fn matches<E: FeatureExtractor>(
+    frontend: &Frontend<E>,
+    a: &StereoPair,
+    b: &StereoPair,
+) -> Result<FrameMatches, CliError> {
+    let fa = frontend.stereo_frame(a.left.view(), a.right.view());
+    let fb = frontend.stereo_frame(b.left.view(), b.right.view());
+    frontend
+        .match_frames(&fa, &fb)
+        .map_err(|e| CliError::failure(format!("matching failed: {e}")))
+}
+
+/// Inlier flags from a `register` JSON report of `n` correspondences.
+fn read_inliers(path: &Path, n: usize) -> Result<Vec<bool>, CliError> {
+    let name = path.display();
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| CliError::usage(format!("{name}: cannot read: {e}")))?;
+    let value: serde_json::Value = serde_json::from_str(text.trim())
+        .map_err(|e| CliError::usage(format!("{name}: not a register JSON report: {e}")))?;
+    let list = value
+        .get("inliers")
+        .and_then(|v| v.as_array())
+        .ok_or_else(|| CliError::usage(format!("{name}: no \"inliers\" array")))?;
+    let mut flags = vec![false; n];
+    for v in list {
+        let i = v
+            .as_u64()
+            .and_then(|i| usize::try_from(i).ok())
+            .filter(|&i| i < n)
+            .ok_or_else(|| {
+                CliError::usage(format!(
+                    "{name}: inlier {v} is not an index below {n} (the report is of another CSV?)"
+                ))
+            })?;
+        flags[i] = true;
+    }
+    Ok(flags)
+}
+
+/// Runs `correspondences`.
+///
+/// # Errors
+/// A bad sequence or frame index (exit 2), an unwritable output (exit 1).
+pub fn run(args: &CorrespondencesArgs) -> Result<(), CliError> {
+    let (i, j) = match args.frames.as_slice() {
+        [i, j] => (*i, *j),
+        _ => return Err(CliError::usage("--frames takes two frame indices, I and J")),
+    };
+    let seq: Box<dyn StereoSequence> = open(&args.sequence).map_err(dataset_error)?;
+    for f in [i, j] {
+        if f >= seq.len() {
+            return Err(CliError::usage(format!(
+                "{}: frame {f} out of range (the sequence has {} frames, 0-{})",
+                args.sequence.display(),
+                seq.len(),
+                seq.len().saturating_sub(1)
+            )));
+        }
+    }
+    let a = seq.frame(i).map_err(dataset_error)?;
+    let b = seq.frame(j).map_err(dataset_error)?;
+    let rig = seq.calibration();
+    let m = match args.detector {
+        Detector::Orb => {
+            let mut fe = Frontend::orb(rig);
+            fe.temporal.circular_check = args.circular_check;
+            matches(&fe, &a, &b)?
+        }
+        Detector::Surf => {
+            let mut fe = Frontend::float_descriptor(Surf::upright(), rig);
+            fe.temporal.circular_check = args.circular_check;
+            matches(&fe, &a, &b)?
+        }
+    };
+    correspondence_csv::write_path(&args.out, &m.correspondences)?;
+    if let Some(png) = &args.draw {
+        let flags = match &args.inliers {
+            Some(p) => Some(read_inliers(p, m.correspondences.len())?),
+            None => None,
+        };
+        draw_matches(
+            a.left.view(),
+            b.left.view(),
+            &m.dst_pixels,
+            &m.src_pixels,
+            flags.as_deref(),
+        )
+        .save_png(png)
+        .map_err(CliError::failure)?;
+    }
+    eprintln!(
+        "swarmpose: {} ({}), frames {i} -> {j}: {} correspondences written to {}",
+        args.sequence.display(),
+        seq.layout(),
+        m.correspondences.len(),
+        args.out.display()
+    );
+    Ok(())
+}
