@@ -37,6 +37,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     fe.temporal.circular_check = env("CIRC", 0.0) > 0.5;
     fe.temporal.max_displacement_px = Some(env("WIN", 150.0) as f32);
     fe.stereo.max_depth_m = env("MAXZ", 80.0);
+    fe.stereo.disparity_offset_px = env("DOFF", 0.0) as f32;
     fe.stereo.gauss_newton = env("GN", 1.0) > 0.5;
     fe.stereo.subpixel_radius = env("SUBR", 3.0) as usize;
     let verbose = env("VERBOSE", 0.0) > 0.5;
@@ -76,7 +77,25 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             );
         }
         if let Some(pf) = prev.take() {
-            let m = fe.match_frames(&pf, &f)?;
+            let mut m = fe.match_frames(&pf, &f)?;
+            let sel = env("SEL", 0.0) as i32;
+            if sel != 0 {
+                let c = &m.correspondences;
+                let keep: Vec<usize> = (0..c.len())
+                    .filter(|&k| {
+                        let d = c.dst()[k];
+                        let below = d.y > 1.0;
+                        if sel == 1 { below } else { !below }
+                    })
+                    .collect();
+                let src = keep.iter().map(|&k| c.src()[k]).collect();
+                let dst = keep.iter().map(|&k| c.dst()[k]).collect();
+                let sig = keep.iter().map(|&k| c.noise_sigma().unwrap()[k]).collect();
+                m.src_covariances = keep.iter().map(|&k| m.src_covariances[k]).collect();
+                m.dst_covariances = keep.iter().map(|&k| m.dst_covariances[k]).collect();
+                m.correspondences =
+                    swarmpose_core::Correspondences::new(src, dst)?.with_noise_sigma(sig)?;
+            }
             let gt = seq.relative_ground_truth(i - 1, i).ok_or("no gt")?;
             counts.push(m.correspondences.len());
             let e = est.estimate_seeded(&m.correspondences, i as u64)?;

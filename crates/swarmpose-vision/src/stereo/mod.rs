@@ -35,6 +35,9 @@ pub struct StereoConfig {
     /// After the parabola, refine the disparity by Gauss-Newton on the same window
     /// ([`subpixel::refine_disparity_lk`]) [true].
     pub gauss_newton: bool,
+    /// Added to every measured disparity before triangulation, pixels [0]: corrects a
+    /// calibration whose right principal point is off.
+    pub disparity_offset_px: f32,
     /// Points deeper than this are dropped, metres [80].
     pub max_depth_m: f64,
     /// Assumed standard deviation of a disparity, pixels, for the per-point noise
@@ -56,6 +59,7 @@ impl Default for StereoConfig {
             subpixel_radius: 3,
             gauss_newton: true,
             max_depth_m: 80.0,
+            disparity_offset_px: 0.0,
             disparity_sigma_px: 0.25,
             position_sigma_px: 0.5,
         }
@@ -207,6 +211,7 @@ pub fn match_stereo<D: Descriptor>(
         } else {
             coarse
         };
+        let disparity = disparity + config.disparity_offset_px;
         if disparity < dmin || disparity > dmax {
             continue;
         }
