@@ -12,7 +12,10 @@ use nalgebra::Isometry3;
 
 use crate::error::DatasetError;
 use crate::text::{list_sorted, numbers, parse_error, read_text};
-use crate::{RectifiedStereo, StereoPair, StereoSequence, check_counts, first_size, load_pair};
+use crate::{
+    RectifiedStereo, StereoPair, StereoSequence, check_counts, check_partners, first_size,
+    load_pair,
+};
 
 fn is_left(name: &str) -> bool {
     name.starts_with("I1_") && crate::text::is_png(name)
@@ -127,6 +130,7 @@ impl KarlsruheSequence {
         let left = list_sorted(&images, is_left)?;
         let right = list_sorted(&images, is_right)?;
         check_counts(dir, &left, &images, &right, &images)?;
+        check_partners(&left, &right, &images, |n| n.replacen("I1_", "I2_", 1))?;
         let calib = [dir.join("calib.txt"), images.join("calib.txt")]
             .into_iter()
             .chain(dir.parent().map(|p| p.join("calib.txt")))

@@ -10,7 +10,8 @@ use nalgebra::Isometry3;
 use crate::error::DatasetError;
 use crate::text::{is_png, list_sorted, numbers, parse_error, read_text};
 use crate::{
-    RectifiedStereo, StereoPair, StereoSequence, check_counts, first_size, load_pair, pose_from_3x4,
+    RectifiedStereo, StereoPair, StereoSequence, check_counts, check_partners, first_size,
+    load_pair, pose_from_3x4,
 };
 
 /// True when `dir` looks like a KITTI sequence.
@@ -150,6 +151,7 @@ impl KittiSequence {
         let left = list_sorted(&ld, is_png)?;
         let right = list_sorted(&rd, is_png)?;
         check_counts(dir, &left, &ld, &right, &rd)?;
+        check_partners(&left, &right, &rd, str::to_owned)?;
         let rig = read_calibration(&dir.join("calib.txt"))?;
         let size = first_size(&left[0])?;
         let pose_file = official_poses(dir).unwrap_or_else(|| dir.join("poses.txt"));

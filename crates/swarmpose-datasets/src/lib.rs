@@ -174,6 +174,33 @@ pub(crate) fn check_counts(
     Ok(())
 }
 
+/// Checks that every left image has its right partner: `partner(left file name)` is
+/// the expected right file name.
+pub(crate) fn check_partners(
+    left: &[PathBuf],
+    right: &[PathBuf],
+    right_dir: &Path,
+    partner: impl Fn(&str) -> String,
+) -> Result<(), DatasetError> {
+    let names: std::collections::BTreeSet<String> = right
+        .iter()
+        .filter_map(|p| p.file_name()?.to_str().map(str::to_owned))
+        .collect();
+    for l in left {
+        let Some(name) = l.file_name().and_then(|n| n.to_str()) else {
+            continue;
+        };
+        let want = partner(name);
+        if !names.contains(&want) {
+            return Err(DatasetError::Missing {
+                path: right_dir.join(want),
+                what: "the right image of a left image",
+            });
+        }
+    }
+    Ok(())
+}
+
 /// Size of the first image of a sequence (read from its header by decoding it).
 pub(crate) fn first_size(path: &Path) -> Result<(usize, usize), DatasetError> {
     let img = GrayImage::load_png(path)?;

@@ -174,3 +174,22 @@ pub fn run(args: &CorrespondencesArgs) -> Result<(), CliError> {
     );
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn inliers_of_a_register_report() {
+        let dir = std::env::temp_dir().join(format!("swarmpose-corr-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("tmp");
+        let p = dir.join("r.json");
+        std::fs::write(&p, r#"{"method":"pso","inliers":[0,2]}"#).expect("write");
+        assert_eq!(read_inliers(&p, 3).expect("ok"), vec![true, false, true]);
+        let e = read_inliers(&p, 2).expect_err("index 2 of 2");
+        assert!(e.message.contains("r.json") && e.message.contains("below 2"));
+        std::fs::write(&p, "{}").expect("write");
+        assert!(read_inliers(&p, 2).is_err());
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
