@@ -37,11 +37,16 @@ pub struct BinaryDescriptor(pub [u8; 32]);
 impl Descriptor for BinaryDescriptor {
     #[inline]
     fn distance(&self, other: &Self) -> f32 {
-        self.0
-            .iter()
-            .zip(&other.0)
-            .map(|(a, b)| (a ^ b).count_ones())
-            .sum::<u32>() as f32
+        // Four 64-bit words: one popcount each.
+        let mut n = 0u32;
+        for (a, b) in self.0.chunks_exact(8).zip(other.0.chunks_exact(8)) {
+            let mut wa = [0u8; 8];
+            let mut wb = [0u8; 8];
+            wa.copy_from_slice(a);
+            wb.copy_from_slice(b);
+            n += (u64::from_le_bytes(wa) ^ u64::from_le_bytes(wb)).count_ones();
+        }
+        n as f32
     }
 }
 

@@ -65,43 +65,49 @@ pub fn fast9(
     scores.resize(w * h, 0);
     let offs: [isize; 16] = CIRCLE.map(|(dx, dy)| dy * w as isize + dx);
     let d = img.data;
-    let t = i16::from(threshold);
     let mut candidates: Vec<Corner> = Vec::new();
     for y in border..h - border {
+        let up = &d[(y - 3) * w..(y - 2) * w];
+        let mid = &d[y * w..(y + 1) * w];
+        let down = &d[(y + 3) * w..(y + 4) * w];
         for x in border..w - border {
+            // Quick rejection on the compass points 0, 4, 8, 12: an arc of 9 covers two
+            // circularly adjacent ones, both on the arc's side.
+            let c = mid[x];
+            let hi8 = c.saturating_add(threshold);
+            let lo8 = c.saturating_sub(threshold);
+            let compass = [up[x], mid[x + 3], down[x], mid[x - 3]];
+            let (mut b4, mut d4) = (0u8, 0u8);
+            for (k, &p) in compass.iter().enumerate() {
+                b4 |= u8::from(p > hi8) << k;
+                d4 |= u8::from(p < lo8) << k;
+            }
+            let adjacent = |m: u8| m & ((m >> 1) | (m << 3)) & 0xf != 0;
+            if !adjacent(b4) && !adjacent(d4) {
+                continue;
+            }
             let i = y * w + x;
-            let c = i16::from(d[i]);
-            let (hi, lo) = (c + t, c - t);
-            let px = |k: usize| i16::from(d[(i as isize + offs[k]) as usize]);
-            let (p0, p8) = (px(0), px(8));
-            let a = p0 > hi || p0 < lo || p8 > hi || p8 < lo;
-            if !a {
+            let mut ring = [0u8; 16];
+            let (mut bright, mut dark) = (0u32, 0u32);
+            for (k, (&o, r)) in offs.iter().zip(ring.iter_mut()).enumerate() {
+                let p = d[(i as isize + o) as usize];
+                *r = p;
+                bright |= u32::from(p > hi8) << k;
+                dark |= u32::from(p < lo8) << k;
+            }
+            let (is_bright, is_dark) = (has_run9(bright), has_run9(dark));
+            if !is_bright && !is_dark {
                 continue;
             }
-            let (p4, p12) = (px(4), px(12));
-            if !(p4 > hi || p4 < lo || p12 > hi || p12 < lo) {
-                continue;
+            let (mut sb, mut sd) = (0u32, 0u32);
+            for &p in &ring {
+                sb += u32::from(p.saturating_sub(hi8));
+                sd += u32::from(lo8.saturating_sub(p));
             }
-            let mut bright = 0u32;
-            let mut dark = 0u32;
-            let mut sb = 0u32;
-            let mut sd = 0u32;
-            for (k, &o) in offs.iter().enumerate() {
-                let p = i16::from(d[(i as isize + o) as usize]);
-                if p > hi {
-                    bright |= 1 << k;
-                    sb += (p - hi) as u32;
-                } else if p < lo {
-                    dark |= 1 << k;
-                    sd += (lo - p) as u32;
-                }
-            }
-            let score = if has_run9(bright) {
-                sb.max(if has_run9(dark) { sd } else { 0 })
-            } else if has_run9(dark) {
-                sd
-            } else {
-                continue;
+            let score = match (is_bright, is_dark) {
+                (true, true) => sb.max(sd),
+                (true, false) => sb,
+                _ => sd,
             };
             let s = score.clamp(1, u32::from(u16::MAX)) as u16;
             scores[i] = s;

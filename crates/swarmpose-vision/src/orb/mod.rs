@@ -81,6 +81,7 @@ impl OrbExtractor {
             &mut scores,
             &mut corners,
         );
+        let rank = self.config.bucketing.is_some() || corners.len() > self.config.max_features;
         let mut kps: Vec<Keypoint> = corners
             .iter()
             .map(|c| Keypoint {
@@ -88,7 +89,12 @@ impl OrbExtractor {
                 y: c.y as f32,
                 scale: ORIENTATION_RADIUS as f32,
                 angle: 0.0,
-                response: harris(image, c.x, c.y),
+                // Harris only ranks corners for bucketing and the cap.
+                response: if rank {
+                    harris(image, c.x, c.y)
+                } else {
+                    f32::from(c.score)
+                },
                 octave: 0,
             })
             .collect();

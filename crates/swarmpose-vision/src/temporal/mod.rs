@@ -29,7 +29,9 @@ impl Default for TemporalConfig {
     }
 }
 
-/// For each item of `a`, its best match in `b` and the two best distances.
+/// For each item of `a`, its best match in `b` and the two best distances. With a
+/// window, `b` is scanned by column through a sorted index (only the columns within
+/// the window).
 fn nearest<D: Descriptor>(
     a_kps: &[Keypoint],
     a: &[D],
@@ -37,17 +39,27 @@ fn nearest<D: Descriptor>(
     b: &[D],
     window: Option<f32>,
 ) -> Vec<Option<(usize, f32, f32)>> {
+    let mut order: Vec<usize> = (0..b.len()).collect();
+    order.sort_by(|&i, &j| b_kps[i].x.total_cmp(&b_kps[j].x));
+    let xs: Vec<f32> = order.iter().map(|&i| b_kps[i].x).collect();
     a.iter()
         .zip(a_kps)
         .map(|(da, ka)| {
+            let (lo, hi) = match window {
+                Some(w) => (
+                    xs.partition_point(|&x| x < ka.x - w),
+                    xs.partition_point(|&x| x <= ka.x + w),
+                ),
+                None => (0, xs.len()),
+            };
             let mut best = (usize::MAX, f32::INFINITY, f32::INFINITY);
-            for (j, (db, kb)) in b.iter().zip(b_kps).enumerate() {
+            for &j in &order[lo..hi] {
                 if let Some(w) = window
-                    && ((ka.x - kb.x).abs() > w || (ka.y - kb.y).abs() > w)
+                    && (ka.y - b_kps[j].y).abs() > w
                 {
                     continue;
                 }
-                let d = da.distance(db);
+                let d = da.distance(&b[j]);
                 if d < best.1 {
                     best = (j, d, best.1);
                 } else if d < best.2 {
