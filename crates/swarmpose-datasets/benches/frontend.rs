@@ -9,7 +9,7 @@
 use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use swarmpose_datasets::{StereoSequence, open};
+use swarmpose_datasets::open;
 use swarmpose_vision::features::{FeatureExtractor, Features};
 use swarmpose_vision::frontend::Frontend;
 use swarmpose_vision::surf::Surf;
