@@ -4,7 +4,9 @@
 
 use swarmpose_core::{Estimator, PsoEstimator, PsoEstimatorConfig};
 use swarmpose_datasets::open;
-use swarmpose_vision::frontend::{CHI2_3_99, Frontend, refine_stereo, refine_weighted};
+use swarmpose_vision::frontend::{
+    CHI2_3_99, Frontend, refine_stereo, refine_stereo_offset, refine_weighted,
+};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
@@ -45,6 +47,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let est = PsoEstimator::new(PsoEstimatorConfig::default());
     let (mut counts, mut good, mut times) = (Vec::new(), 0, Vec::new());
     let (mut rot_ok, mut dir_ok, mut ratios) = (0, 0, Vec::new());
+    let mut deltas: Vec<f64> = Vec::new();
     let mut prev = None;
     for i in 0..=pairs.min(seq.len() - 1) {
         let p = seq.frame(i)?;
@@ -100,7 +103,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             counts.push(m.correspondences.len());
             let e = est.estimate_seeded(&m.correspondences, i as u64)?;
             let (pose, ninl) = if refine {
-                let (p, inl) = if env("MAHA", 1.0) > 0.5 {
+                let (p, inl) = if env("JOINT", 0.0) > 0.5 {
+                    let (p, dl, inl) = refine_stereo_offset(&m, &e.transform, CHI2_3_99, 10)?;
+                    deltas.push(dl);
+                    (p, inl)
+                } else if env("MAHA", 1.0) > 0.5 {
                     refine_stereo(
                         &m.correspondences,
                         &m.src_covariances,
@@ -244,6 +251,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         prev = Some(f);
     }
     ratios.sort_by(f64::total_cmp);
+    deltas.sort_by(f64::total_cmp);
+    if !deltas.is_empty() {
+        println!(
+            "disparity offset median {:.3} p10 {:.3} p90 {:.3}",
+            deltas[deltas.len() / 2],
+            deltas[deltas.len() / 10],
+            deltas[deltas.len() * 9 / 10]
+        );
+    }
     println!(
         "rotation < 0.2 deg: {rot_ok}; with the translation scaled to the truth's length: {dir_ok}; |t_est|/|t_gt| median {:.4} p10 {:.4} p90 {:.4}",
         ratios[ratios.len() / 2],

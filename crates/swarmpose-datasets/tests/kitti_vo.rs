@@ -1,19 +1,22 @@
 //! End to end on `kitti_vo_seq2`: every consecutive pair yields at least 300 3D-3D
 //! correspondences with the fast detector, and the robust PSO estimator (per-point
 //! stereo noise) followed by the stereo Mahalanobis refinement recovers the ground-truth
-//! relative motion.
+//! relative motion within 0.2 degrees and 5 cm for at least 90 % of the pairs.
 //!
-//! Measured (see the printed table): the rotation is within 0.2 degrees on every pair and
-//! the translation direction is right, but the translation LENGTH from stereo is about
-//! 6 % (3.5-12 %) longer than the ground truth's on every pair, whatever the sub-pixel
-//! method or the depth range used; so the strict "0.2 degrees and 5 cm" criterion passes
-//! only on a minority of pairs. The test asserts what holds and prints the strict count.
+//! With the calibration as given, the translations from stereo are about 6 % too long
+//! (more for far points): the disparities of this copy of the sequence are offset from
+//! its `calib.txt` (a right principal point off by about 2 pixels). The offset is
+//! self-calibrated from the image data alone (no ground truth): the median over the
+//! pairs of the offset estimated jointly with each motion
+//! ([`refine_stereo_offset`]); the pairs are then registered with it applied.
 
 mod common;
 
 use swarmpose_core::{Estimator, PsoEstimator, PsoEstimatorConfig};
 use swarmpose_datasets::open;
-use swarmpose_vision::frontend::{CHI2_3_99, Frontend, refine_stereo};
+use swarmpose_vision::frontend::{
+    CHI2_3_99, FrameMatches, Frontend, refine_stereo, refine_stereo_offset,
+};
 
 #[test]
 fn kitti_pairs_recover_the_ground_truth_motion() {
@@ -25,19 +28,45 @@ fn kitti_pairs_recover_the_ground_truth_motion() {
     assert_eq!(seq.len(), 51);
     let frontend = Frontend::orb(seq.calibration());
     let estimator = PsoEstimator::new(PsoEstimatorConfig::default());
+
+    // The front end on every consecutive pair (frame i+1 = src, frame i = dst).
     let mut prev = None;
-    let (mut counts, mut strict, mut rotation_ok, mut shape_ok) = (Vec::new(), 0, 0, 0);
-    let mut ratios = Vec::new();
+    let mut pairs: Vec<FrameMatches> = Vec::new();
     for i in 0..seq.len() {
         let pair = seq.frame(i).expect("frame");
         let frame = frontend.stereo_frame(pair.left.view(), pair.right.view());
         if let Some(p) = prev.take() {
-            let m = frontend.match_frames(&p, &frame).expect("matches");
-            let n = m.correspondences.len();
-            counts.push(n);
-            let truth = seq.relative_ground_truth(i - 1, i).expect("ground truth");
+            pairs.push(frontend.match_frames(&p, &frame).expect("matches"));
+        }
+        prev = Some(frame);
+    }
+    let mut counts: Vec<usize> = pairs.iter().map(|m| m.correspondences.len()).collect();
+    counts.sort_unstable();
+    assert_eq!(counts.len(), 50);
+    assert!(counts[0] >= 300, "fewest correspondences {}", counts[0]);
+
+    // Self-calibration of the disparity offset (image data only).
+    let mut offsets: Vec<f64> = pairs
+        .iter()
+        .enumerate()
+        .filter_map(|(k, m)| {
+            let e = estimator
+                .estimate_seeded(&m.correspondences, k as u64)
+                .ok()?;
+            refine_stereo_offset(m, &e.transform, CHI2_3_99, 10)
+                .ok()
+                .map(|r| r.1)
+        })
+        .collect();
+    offsets.sort_by(f64::total_cmp);
+    let offset = offsets[offsets.len() / 2];
+
+    let (mut good, mut good_uncalibrated) = (0, 0);
+    for (k, m0) in pairs.iter().enumerate() {
+        let truth = seq.relative_ground_truth(k, k + 1).expect("ground truth");
+        let judge = |m: &FrameMatches| {
             let est = estimator
-                .estimate_seeded(&m.correspondences, i as u64)
+                .estimate_seeded(&m.correspondences, k as u64)
                 .expect("estimate");
             let (pose, inliers) = refine_stereo(
                 &m.correspondences,
@@ -51,49 +80,26 @@ fn kitti_pairs_recover_the_ground_truth_motion() {
             let d = truth.inverse() * pose;
             let deg = d.rotation.angle().to_degrees();
             let cm = d.translation.vector.norm() * 100.0;
-            let (te, tg) = (pose.translation.vector, truth.translation.vector);
-            let ratio = te.norm() / tg.norm();
-            let shape_cm = (te.normalize() * tg.norm() - tg).norm() * 100.0;
-            strict += usize::from(deg < 0.2 && cm < 5.0);
-            rotation_ok += usize::from(deg < 0.2);
-            shape_ok += usize::from(deg < 0.2 && shape_cm < 5.0);
-            ratios.push(ratio);
-            eprintln!(
-                "pair {:2}-{:2}: {n:4} correspondences, {:4} inliers, error {deg:.3} deg {cm:5.2} cm, \
-                 |t|/|t_true| {ratio:.3}, error at the true length {shape_cm:.2} cm",
-                i - 1,
-                i,
-                inliers.len(),
-            );
-        }
-        prev = Some(frame);
+            (deg, cm, inliers.len())
+        };
+        let (deg0, cm0, _) = judge(m0);
+        good_uncalibrated += usize::from(deg0 < 0.2 && cm0 < 5.0);
+        let m = m0.with_disparity_offset(offset).expect("offset");
+        let (deg, cm, inliers) = judge(&m);
+        let ok = deg < 0.2 && cm < 5.0;
+        good += usize::from(ok);
+        eprintln!(
+            "pair {k:2}-{:2}: {:4} correspondences, {inliers:4} inliers, error {deg:.3} deg \
+             {cm:5.2} cm{} (as calibrated: {deg0:.3} deg {cm0:5.2} cm)",
+            k + 1,
+            m.correspondences.len(),
+            if ok { "" } else { "  <-- off" },
+        );
     }
-    let mut sorted = counts.clone();
-    sorted.sort_unstable();
-    ratios.sort_by(f64::total_cmp);
-    let pairs = counts.len();
     eprintln!(
-        "correspondences min {} median {}; within 0.2 deg and 5 cm: {strict}/{pairs}; \
-         rotation within 0.2 deg: {rotation_ok}/{pairs}; within 0.2 deg and 5 cm at the true \
-         translation length: {shape_ok}/{pairs}; median |t|/|t_true| {:.3}",
-        sorted[0],
-        sorted[pairs / 2],
-        ratios[pairs / 2]
+        "correspondences min {} median {}; disparity offset {offset:.3} px; within 0.2 deg \
+         and 5 cm: {good}/50 (as calibrated: {good_uncalibrated}/50)",
+        counts[0], counts[25]
     );
-    assert_eq!(pairs, 50);
-    assert!(sorted[0] >= 300, "fewest correspondences {}", sorted[0]);
-    assert!(
-        rotation_ok * 10 >= pairs * 9,
-        "rotation: {rotation_ok} of {pairs}"
-    );
-    assert!(
-        shape_ok * 10 >= pairs * 9,
-        "direction: {shape_ok} of {pairs}"
-    );
-    // The translation length agrees with the ground truth to 15 %.
-    assert!(
-        (0.9..1.15).contains(&ratios[pairs / 2]),
-        "{}",
-        ratios[pairs / 2]
-    );
+    assert!(good >= 45, "{good} of 50 pairs within 0.2 deg and 5 cm");
 }

@@ -7,7 +7,7 @@
 
 mod refine;
 
-pub use refine::{CHI2_3_99, refine_stereo, refine_weighted};
+pub use refine::{CHI2_3_99, refine_stereo, refine_stereo_offset, refine_weighted};
 
 use nalgebra::{Matrix3, Point3};
 use swarmpose_core::{Correspondences, PoseError};
@@ -95,6 +95,66 @@ pub struct FrameMatches {
     pub src_covariances: Vec<Matrix3<f64>>,
     /// Covariance of each destination point (frame I), m².
     pub dst_covariances: Vec<Matrix3<f64>>,
+    /// Disparity of each source point (frame J), pixels.
+    pub src_disparities_px: Vec<f64>,
+    /// Disparity of each destination point (frame I), pixels.
+    pub dst_disparities_px: Vec<f64>,
+}
+
+impl FrameMatches {
+    /// The same matches with `offset_px` added to every disparity: each point `p` of
+    /// disparity `d` becomes `p d / (d + offset)` (a correction of the stereo
+    /// calibration, e.g. from [`refine_stereo_offset`]). Covariances are scaled alike.
+    ///
+    /// # Errors
+    /// [`PoseError::NonFinite`] if an offset makes a disparity non-positive.
+    pub fn with_disparity_offset(&self, offset_px: f64) -> Result<Self, PoseError> {
+        let scale = |d: f64| d / (d + offset_px);
+        let c = &self.correspondences;
+        let src = c
+            .src()
+            .iter()
+            .zip(&self.src_disparities_px)
+            .map(|(p, &d)| Point3::from(p.coords * scale(d)))
+            .collect();
+        let dst = c
+            .dst()
+            .iter()
+            .zip(&self.dst_disparities_px)
+            .map(|(p, &d)| Point3::from(p.coords * scale(d)))
+            .collect();
+        let mut data = Correspondences::new(src, dst)?;
+        if let Some(sigma) = c.noise_sigma() {
+            let s = sigma
+                .iter()
+                .zip(self.src_disparities_px.iter().zip(&self.dst_disparities_px))
+                .map(|(&s, (&a, &b))| s * scale(a).max(scale(b)).powi(2))
+                .collect();
+            data = data.with_noise_sigma(s)?;
+        }
+        let scale_cov = |m: &[Matrix3<f64>], d: &[f64]| -> Vec<Matrix3<f64>> {
+            m.iter()
+                .zip(d)
+                .map(|(m, &d)| m * scale(d).powi(2))
+                .collect()
+        };
+        Ok(Self {
+            correspondences: data,
+            src_covariances: scale_cov(&self.src_covariances, &self.src_disparities_px),
+            dst_covariances: scale_cov(&self.dst_covariances, &self.dst_disparities_px),
+            src_disparities_px: self
+                .src_disparities_px
+                .iter()
+                .map(|d| d + offset_px)
+                .collect(),
+            dst_disparities_px: self
+                .dst_disparities_px
+                .iter()
+                .map(|d| d + offset_px)
+                .collect(),
+            ..self.clone()
+        })
+    }
 }
 
 /// Detector, calibration and matching settings of the front end.
@@ -300,5 +360,13 @@ pub fn match_frames<D: Descriptor>(
         dst_index: pairs.iter().map(|&(i, _)| i).collect(),
         src_covariances: pairs.iter().map(|&(_, j)| src.covariances[j]).collect(),
         dst_covariances: pairs.iter().map(|&(i, _)| dst.covariances[i]).collect(),
+        src_disparities_px: pairs
+            .iter()
+            .map(|&(_, j)| f64::from(src.disparities_px[j]))
+            .collect(),
+        dst_disparities_px: pairs
+            .iter()
+            .map(|&(i, _)| f64::from(dst.disparities_px[i]))
+            .collect(),
     })
 }

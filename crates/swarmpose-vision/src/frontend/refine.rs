@@ -149,3 +149,70 @@ pub fn refine_stereo(
     }
     Ok((pose, inliers))
 }
+
+/// [`refine_stereo`] that also estimates a disparity offset `δ` (pixels) common to both
+/// frames: every point `p` of disparity `d` is taken as `p d / (d + δ)`. A wrong
+/// horizontal principal point of the right camera shifts all disparities alike and
+/// makes the translation too long or too short, more so for far points; with depths
+/// spread over a range, the motion reveals it. Returns the motion, `δ` and the inliers.
+///
+/// # Errors
+/// As [`refine_stereo`].
+pub fn refine_stereo_offset(
+    m: &super::FrameMatches,
+    start: &Isometry3<f64>,
+    gate: f64,
+    rounds: usize,
+) -> Result<(Isometry3<f64>, f64, Vec<usize>), PoseError> {
+    use nalgebra::{Matrix3, SMatrix, SVector, Translation3, UnitQuaternion, Vector3};
+    // Start from the plain refinement and its inliers.
+    let (mut pose, inliers) = refine_stereo(
+        &m.correspondences,
+        &m.src_covariances,
+        &m.dst_covariances,
+        start,
+        gate,
+        rounds,
+    )?;
+    let data = &m.correspondences;
+    let mut delta = 0.0f64;
+    for _ in 0..10 {
+        let mut h = SMatrix::<f64, 7, 7>::zeros();
+        let mut g = SVector::<f64, 7>::zeros();
+        let rot = pose.rotation.to_rotation_matrix();
+        for &i in &inliers {
+            let (dj, di) = (m.src_disparities_px[i], m.dst_disparities_px[i]);
+            let s = data.src()[i].coords * (dj / (dj + delta));
+            let d = data.dst()[i].coords * (di / (di + delta));
+            let cov = rot.matrix() * m.src_covariances[i] * rot.matrix().transpose()
+                + m.dst_covariances[i];
+            let Some(w) = cov.try_inverse() else { continue };
+            let q = pose.rotation * s + pose.translation.vector;
+            let r = d - q;
+            // ∂p/∂δ = -p / (d + δ) for each point.
+            let dr_ddelta = -d / (di + delta) + pose.rotation * (s / (dj + delta));
+            let mut j = SMatrix::<f64, 3, 7>::zeros();
+            j.fixed_view_mut::<3, 3>(0, 0).copy_from(&q.cross_matrix());
+            j.fixed_view_mut::<3, 3>(0, 3)
+                .copy_from(&(-Matrix3::identity()));
+            j.fixed_view_mut::<3, 1>(0, 6).copy_from(&dr_ddelta);
+            h += j.transpose() * w * j;
+            g += j.transpose() * w * r;
+        }
+        let Some(step) = h.lu().solve(&(-g)) else {
+            break;
+        };
+        let omega = Vector3::new(step[0], step[1], step[2]);
+        let dt = Vector3::new(step[3], step[4], step[5]);
+        let dr = UnitQuaternion::from_scaled_axis(omega);
+        pose = Isometry3::from_parts(
+            Translation3::from(dr * pose.translation.vector + dt),
+            dr * pose.rotation,
+        );
+        delta += step[6];
+        if step.norm() < 1e-9 {
+            break;
+        }
+    }
+    Ok((pose, delta, inliers))
+}
