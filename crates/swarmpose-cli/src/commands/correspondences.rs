@@ -68,6 +68,17 @@ pub struct CorrespondencesArgs {
     /// t-1 -> left t-1 -> left t closes).
     #[arg(long)]
     pub circular_check: bool,
+
+    /// Added to every measured disparity, pixels: corrects a right principal point that
+    /// is off in the calibration (kitti_vo_seq2 needs about 1.85, self-calibrated by
+    /// the KITTI test of swarmpose-datasets).
+    #[arg(
+        long,
+        value_name = "PX",
+        default_value_t = 0.0,
+        allow_negative_numbers = true
+    )]
+    pub disparity_offset: f32,
 }
 
 fn dataset_error(e: DatasetError) -> CliError {
@@ -119,6 +130,11 @@ fn read_inliers(path: &Path, n: usize) -> Result<Vec<bool>, CliError> {
 /// # Errors
 /// A bad sequence or frame index (exit 2), an unwritable output (exit 1).
 pub fn run(args: &CorrespondencesArgs) -> Result<(), CliError> {
+    if !args.disparity_offset.is_finite() {
+        return Err(CliError::usage(
+            "--disparity-offset must be a finite number of pixels",
+        ));
+    }
     let (i, j) = match args.frames.as_slice() {
         [i, j] => (*i, *j),
         _ => return Err(CliError::usage("--frames takes two frame indices, I and J")),
@@ -141,11 +157,13 @@ pub fn run(args: &CorrespondencesArgs) -> Result<(), CliError> {
         Detector::Orb => {
             let mut fe = Frontend::orb(rig);
             fe.temporal.circular_check = args.circular_check;
+            fe.stereo.disparity_offset_px = args.disparity_offset;
             matches(&fe, &a, &b)?
         }
         Detector::Surf => {
             let mut fe = Frontend::float_descriptor(Surf::upright(), rig);
             fe.temporal.circular_check = args.circular_check;
+            fe.stereo.disparity_offset_px = args.disparity_offset;
             matches(&fe, &a, &b)?
         }
     };
