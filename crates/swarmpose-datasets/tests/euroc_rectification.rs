@@ -6,7 +6,9 @@ mod common;
 use swarmpose_datasets::euroc::EurocSequence;
 use swarmpose_datasets::{StereoPair, StereoSequence};
 use swarmpose_vision::features::{Descriptor, FeatureExtractor};
+use swarmpose_vision::frontend::Frontend;
 use swarmpose_vision::orb::{OrbConfig, OrbExtractor};
+use swarmpose_vision::stereo::subpixel::row_offset;
 use swarmpose_vision::temporal::{TemporalConfig, mutual_matches};
 
 /// Row differences (right - left, pixels) of mutual nearest-neighbour ORB matches
@@ -70,6 +72,37 @@ fn euroc_rectified_pairs_share_rows() {
     );
     assert!(rect.len() >= 100, "{} matches", rect.len());
     assert!(mr < 0.5, "rectified median row difference {mr} px");
+
+    // Sub-pixel: the vertical offset of each stereo match, by Gauss-Newton.
+    let mut frontend = Frontend::orb(rig);
+    frontend.stereo.row_tolerance_px = 2.0;
+    let mut dys = Vec::new();
+    for i in [0, 15, 29] {
+        let p = seq.frame(i).expect("frame");
+        let f = frontend.stereo_frame(p.left.view(), p.right.view());
+        for (k, d) in f.left_keypoints.iter().zip(&f.disparities_px) {
+            if let Some(dy) = row_offset(
+                p.left.view(),
+                p.right.view(),
+                k.x.round() as usize,
+                k.y.round() as usize,
+                *d,
+                4,
+            ) {
+                dys.push(dy);
+            }
+        }
+    }
+    let sub = median_abs(&dys);
+    let mut signed = dys.clone();
+    signed.sort_by(f32::total_cmp);
+    eprintln!(
+        "sub-pixel row offsets of {} stereo matches: median |dy| {sub:.3} px, median dy {:.3} px",
+        dys.len(),
+        signed[signed.len() / 2]
+    );
+    assert!(dys.len() >= 100, "{}", dys.len());
+    assert!(sub < 0.5, "median sub-pixel row difference {sub} px");
     // The ground truth says the MAV sits still: the motion is tiny.
     let gt = seq.relative_ground_truth(0, 29).expect("ground truth");
     assert!(gt.translation.vector.norm() < 0.01);

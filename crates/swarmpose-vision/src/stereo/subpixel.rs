@@ -132,6 +132,64 @@ pub fn refine_disparity_lk(
     Some(d)
 }
 
+/// Vertical offset, pixels, of the right image against the left around left pixel
+/// `(xl, y)` for a known disparity `d` (pixels): Gauss-Newton on
+/// `Σ (L(x, y) - R(x - d, y + dy))²` over the `(2 r + 1)²` window. Zero on a perfectly
+/// rectified pair; used to check rectification. `None` near the borders, on texture
+/// without vertical gradient, or beyond 2 pixels.
+#[must_use]
+pub fn row_offset(
+    left: GrayView<'_>,
+    right: GrayView<'_>,
+    xl: usize,
+    y: usize,
+    d: f32,
+    r: usize,
+) -> Option<f32> {
+    let xr0 = xl as f32 - d - r as f32;
+    if y < r + 4
+        || y + r + 4 >= left.height.min(right.height)
+        || xl < r
+        || xl + r >= left.width
+        || xr0 < 1.0
+        || xr0 + 2.0 * r as f32 + 2.0 >= right.width as f32
+    {
+        return None;
+    }
+    let at = |x: f32, yy: f32| {
+        let (xi, yi) = (x as usize, yy as usize);
+        let (fx, fy) = (x - xi as f32, yy - yi as f32);
+        let g = |a: usize, b: usize| f32::from(right.data[b * right.width + a]);
+        (g(xi, yi) * (1.0 - fx) + g(xi + 1, yi) * fx) * (1.0 - fy)
+            + (g(xi, yi + 1) * (1.0 - fx) + g(xi + 1, yi + 1) * fx) * fy
+    };
+    let mut dy = 0f32;
+    for _ in 0..10 {
+        let (mut eg, mut gg) = (0f32, 0f32);
+        for yy in y - r..=y + r {
+            for xx in xl - r..=xl + r {
+                let (xr, yr) = (xx as f32 - d, yy as f32 + dy);
+                let e = f32::from(left.data[yy * left.width + xx]) - at(xr, yr);
+                let g = 0.5 * (at(xr, yr + 1.0) - at(xr, yr - 1.0));
+                eg += e * g;
+                gg += g * g;
+            }
+        }
+        if gg < 1e-3 {
+            return None;
+        }
+        let step = eg / gg;
+        dy += step;
+        if dy.abs() > 2.0 {
+            return None;
+        }
+        if step.abs() < 1e-3 {
+            break;
+        }
+    }
+    Some(dy)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
