@@ -129,3 +129,36 @@ pub fn draw_matches(
     }
     canvas
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn draws_side_by_side_with_colours() {
+        let a = vec![10u8; 20 * 10];
+        let b = vec![200u8; 20 * 10];
+        fn view(d: &[u8]) -> GrayView<'_> {
+            GrayView {
+                width: 20,
+                height: 10,
+                data: d,
+            }
+        }
+        let c = draw_matches(
+            view(&a),
+            view(&b),
+            &[(5.0, 5.0), (2.0, 2.0)],
+            &[(5.0, 5.0), (2.0, 8.0)],
+            Some(&[true, false]),
+        );
+        assert_eq!((c.width, c.height), (40, 10));
+        let px = |x: usize, y: usize| &c.rgb[3 * (y * 40 + x)..3 * (y * 40 + x) + 3];
+        // The inlier's line is green along row 5 between the halves.
+        assert_eq!(px(15, 5), &INLIER);
+        // Untouched pixels keep the gray levels of each frame.
+        assert_eq!(px(10, 0), &[10, 10, 10]);
+        assert_eq!(px(35, 0), &[200, 200, 200]);
+        assert!(c.rgb.chunks(3).any(|p| p == OUTLIER));
+    }
+}

@@ -120,8 +120,9 @@ impl OrbExtractor {
         kps
     }
 
-    /// Description: smooth the image, then steered BRIEF at each keypoint (which must
-    /// come from [`OrbExtractor::detect`] on the same image: integer, [`BORDER`] inside).
+    /// Description: smooth the image, then steered BRIEF at each keypoint (rounded to
+    /// the nearest pixel). Keypoints from [`OrbExtractor::detect`] are all described;
+    /// any closer than [`BORDER`] to an edge get an all-zero descriptor.
     #[must_use]
     pub fn describe(&self, image: GrayView<'_>, keypoints: &[Keypoint]) -> Vec<BinaryDescriptor> {
         let (mut tmp, mut smooth) = (Vec::new(), Vec::new());
@@ -132,9 +133,25 @@ impl OrbExtractor {
             data: &smooth,
         };
         let pattern = RotatedPattern::new(image.width);
+        let inside = |k: &Keypoint| {
+            let (x, y) = (k.x.round(), k.y.round());
+            x >= BORDER as f32
+                && y >= BORDER as f32
+                && x + (BORDER as f32) < image.width as f32
+                && y + (BORDER as f32) < image.height as f32
+        };
         keypoints
             .iter()
-            .map(|k| pattern.describe(view, k.x as usize, k.y as usize, k.angle))
+            .map(|k| {
+                if inside(k) {
+                    let (x, y) = (k.x.round() as usize, k.y.round() as usize);
+                    pattern.describe(view, x, y, k.angle)
+                } else {
+                    // Too close to the border for the pattern: an all-zero descriptor
+                    // (rarely the nearest neighbour of anything real).
+                    BinaryDescriptor([0; 32])
+                }
+            })
             .collect()
     }
 }
