@@ -210,4 +210,51 @@ mod tests {
         assert!(read_inliers(&p, 2).is_err());
         let _ = std::fs::remove_dir_all(&dir);
     }
+
+    fn args(sequence: PathBuf, frames: [usize; 2], out: PathBuf) -> CorrespondencesArgs {
+        CorrespondencesArgs {
+            sequence,
+            frames: frames.to_vec(),
+            out,
+            draw: None,
+            inliers: None,
+            detector: Detector::Orb,
+            circular_check: false,
+            disparity_offset: 0.0,
+        }
+    }
+
+    #[test]
+    fn kitti_frames_to_csv_and_drawing() {
+        let root = swarmpose_datasets::data_root().join("kitti_vo_seq2");
+        if !root.is_dir() {
+            assert!(
+                std::env::var("CI").map_or(true, |v| v != "true"),
+                "CI=true: {} missing",
+                root.display()
+            );
+            eprintln!("SKIPPED: {} not found", root.display());
+            return;
+        }
+        let dir = std::env::temp_dir().join(format!("swarmpose-corr-k-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("tmp");
+        let mut a = args(root.clone(), [3, 4], dir.join("c.csv"));
+        a.draw = Some(dir.join("m.png"));
+        run(&a).expect("run");
+        let data = correspondence_csv::read_path(dir.join("c.csv")).expect("csv");
+        assert!(data.len() >= 300, "{}", data.len());
+        assert!(dir.join("m.png").is_file());
+        // Errors: a frame out of range, a missing directory, a bad offset.
+        let e = run(&args(root.clone(), [0, 51], dir.join("x.csv"))).expect_err("range");
+        assert!(
+            e.code == 2 && e.message.contains("frame 51 out of range"),
+            "{e}"
+        );
+        let e = run(&args(dir.join("nope"), [0, 1], dir.join("x.csv"))).expect_err("missing");
+        assert!(e.code == 2 && e.message.contains("nope"), "{e}");
+        let mut b = args(root, [0, 1], dir.join("x.csv"));
+        b.disparity_offset = f32::NAN;
+        assert_eq!(run(&b).expect_err("nan").code, 2);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }
