@@ -8,14 +8,14 @@
 //! its `calib.txt` (a right principal point off by about 2 pixels). The offset is
 //! self-calibrated from the image data alone (no ground truth): the median over the
 //! pairs of the offset estimated jointly with each motion
-//! ([`refine_stereo_offset`]); the pairs are then registered with it applied.
+//! ([`swarmpose_vision::frontend::refine_stereo_offset`]); the pairs are then registered with it applied.
 
 mod common;
 
 use swarmpose_core::{Estimator, PsoEstimator, PsoEstimatorConfig};
 use swarmpose_datasets::open;
 use swarmpose_vision::frontend::{
-    CHI2_3_99, FrameMatches, Frontend, refine_stereo, refine_stereo_offset,
+    CHI2_3_99, FrameMatches, Frontend, estimate_disparity_offset, refine_stereo,
 };
 
 #[test]
@@ -46,20 +46,7 @@ fn kitti_pairs_recover_the_ground_truth_motion() {
     assert!(counts[0] >= 300, "fewest correspondences {}", counts[0]);
 
     // Self-calibration of the disparity offset (image data only).
-    let mut offsets: Vec<f64> = pairs
-        .iter()
-        .enumerate()
-        .filter_map(|(k, m)| {
-            let e = estimator
-                .estimate_seeded(&m.correspondences, k as u64)
-                .ok()?;
-            refine_stereo_offset(m, &e.transform, CHI2_3_99, 10)
-                .ok()
-                .map(|r| r.1)
-        })
-        .collect();
-    offsets.sort_by(f64::total_cmp);
-    let offset = offsets[offsets.len() / 2];
+    let offset = estimate_disparity_offset(&pairs, &estimator, 0).expect("self-calibration");
 
     let (mut good, mut good_uncalibrated) = (0, 0);
     for (k, m0) in pairs.iter().enumerate() {

@@ -8,11 +8,12 @@
 use std::path::{Path, PathBuf};
 
 use clap::{Args, ValueEnum};
+use swarmpose_core::{PsoEstimator, PsoEstimatorConfig};
 use swarmpose_data::correspondence_csv;
 use swarmpose_datasets::{DatasetError, StereoPair, StereoSequence, open};
 use swarmpose_vision::draw::draw_matches;
 use swarmpose_vision::features::FeatureExtractor;
-use swarmpose_vision::frontend::{FrameMatches, Frontend};
+use swarmpose_vision::frontend::{FrameMatches, Frontend, estimate_disparity_offset};
 use swarmpose_vision::surf::Surf;
 
 use crate::error::CliError;
@@ -79,18 +80,64 @@ pub struct CorrespondencesArgs {
         allow_negative_numbers = true
     )]
     pub disparity_offset: f32,
+
+    /// Self-calibrate the disparity offset from the first N consecutive pairs of the
+    /// sequence (image data only: the median of offsets estimated jointly with each
+    /// motion), then use it; overrides --disparity-offset.
+    #[arg(long, value_name = "N")]
+    pub self_calibrate: Option<usize>,
 }
 
 fn dataset_error(e: DatasetError) -> CliError {
     CliError::usage(e.to_string())
 }
 
+/// The disparity offset self-calibrated on the first `pairs` consecutive pairs.
+fn self_calibrate<E: FeatureExtractor>(
+    frontend: &Frontend<E>,
+    seq: &dyn StereoSequence,
+    pairs: usize,
+) -> Result<f32, CliError> {
+    if pairs == 0 || pairs >= seq.len() {
+        return Err(CliError::usage(format!(
+            "--self-calibrate needs 1 to {} pairs, got {pairs}",
+            seq.len().saturating_sub(1)
+        )));
+    }
+    let mut prev = None;
+    let mut all = Vec::new();
+    for k in 0..=pairs {
+        let p = seq.frame(k).map_err(dataset_error)?;
+        let f = frontend.stereo_frame(p.left.view(), p.right.view());
+        if let Some(q) = prev.take() {
+            all.push(
+                frontend
+                    .match_frames(&q, &f)
+                    .map_err(|e| CliError::failure(format!("matching failed: {e}")))?,
+            );
+        }
+        prev = Some(f);
+    }
+    let estimator = PsoEstimator::new(PsoEstimatorConfig::default());
+    let offset = estimate_disparity_offset(&all, &estimator, 0)
+        .ok_or_else(|| CliError::failure("self-calibration failed: no pair could be registered"))?;
+    eprintln!("swarmpose: self-calibrated disparity offset {offset:.3} px over {pairs} pairs");
+    Ok(offset as f32)
+}
+
 /// Runs the front end on frames `i` and `j`.
 fn matches<E: FeatureExtractor>(
-    frontend: &Frontend<E>,
+    frontend: &mut Frontend<E>,
+    seq: &dyn StereoSequence,
+    args: &CorrespondencesArgs,
     a: &StereoPair,
     b: &StereoPair,
 ) -> Result<FrameMatches, CliError> {
+    frontend.temporal.circular_check = args.circular_check;
+    frontend.stereo.disparity_offset_px = args.disparity_offset;
+    if let Some(n) = args.self_calibrate {
+        frontend.stereo.disparity_offset_px = self_calibrate(frontend, seq, n)?;
+    }
     let fa = frontend.stereo_frame(a.left.view(), a.right.view());
     let fb = frontend.stereo_frame(b.left.view(), b.right.view());
     frontend
@@ -154,18 +201,14 @@ pub fn run(args: &CorrespondencesArgs) -> Result<(), CliError> {
     let b = seq.frame(j).map_err(dataset_error)?;
     let rig = seq.calibration();
     let m = match args.detector {
-        Detector::Orb => {
-            let mut fe = Frontend::orb(rig);
-            fe.temporal.circular_check = args.circular_check;
-            fe.stereo.disparity_offset_px = args.disparity_offset;
-            matches(&fe, &a, &b)?
-        }
-        Detector::Surf => {
-            let mut fe = Frontend::float_descriptor(Surf::upright(), rig);
-            fe.temporal.circular_check = args.circular_check;
-            fe.stereo.disparity_offset_px = args.disparity_offset;
-            matches(&fe, &a, &b)?
-        }
+        Detector::Orb => matches(&mut Frontend::orb(rig), seq.as_ref(), args, &a, &b)?,
+        Detector::Surf => matches(
+            &mut Frontend::float_descriptor(Surf::upright(), rig),
+            seq.as_ref(),
+            args,
+            &a,
+            &b,
+        )?,
     };
     correspondence_csv::write_path(&args.out, &m.correspondences)?;
     if let Some(png) = &args.draw {
@@ -221,6 +264,7 @@ mod tests {
             detector: Detector::Orb,
             circular_check: false,
             disparity_offset: 0.0,
+            self_calibrate: None,
         }
     }
 
@@ -252,9 +296,14 @@ mod tests {
         );
         let e = run(&args(dir.join("nope"), [0, 1], dir.join("x.csv"))).expect_err("missing");
         assert!(e.code == 2 && e.message.contains("nope"), "{e}");
-        let mut b = args(root, [0, 1], dir.join("x.csv"));
+        let mut b = args(root.clone(), [0, 1], dir.join("x.csv"));
         b.disparity_offset = f32::NAN;
         assert_eq!(run(&b).expect_err("nan").code, 2);
+        let mut c = args(root, [0, 1], dir.join("y.csv"));
+        c.self_calibrate = Some(4);
+        run(&c).expect("self-calibrated run");
+        c.self_calibrate = Some(51);
+        assert_eq!(run(&c).expect_err("too many pairs").code, 2);
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -7,7 +7,9 @@
 
 mod refine;
 
-pub use refine::{CHI2_3_99, refine_stereo, refine_stereo_offset, refine_weighted};
+pub use refine::{
+    CHI2_3_99, estimate_disparity_offset, refine_stereo, refine_stereo_offset, refine_weighted,
+};
 
 use nalgebra::{Matrix3, Point3};
 use swarmpose_core::{Correspondences, PoseError};

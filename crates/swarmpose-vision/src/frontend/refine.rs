@@ -216,3 +216,33 @@ pub fn refine_stereo_offset(
     }
     Ok((pose, delta, inliers))
 }
+
+/// Self-calibration of the disparity offset from image data alone: for each set of
+/// matches, a robust motion from `estimator` (seeded with `seed + index`), then
+/// [`refine_stereo_offset`]; the median of the offsets, pixels. `None` when no set
+/// could be registered.
+#[must_use]
+pub fn estimate_disparity_offset(
+    matches: &[super::FrameMatches],
+    estimator: &dyn swarmpose_core::Estimator,
+    seed: u64,
+) -> Option<f64> {
+    let mut offsets: Vec<f64> = matches
+        .iter()
+        .enumerate()
+        .filter_map(|(k, m)| {
+            let e = estimator
+                .estimate_seeded(&m.correspondences, seed.wrapping_add(k as u64))
+                .ok()?;
+            refine_stereo_offset(m, &e.transform, CHI2_3_99, 10)
+                .ok()
+                .map(|r| r.1)
+                .filter(|d| d.is_finite())
+        })
+        .collect();
+    if offsets.is_empty() {
+        return None;
+    }
+    offsets.sort_by(f64::total_cmp);
+    Some(offsets[offsets.len() / 2])
+}
