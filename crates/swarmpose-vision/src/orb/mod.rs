@@ -21,14 +21,14 @@ pub const ORIENTATION_RADIUS: usize = 15;
 /// Settings of [`OrbExtractor`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OrbConfig {
-    /// FAST intensity threshold, gray levels [20].
+    /// FAST intensity threshold, gray levels (default 20).
     pub fast_threshold: u8,
     /// Bucketing of the detected corners (by Harris response); `None` keeps all.
     pub bucketing: Option<BucketConfig>,
-    /// Most features overall after bucketing, strongest first [4000].
+    /// Most features overall after bucketing, strongest first (default 4000).
     pub max_features: usize,
     /// Orient the descriptor by the intensity centroid (ORB); `false` gives upright
-    /// BRIEF, which is more distinctive when the camera does not roll [true].
+    /// BRIEF, which is more distinctive when the camera does not roll (default true).
     pub oriented: bool,
 }
 

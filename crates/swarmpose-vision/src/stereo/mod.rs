@@ -15,35 +15,35 @@ use subpixel::{refine_disparity, refine_disparity_lk};
 /// Settings of [`match_stereo`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StereoConfig {
-    /// Largest row difference between a left and a right keypoint, pixels [1.0].
+    /// Largest row difference between a left and a right keypoint, pixels (default 1.0).
     pub row_tolerance_px: f32,
-    /// Smallest disparity accepted, pixels [1.0].
+    /// Smallest disparity accepted, pixels (default 1.0).
     pub min_disparity_px: f32,
-    /// Largest disparity searched, pixels [160].
+    /// Largest disparity searched, pixels (default 160).
     pub max_disparity_px: f32,
     /// Largest descriptor distance of a match (Hamming bits for binary descriptors,
-    /// Euclidean for SURF) [50].
+    /// Euclidean for SURF) (default 50).
     pub max_distance: f32,
-    /// Ratio test: best distance `<` ratio × second best [0.9].
+    /// Ratio test: best distance `<` ratio × second best (default 0.9).
     pub ratio: f32,
     /// Keep a match only when the right feature's best left candidate is the same
-    /// feature [true].
+    /// feature (default true).
     pub left_right_check: bool,
     /// Half size of the block refining the disparity, pixels (`r` gives a `(2r+1)²`
-    /// window); 0 keeps the keypoints' disparity [3].
+    /// window); 0 keeps the keypoints' disparity (default 3).
     pub subpixel_radius: usize,
     /// After the parabola, refine the disparity by Gauss-Newton on the same window
-    /// ([`subpixel::refine_disparity_lk`]) [true].
+    /// ([`subpixel::refine_disparity_lk`]) (default true).
     pub gauss_newton: bool,
-    /// Added to every measured disparity before triangulation, pixels [0]: corrects a
+    /// Added to every measured disparity before triangulation, pixels (default 0): corrects a
     /// calibration whose right principal point is off.
     pub disparity_offset_px: f32,
-    /// Points deeper than this are dropped, metres [80].
+    /// Points deeper than this are dropped, metres (default 80).
     pub max_depth_m: f64,
     /// Assumed standard deviation of a disparity, pixels, for the per-point noise
-    /// [0.25].
+    /// (default 0.25).
     pub disparity_sigma_px: f64,
-    /// Assumed standard deviation of a keypoint position, pixels [0.5].
+    /// Assumed standard deviation of a keypoint position, pixels (default 0.5).
     pub position_sigma_px: f64,
 }
 

@@ -6,15 +6,15 @@ use crate::features::{Descriptor, Keypoint};
 /// Settings of [`mutual_matches`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TemporalConfig {
-    /// Largest descriptor distance of a match [60].
+    /// Largest descriptor distance of a match (default 60).
     pub max_distance: f32,
-    /// Ratio test: best distance `<` ratio × second best, in both directions [0.9].
+    /// Ratio test: best distance `<` ratio × second best, in both directions (default 0.9).
     pub ratio: f32,
     /// Largest image displacement between the frames, pixels; `None` searches the
-    /// whole image [Some(250)].
+    /// whole image (default Some(250)).
     pub max_displacement_px: Option<f32>,
     /// Also require the circular check (left t → right t → right t-1 → left t-1 → left
-    /// t closes) [false].
+    /// t closes) (default false).
     pub circular_check: bool,
 }
 
