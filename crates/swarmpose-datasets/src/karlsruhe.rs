@@ -106,9 +106,40 @@ pub fn read_calibration(path: &Path) -> Result<RectifiedStereo, DatasetError> {
     })
 }
 
+/// Reads `insdata.txt`: per line, the timestamp (ns) and the local metric position
+/// `x, y, z` (columns 5-7, metres) of the vehicle's INS, one line per frame.
+///
+/// # Errors
+/// [`DatasetError::Parse`] naming the file and line.
+pub fn read_ins_positions(path: &Path) -> Result<Vec<(u64, [f64; 3])>, DatasetError> {
+    let text = read_text(path, "Karlsruhe INS data insdata.txt")?;
+    let mut out = Vec::new();
+    for (k, line) in text.lines().enumerate() {
+        if line.trim().is_empty() {
+            continue;
+        }
+        let v = numbers(line, path, k + 1)?;
+        if v.len() < 10 {
+            return Err(parse_error(
+                path,
+                k + 1,
+                format!("expected 10 columns, found {}", v.len()),
+            ));
+        }
+        let ts = line
+            .split_whitespace()
+            .next()
+            .and_then(|t| t.parse::<u64>().ok())
+            .ok_or_else(|| parse_error(path, k + 1, "the timestamp is not an integer"))?;
+        out.push((ts, [v[4], v[5], v[6]]));
+    }
+    Ok(out)
+}
+
 /// A Karlsruhe sequence.
 #[derive(Debug, Clone)]
 pub struct KarlsruheSequence {
+    images: PathBuf,
     root: PathBuf,
     left: Vec<PathBuf>,
     right: Vec<PathBuf>,
@@ -139,12 +170,37 @@ impl KarlsruheSequence {
         let rig = read_calibration(&calib)?;
         let size = first_size(&left[0])?;
         Ok(Self {
+            images,
             root: dir.to_owned(),
             left,
             right,
             rig,
             size,
         })
+    }
+}
+
+impl KarlsruheSequence {
+    /// The rough INS positions of the vehicle (not the camera), metres, one per frame,
+    /// from `insdata.txt` beside the images; `None` when the file is absent. There is no
+    /// camera-to-INS extrinsic: compare trajectories after an alignment.
+    ///
+    /// # Errors
+    /// A malformed line, or a line count that differs from the frame count.
+    pub fn ins_positions(&self) -> Result<Option<Vec<[f64; 3]>>, DatasetError> {
+        let path = self.images.join("insdata.txt");
+        if !path.is_file() {
+            return Ok(None);
+        }
+        let rows = read_ins_positions(&path)?;
+        if rows.len() != self.left.len() {
+            return Err(parse_error(
+                &path,
+                0,
+                format!("{} rows for {} frames", rows.len(), self.left.len()),
+            ));
+        }
+        Ok(Some(rows.into_iter().map(|r| r.1).collect()))
     }
 }
 
