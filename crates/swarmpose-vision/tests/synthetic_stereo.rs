@@ -118,5 +118,30 @@ fn front_end_recovers_a_known_motion() {
         truth.translation.vector.as_slice(),
         est.transform.translation.vector.as_slice(),
     );
-    assert!(deg < 0.5 && cm < 5.0, "{deg} deg {cm} cm");
+    assert!(deg < 0.1 && cm < 1.0, "{deg} deg {cm} cm");
+
+    // The circular check keeps a subset, and a cleaner one: fewer matches far from the
+    // true motion.
+    let mut circular = frontend.clone();
+    circular.temporal.circular_check = true;
+    let mc = circular.match_frames(&fi, &fj).expect("matches");
+    let bad = |m: &swarmpose_vision::frontend::FrameMatches| {
+        let c = &m.correspondences;
+        let n = c
+            .src()
+            .iter()
+            .zip(c.dst())
+            .filter(|(s, d)| (*d - truth * *s).norm() > 0.3)
+            .count();
+        n as f64 / c.len().max(1) as f64
+    };
+    eprintln!(
+        "circular check: {} of {} kept; wrong fraction {:.3} -> {:.3}",
+        mc.correspondences.len(),
+        m.correspondences.len(),
+        bad(&m),
+        bad(&mc)
+    );
+    assert!(mc.correspondences.len() >= 50 && mc.correspondences.len() <= m.correspondences.len());
+    assert!(bad(&mc) <= bad(&m));
 }
