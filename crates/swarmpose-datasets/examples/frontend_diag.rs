@@ -93,15 +93,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     .collect();
                 let src = keep.iter().map(|&k| c.src()[k]).collect();
                 let dst = keep.iter().map(|&k| c.dst()[k]).collect();
-                let sig = keep.iter().map(|&k| c.noise_sigma().unwrap()[k]).collect();
+                let sig = keep.iter().map(|&k| m.noise_sigma_m[k]).collect();
                 m.src_covariances = keep.iter().map(|&k| m.src_covariances[k]).collect();
                 m.dst_covariances = keep.iter().map(|&k| m.dst_covariances[k]).collect();
-                m.correspondences =
-                    swarmpose_core::Correspondences::new(src, dst)?.with_noise_sigma(sig)?;
+                m.src_disparities_px = keep.iter().map(|&k| m.src_disparities_px[k]).collect();
+                m.dst_disparities_px = keep.iter().map(|&k| m.dst_disparities_px[k]).collect();
+                m.noise_sigma_m = sig;
+                m.correspondences = swarmpose_core::Correspondences::new(src, dst)?;
             }
             let gt = seq.relative_ground_truth(i - 1, i).ok_or("no gt")?;
             counts.push(m.correspondences.len());
-            let e = est.estimate_seeded(&m.correspondences, i as u64)?;
+            let e = if env("SIGMA", 0.0) > 0.5 {
+                est.estimate_seeded(&m.correspondences_with_noise()?, i as u64)?
+            } else {
+                est.estimate_seeded(&m.correspondences, i as u64)?
+            };
             let (pose, ninl) = if refine {
                 let (p, inl) = if env("JOINT", 0.0) > 0.5 {
                     let (p, dl, inl) = refine_stereo_offset(&m, &e.transform, CHI2_3_99, 10)?;
@@ -117,7 +123,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                         10,
                     )?
                 } else {
-                    refine_weighted(&m.correspondences, &e.transform, 3.0, 10)?
+                    refine_weighted(&m.correspondences_with_noise()?, &e.transform, 3.0, 10)?
                 };
                 (p, inl.len())
             } else {

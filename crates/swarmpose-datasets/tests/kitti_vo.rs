@@ -1,14 +1,16 @@
 //! End to end on `kitti_vo_seq2`: every consecutive pair yields at least 300 3D-3D
-//! correspondences with the fast detector, and the robust PSO estimator (per-point
-//! stereo noise) followed by the stereo Mahalanobis refinement recovers the ground-truth
-//! relative motion within 0.2 degrees and 5 cm for at least 90 % of the pairs.
+//! correspondences with the fast detector, and the robust PSO estimator of the core
+//! (automatic threshold) followed by the stereo Mahalanobis refinement of the front end
+//! recovers the ground-truth relative motion within 0.2 degrees and 5 cm for at least
+//! 90 % of the pairs.
 //!
 //! With the calibration as given, the translations from stereo are about 6 % too long
 //! (more for far points): the disparities of this copy of the sequence are offset from
-//! its `calib.txt` (a right principal point off by about 2 pixels). The offset is
-//! self-calibrated from the image data alone (no ground truth): the median over the
-//! pairs of the offset estimated jointly with each motion
-//! ([`swarmpose_vision::frontend::refine_stereo_offset`]); the pairs are then registered with it applied.
+//! its `calib.txt` (as if the right principal point were off by about 2 pixels). The
+//! offset is self-calibrated from the image data alone (no ground truth): the median
+//! over the pairs of the offset estimated jointly with each motion
+//! ([`swarmpose_vision::frontend::refine_stereo_offset`]); the pairs are then
+//! registered with it applied. Both counts are printed.
 
 mod common;
 

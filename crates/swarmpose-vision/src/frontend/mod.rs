@@ -82,9 +82,15 @@ impl<D> StereoFrame<D> {
 pub struct FrameMatches {
     /// `src[k]`: the point in frame J's left camera frame; `dst[k]`: the same feature in
     /// frame I's left camera frame (metres). The motion `dst = R src + t` is the pose of
-    /// camera J in camera I. Each carries its noise level
-    /// ([`Correspondences::noise_sigma`]): the root sum of squares of both points'.
+    /// camera J in camera I. No per-point noise is attached: see
+    /// [`FrameMatches::noise_sigma_m`].
     pub correspondences: Correspondences,
+    /// Isotropic noise level of each correspondence, metres: the root sum of squares of
+    /// both points' ([`crate::stereo::RectifiedStereo::point_sigma`]). Not attached to
+    /// [`FrameMatches::correspondences`] because the core's per-point mode refits without
+    /// weights, which far stereo points (σ of metres) ruin; see
+    /// [`FrameMatches::correspondences_with_noise`].
+    pub noise_sigma_m: Vec<f64>,
     /// Left-image pixel `(u, v)` of each correspondence in frame J.
     pub src_pixels: Vec<(f32, f32)>,
     /// Left-image pixel `(u, v)` of each correspondence in frame I.
@@ -104,6 +110,17 @@ pub struct FrameMatches {
 }
 
 impl FrameMatches {
+    /// The correspondences with [`FrameMatches::noise_sigma_m`] attached, for estimators
+    /// that scale their inlier test per point.
+    ///
+    /// # Errors
+    /// As [`Correspondences::with_noise_sigma`].
+    pub fn correspondences_with_noise(&self) -> Result<Correspondences, PoseError> {
+        self.correspondences
+            .clone()
+            .with_noise_sigma(self.noise_sigma_m.clone())
+    }
+
     /// The same matches with `offset_px` added to every disparity: each point `p` of
     /// disparity `d` becomes `p d / (d + offset)` (a correction of the stereo
     /// calibration, e.g. from [`refine_stereo_offset`]). Covariances are scaled alike.
@@ -125,15 +142,13 @@ impl FrameMatches {
             .zip(&self.dst_disparities_px)
             .map(|(p, &d)| Point3::from(p.coords * scale(d)))
             .collect();
-        let mut data = Correspondences::new(src, dst)?;
-        if let Some(sigma) = c.noise_sigma() {
-            let s = sigma
-                .iter()
-                .zip(self.src_disparities_px.iter().zip(&self.dst_disparities_px))
-                .map(|(&s, (&a, &b))| s * scale(a).max(scale(b)).powi(2))
-                .collect();
-            data = data.with_noise_sigma(s)?;
-        }
+        let data = Correspondences::new(src, dst)?;
+        let noise_sigma_m = self
+            .noise_sigma_m
+            .iter()
+            .zip(self.src_disparities_px.iter().zip(&self.dst_disparities_px))
+            .map(|(&s, (&a, &b))| s * scale(a).max(scale(b)).powi(2))
+            .collect();
         let scale_cov = |m: &[Matrix3<f64>], d: &[f64]| -> Vec<Matrix3<f64>> {
             m.iter()
                 .zip(d)
@@ -142,6 +157,7 @@ impl FrameMatches {
         };
         Ok(Self {
             correspondences: data,
+            noise_sigma_m,
             src_covariances: scale_cov(&self.src_covariances, &self.src_disparities_px),
             dst_covariances: scale_cov(&self.dst_covariances, &self.dst_disparities_px),
             src_disparities_px: self
@@ -344,12 +360,13 @@ pub fn match_frames<D: Descriptor>(
     let src_pts = pairs.iter().map(|&(_, j)| src.points[j]).collect();
     let dst_pts = pairs.iter().map(|&(i, _)| dst.points[i]).collect();
     let px = |k: &Keypoint| (k.x, k.y);
-    let sigma = pairs
+    let sigma: Vec<f64> = pairs
         .iter()
         .map(|&(i, j)| dst.sigmas_m[i].hypot(src.sigmas_m[j]))
         .collect();
     Ok(FrameMatches {
-        correspondences: Correspondences::new(src_pts, dst_pts)?.with_noise_sigma(sigma)?,
+        correspondences: Correspondences::new(src_pts, dst_pts)?,
+        noise_sigma_m: sigma,
         src_pixels: pairs
             .iter()
             .map(|&(_, j)| px(&src.left_keypoints[j]))
