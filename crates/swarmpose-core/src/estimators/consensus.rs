@@ -33,6 +33,17 @@ impl Tolerance<'_> {
             Tolerance::PerPoint(v) => v[i],
         }
     }
+
+    /// Least-squares weight of correspondence `i`: 1 for a uniform tolerance, `1 / δ_i²`
+    /// (inverse variance, as δ_i is proportional to σ_i) per point.
+    #[inline]
+    #[must_use]
+    pub fn weight(&self, i: usize) -> f64 {
+        match self {
+            Tolerance::Uniform(_) => 1.0,
+            Tolerance::PerPoint(v) => v[i].powi(-2),
+        }
+    }
 }
 
 /// Writes into `out` the indices whose residual is below `threshold_m` (metres).
@@ -102,8 +113,17 @@ pub(crate) fn arun_on(
     data: &Correspondences,
     indices: &[usize],
 ) -> Result<Isometry3<f64>, PoseError> {
+    arun_within(data, indices, Tolerance::Uniform(1.0))
+}
+
+/// Arun on the correspondences at `indices`, weighted by [`Tolerance::weight`].
+pub(crate) fn arun_within(
+    data: &Correspondences,
+    indices: &[usize],
+    tol: Tolerance<'_>,
+) -> Result<Isometry3<f64>, PoseError> {
     let (src, dst) = (data.src(), data.dst());
-    arun_pairs(indices.iter().map(|&i| (&src[i], &dst[i], 1.0)))
+    arun_pairs(indices.iter().map(|&i| (&src[i], &dst[i], tol.weight(i))))
 }
 
 /// Fails with [`PoseError::InsufficientSupport`] below [`MIN_CORRESPONDENCES`] indices,
@@ -127,6 +147,7 @@ pub(crate) fn check_input(data: &Correspondences) -> Result<(), PoseError> {
 }
 
 /// Refits on the inliers of `start` and repeats (new inliers at `threshold_m`, new fit)
+/// (with per-point tolerances, the fit is weighted by `1 / δ_i²`)
 /// until the set stops changing or `max_rounds` fits were made. Returns the pose and its
 /// inliers; `inliers` is scratch space and holds the final set.
 pub(crate) fn refine(
@@ -155,7 +176,7 @@ pub(crate) fn refine_within(
 ) -> Result<Isometry3<f64>, PoseError> {
     collect_inliers_within(data, start, tol, inliers);
     check_support(data, inliers)?;
-    let mut pose = arun_on(data, inliers)?;
+    let mut pose = arun_within(data, inliers, tol)?;
     let mut next = Vec::with_capacity(data.len());
     for _ in 1..max_rounds {
         collect_inliers_within(data, &pose, tol, &mut next);
@@ -167,7 +188,7 @@ pub(crate) fn refine_within(
             break;
         }
         std::mem::swap(inliers, &mut next);
-        pose = arun_on(data, inliers)?;
+        pose = arun_within(data, inliers, tol)?;
     }
     // The returned inliers are those of the returned pose.
     collect_inliers_within(data, &pose, tol, inliers);

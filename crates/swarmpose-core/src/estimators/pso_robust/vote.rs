@@ -10,7 +10,8 @@ pub(super) const ANCHORS: usize = 32;
 
 /// The translation with the most agreeing proposals `t_i = d_i - R s_i`: each anchor's
 /// proposal `t_c` counts the points with `|t_i - t_c| < δ_i + δ_c`; the best anchor wins
-/// and its agreeing proposals are averaged. `None` without anchors.
+/// and its agreeing proposals are averaged (weighted by `1 / δ_i²`). `None` without
+/// anchors.
 pub(super) fn translation(
     data: &Correspondences,
     rotation: &Matrix3<f64>,
