@@ -1,0 +1,4 @@
+//! # swarmpose-odometry
+//!
+//! Stereo visual odometry (work in progress).
+#![deny(missing_docs)]
