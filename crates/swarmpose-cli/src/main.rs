@@ -37,6 +37,9 @@ enum Command {
     /// Stereo front end: the 3D-3D correspondences of two frames of a stereo sequence as
     /// a CSV for `register` (src = frame J, dst = frame I).
     Correspondences(commands::correspondences::CorrespondencesArgs),
+    /// Compare an estimated trajectory with the ground truth: eq. (20) per frame and its
+    /// RMS (Table I), ATE, RPE, final drift, KITTI segment errors.
+    Evaluate(commands::evaluate::EvaluateArgs),
 }
 
 fn run(cli: Cli) -> Result<(), CliError> {
@@ -44,6 +47,7 @@ fn run(cli: Cli) -> Result<(), CliError> {
         Command::Register(args) => commands::register::run(&args),
         Command::Bench(args) => commands::bench::run(&args),
         Command::Correspondences(args) => commands::correspondences::run(&args),
+        Command::Evaluate(args) => commands::evaluate::run(&args),
     }
 }
 

@@ -4,4 +4,5 @@
 
 pub mod bench;
 pub mod correspondences;
+pub mod evaluate;
 pub mod register;

@@ -1,0 +1,193 @@
+//! `swarmpose evaluate ESTIMATE GROUND_TRUTH [--format kitti|tum] [--json]`: how far an
+//! estimated trajectory is from the ground truth: the paper's eq. (20) per frame and its
+//! RMS (Table I), ATE raw and after SE(3) Umeyama alignment, RPE per frame, final drift,
+//! and the KITTI devkit segment errors when the path is long enough.
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+use clap::{Args, ValueEnum};
+use swarmpose_eval::associate::{DEFAULT_MAX_DIFF_S, by_index, by_timestamp};
+use swarmpose_eval::{EvalError, Evaluation, Format, Stats, Trajectory, evaluate};
+
+use crate::error::CliError;
+
+/// File format of both trajectories.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum FormatArg {
+    /// One row-major 3x4 `[R|t]` per line; poses associated by line.
+    Kitti,
+    /// `timestamp tx ty tz qx qy qz qw` per line; poses associated by timestamp.
+    Tum,
+}
+
+impl From<FormatArg> for Format {
+    fn from(f: FormatArg) -> Self {
+        match f {
+            FormatArg::Kitti => Format::Kitti,
+            FormatArg::Tum => Format::Tum,
+        }
+    }
+}
+
+/// Arguments of `swarmpose evaluate`.
+#[derive(Debug, Args)]
+#[command(after_help = "\
+Metrics (definitions of evo: evo_ape, evo_rpe --delta 1 --delta_unit f): eq. (20) \
+||I - R_gt R_est^T||_F between the relative rotations of each consecutive pair of \
+frames and its RMS (our Table I); ATE (position error per frame, metres) raw and after \
+SE(3) Umeyama alignment of the estimate onto the ground truth (no scale); RPE per \
+consecutive pair (translation metres, rotation degrees); final drift (last position \
+error after re-basing the estimate on the first true pose) in metres and percent of \
+the ground-truth path length; KITTI devkit segment errors (100-800 m) when the path is \
+at least 100 m long.
+
+Exit status: 0 on success; 2 for bad options or input (unreadable or malformed file, \
+the ground truth has fewer poses than the estimate, too few poses).")]
+pub struct EvaluateArgs {
+    /// Estimated trajectory.
+    #[arg(value_name = "ESTIMATE")]
+    pub estimate: PathBuf,
+
+    /// Ground-truth trajectory.
+    #[arg(value_name = "GROUND_TRUTH")]
+    pub ground_truth: PathBuf,
+
+    /// Format of both files [default: tum for *.tum.txt or groundtruth.txt, else kitti].
+    #[arg(long, value_enum)]
+    pub format: Option<FormatArg>,
+
+    /// TUM association: largest time difference of paired poses, seconds.
+    #[arg(long, value_name = "S", default_value_t = DEFAULT_MAX_DIFF_S)]
+    pub max_diff: f64,
+
+    /// Print one JSON object (every metric and per-frame value) instead of the table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+fn usage(e: EvalError) -> CliError {
+    CliError::usage(e.to_string())
+}
+
+/// Reads, associates and evaluates the two trajectories.
+///
+/// # Errors
+/// Bad input, as [`CliError::usage`].
+pub fn evaluate_files(args: &EvaluateArgs) -> Result<Evaluation, CliError> {
+    if !(args.max_diff.is_finite() && args.max_diff >= 0.0) {
+        return Err(CliError::usage(
+            "--max-diff must be a finite number of seconds >= 0",
+        ));
+    }
+    let format = args
+        .format
+        .map_or_else(|| Format::guess(&args.estimate), Format::from);
+    let est = Trajectory::read(&args.estimate, format).map_err(usage)?;
+    let gt = Trajectory::read(&args.ground_truth, format).map_err(usage)?;
+    let pairs = match format {
+        Format::Kitti => {
+            if gt.len() < est.len() {
+                return Err(CliError::usage(format!(
+                    "{}: {} ground-truth poses for {} estimated frames ({}): the ground truth \
+                     needs one pose per frame",
+                    gt.name,
+                    gt.len(),
+                    est.len(),
+                    est.name
+                )));
+            }
+            by_index(&est, &gt).map_err(usage)?
+        }
+        Format::Tum => by_timestamp(&est, &gt, args.max_diff).map_err(usage)?,
+    };
+    evaluate(&pairs).map_err(usage)
+}
+
+fn stats_row(out: &mut String, name: &str, unit: &str, s: &Stats) {
+    let _ = writeln!(
+        out,
+        "{name:<28} {unit:<4} {:>10.6} {:>10.6} {:>10.6} {:>10.6} {:>10.6}",
+        s.rmse, s.mean, s.median, s.std, s.max
+    );
+}
+
+/// The table printed on standard output.
+#[must_use]
+pub fn table(e: &Evaluation, args: &EvaluateArgs) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "estimate {} vs ground truth {}: {} poses paired, path {:.3} m",
+        args.estimate.display(),
+        args.ground_truth.display(),
+        e.n_pairs,
+        e.path_length_m
+    );
+    let _ = writeln!(
+        s,
+        "{:<28} {:<4} {:>10} {:>10} {:>10} {:>10} {:>10}",
+        "metric", "unit", "rmse", "mean", "median", "std", "max"
+    );
+    stats_row(
+        &mut s,
+        "eq. (20) relative, per frame",
+        "-",
+        &Stats::of(&e.eq20_per_frame),
+    );
+    stats_row(&mut s, "ATE raw", "m", &e.ate_raw);
+    stats_row(&mut s, "ATE SE(3)-aligned", "m", &e.ate_aligned);
+    stats_row(&mut s, "RPE translation (1 frame)", "m", &e.rpe_translation);
+    stats_row(&mut s, "RPE rotation (1 frame)", "deg", &e.rpe_rotation_deg);
+    let _ = writeln!(s, "RMS eq. (20) (Table I): {:.6}", e.eq20_rms);
+    let _ = writeln!(
+        s,
+        "RMS eq. (20) of absolute orientations: {:.6}",
+        e.eq20_absolute_rms
+    );
+    match e.final_drift_percent {
+        Some(p) => {
+            let _ = writeln!(
+                s,
+                "final drift: {:.4} m = {p:.3} % of {:.3} m",
+                e.final_drift_m, e.path_length_m
+            );
+        }
+        None => {
+            let _ = writeln!(
+                s,
+                "final drift: {:.4} m (path too short for a percentage)",
+                e.final_drift_m
+            );
+        }
+    }
+    match (e.kitti.translation_percent, e.kitti.rotation_deg_per_m) {
+        (Some(t), Some(r)) => {
+            let _ = writeln!(
+                s,
+                "KITTI segments: translation {t:.3} %, rotation {r:.5} deg/m ({})",
+                e.kitti.note
+            );
+        }
+        _ => {
+            let _ = writeln!(s, "KITTI segments: {}", e.kitti.note);
+        }
+    }
+    s
+}
+
+/// Runs `evaluate`.
+///
+/// # Errors
+/// Bad input (exit 2).
+pub fn run(args: &EvaluateArgs) -> Result<(), CliError> {
+    let e = evaluate_files(args)?;
+    if args.json {
+        let text = serde_json::to_string(&e)
+            .map_err(|err| CliError::failure(format!("cannot encode JSON: {err}")))?;
+        println!("{text}");
+    } else {
+        print!("{}", table(&e, args));
+    }
+    Ok(())
+}
