@@ -1,4 +1,16 @@
 //! # swarmpose-odometry
 //!
-//! Stereo visual odometry (work in progress).
+//! Stereo visual odometry after the paper's section 7: for every consecutive pair of
+//! frames of a [`StereoSequence`](swarmpose_datasets::StereoSequence), the stereo front
+//! end, an estimator and the chaining of eq. (2) ([`pipeline`]); the per-frame log and
+//! trajectory files ([`output`]) and the plots of figure 17 ([`plots`]).
 #![deny(missing_docs)]
+#![warn(clippy::unwrap_used)]
+
+pub mod error;
+pub mod pipeline;
+
+pub use error::OdometryError;
+pub use pipeline::{
+    DisparityOffset, FrameRecord, OdometryConfig, OdometryRun, StageTimes, Status, run,
+};

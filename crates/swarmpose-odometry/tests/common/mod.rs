@@ -1,0 +1,60 @@
+//! Shared helpers of the odometry tests.
+#![allow(dead_code)]
+
+use std::path::PathBuf;
+
+use swarmpose_core::{PsoEstimator, PsoEstimatorConfig};
+use swarmpose_datasets::open;
+use swarmpose_eval::associate::by_index;
+use swarmpose_eval::{Evaluation, Trajectory, evaluate};
+use swarmpose_odometry::{OdometryConfig, OdometryRun, run};
+use swarmpose_vision::frontend::Frontend;
+
+/// The directory of a shared data set, or `None` (with the reason printed) when it is
+/// absent. Under `CI=true` absence is a failure.
+pub fn dataset(name: &str) -> Option<PathBuf> {
+    let dir = swarmpose_datasets::data_root().join(name);
+    if dir.is_dir() {
+        return Some(dir);
+    }
+    let msg = format!(
+        "data set {} not found (set SWARMPOSE_DATA to the data root)",
+        dir.display()
+    );
+    assert!(
+        std::env::var("CI").map_or(true, |v| v != "true"),
+        "CI=true: {msg}"
+    );
+    eprintln!("SKIPPED: {msg}");
+    None
+}
+
+/// The default run (ORB front end, robust PSO) on a data set.
+pub fn default_run(name: &str) -> Option<OdometryRun> {
+    let dir = dataset(name)?;
+    let seq = open(&dir).expect("open");
+    let frontend = Frontend::orb(seq.calibration());
+    let estimator = PsoEstimator::new(PsoEstimatorConfig::default());
+    let r = run(
+        seq.as_ref(),
+        &frontend,
+        &estimator,
+        &OdometryConfig::default(),
+        &mut |_, _| {},
+    )
+    .expect("odometry");
+    Some(r)
+}
+
+/// Evaluation of a run against the sequence's camera ground truth.
+pub fn evaluate_run(name: &str, r: &OdometryRun) -> Evaluation {
+    let dir = dataset(name).expect("present");
+    let seq = open(&dir).expect("open");
+    let gt = seq.ground_truth().expect("ground truth").to_vec();
+    let pairs = by_index(
+        &Trajectory::indexed("estimate", r.poses.clone()),
+        &Trajectory::indexed("ground truth", gt),
+    )
+    .expect("same length");
+    evaluate(&pairs).expect("evaluate")
+}
