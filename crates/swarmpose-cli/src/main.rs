@@ -40,6 +40,9 @@ enum Command {
     /// Compare an estimated trajectory with the ground truth: eq. (20) per frame and its
     /// RMS (Table I), ATE, RPE, final drift, KITTI segment errors.
     Evaluate(commands::evaluate::EvaluateArgs),
+    /// Stereo visual odometry over a sequence: trajectory (KITTI, TUM), per-frame log,
+    /// plots (figure 17) and, with ground truth, its evaluation.
+    Odometry(commands::odometry::OdometryArgs),
 }
 
 fn run(cli: Cli) -> Result<(), CliError> {
@@ -48,6 +51,7 @@ fn run(cli: Cli) -> Result<(), CliError> {
         Command::Bench(args) => commands::bench::run(&args),
         Command::Correspondences(args) => commands::correspondences::run(&args),
         Command::Evaluate(args) => commands::evaluate::run(&args),
+        Command::Odometry(args) => commands::odometry::run_command(&args),
     }
 }
 

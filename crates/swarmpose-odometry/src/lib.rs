@@ -8,7 +8,9 @@
 #![warn(clippy::unwrap_used)]
 
 pub mod error;
+pub mod output;
 pub mod pipeline;
+pub mod plots;
 
 pub use error::OdometryError;
 pub use pipeline::{

@@ -5,4 +5,5 @@
 pub mod bench;
 pub mod correspondences;
 pub mod evaluate;
+pub mod odometry;
 pub mod register;
