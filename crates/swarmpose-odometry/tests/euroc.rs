@@ -1,0 +1,31 @@
+//! The default run on the EuRoC clip where the MAV sits still (ground-truth motion at
+//! most 2.6 mm): every estimated position stays within 3 cm of the start.
+
+mod common;
+
+#[test]
+fn euroc_still_clip_stays_at_its_start() {
+    let Some(r) = common::default_run("euroc_v1_01_easy_micro") else {
+        return;
+    };
+    let far = r
+        .poses
+        .iter()
+        .map(|p| p.translation.vector.norm())
+        .fold(0.0f64, f64::max);
+    let angle = r
+        .poses
+        .iter()
+        .map(|p| p.rotation.angle().to_degrees())
+        .fold(0.0f64, f64::max);
+    eprintln!(
+        "euroc still clip: {} frames, farthest from the start {:.2} mm, largest rotation \
+         {angle:.3} deg, {} constant-velocity frames",
+        r.poses.len(),
+        far * 1e3,
+        r.n_fallbacks()
+    );
+    assert_eq!(r.poses.len(), 30);
+    assert_eq!(r.n_fallbacks(), 0);
+    assert!(far <= 0.03, "{:.1} mm from the start", far * 1e3);
+}
