@@ -28,7 +28,11 @@ fn karlsruhe_ate_after_alignment() {
         .collect();
     let y: Vec<Point3<f64>> = ins.iter().map(|p| Point3::new(p[0], p[1], p[2])).collect();
     let t = umeyama(&x, &y).expect("align");
-    let sq: f64 = x.iter().zip(&y).map(|(a, b)| (b - t * a).norm_squared()).sum();
+    let sq: f64 = x
+        .iter()
+        .zip(&y)
+        .map(|(a, b)| (b - t * a).norm_squared())
+        .sum();
     let ate = (sq / x.len() as f64).sqrt();
     let length: f64 = y.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
     let ours: f64 = x.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
