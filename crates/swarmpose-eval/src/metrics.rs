@@ -205,7 +205,8 @@ pub struct Evaluation {
     pub rpe_rotation_deg_per_frame: Vec<f64>,
     /// Final position error after re-basing on the first pose, metres.
     pub final_drift_m: f64,
-    /// The same as a percentage of the path length (`None` for a path shorter than 1 mm).
+    /// The same as a percentage of the path length (`None` for a path shorter than 10 cm, where a
+    /// percentage means nothing).
     pub final_drift_percent: Option<f64>,
     /// KITTI devkit segment errors.
     pub kitti: KittiSegments,
@@ -386,7 +387,7 @@ pub fn evaluate(pairs: &Associated) -> Result<Evaluation, EvalError> {
         rpe_rotation_deg: Stats::of(&rpe_r),
         rpe_rotation_deg_per_frame: rpe_r,
         final_drift_m: drift,
-        final_drift_percent: (length > 1e-3).then(|| 100.0 * drift / length),
+        final_drift_percent: (length >= 0.1).then(|| 100.0 * drift / length),
         kitti: kitti_segments(est, gt),
     })
 }

@@ -180,7 +180,44 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
     let title = format!("{} ({})", dir.display(), seq.layout());
     let r = run_sequence(seq.as_ref(), args, &config)?;
     let gt: Option<Vec<Isometry3<f64>>> = seq.ground_truth().map(<[_]>::to_vec);
-    finish(&r, &title, gt.as_deref(), args)
+    finish(&r, &title, gt.as_deref(), args)?;
+    if seq.layout() == "karlsruhe" {
+        ins_summary(dir, &r);
+    }
+    Ok(())
+}
+
+/// Karlsruhe has no camera ground truth, only rough INS positions of the vehicle in
+/// another frame: the ATE of our positions after their SE(3) Umeyama alignment.
+fn ins_summary(dir: &std::path::Path, r: &OdometryRun) {
+    use nalgebra::Point3;
+    let ins =
+        swarmpose_datasets::karlsruhe::KarlsruheSequence::open(dir).and_then(|k| k.ins_positions());
+    let Ok(Some(ins)) = ins else {
+        return;
+    };
+    if ins.len() != r.poses.len() {
+        return;
+    }
+    let x: Vec<Point3<f64>> = r
+        .poses
+        .iter()
+        .map(|p| Point3::from(p.translation.vector))
+        .collect();
+    let y: Vec<Point3<f64>> = ins.iter().map(|p| Point3::new(p[0], p[1], p[2])).collect();
+    let Ok(t) = swarmpose_eval::metrics::umeyama(&x, &y) else {
+        return;
+    };
+    let ate: Vec<f64> = x.iter().zip(&y).map(|(a, b)| (b - t * a).norm()).collect();
+    let stats = swarmpose_eval::Stats::of(&ate);
+    let length: f64 = y.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
+    let last = ate.last().copied().unwrap_or(0.0);
+    println!(
+        "vs INS positions (insdata.txt, after SE(3) alignment): path {length:.2} m, ATE {:.3} m ({:.2} % of the path), final position error {last:.3} m ({:.2} %)",
+        stats.rmse,
+        100.0 * stats.rmse / length.max(1e-9),
+        100.0 * last / length.max(1e-9)
+    );
 }
 
 /// Writes the outputs and prints the summary.
