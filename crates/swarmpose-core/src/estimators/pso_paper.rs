@@ -10,7 +10,7 @@ use super::consensus::{
 };
 use super::{Diagnostics, Estimate, Estimator};
 use crate::error::PoseError;
-use crate::geometry::{Correspondences, rotation_from_particle};
+use crate::geometry::{Correspondences, rotation_from_particle, wrap_rotation_vector};
 use crate::pso::{ParticleSwarm, PsoConfig};
 use crate::rng::SeededRng;
 
@@ -121,7 +121,8 @@ impl Estimator for PsoPaperEstimator {
                 .collect()
         };
         let swarm = ParticleSwarm::new(cfg.pso.clone());
-        let out = swarm.minimize([-PI; 3], [PI; 3], &[], rng, fitness)?;
+        let out =
+            swarm.minimize_projected([-PI; 3], [PI; 3], &[], rng, wrap_rotation_vector, fitness)?;
         // Each particle keeps its support, eq. (15); the best particle has the most, ties
         // broken by the lower fitness.
         let mut inliers: Vec<usize> = Vec::new();

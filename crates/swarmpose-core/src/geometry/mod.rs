@@ -14,4 +14,4 @@ pub use degeneracy::{check_spread, spread};
 pub use pose::{
     chain, frobenius_rotation_error, quaternion_wxyz, rodrigues_rotate, rotation_angle_between,
 };
-pub use rotation_map::{particle_from_rotation, rotation_from_particle};
+pub use rotation_map::{particle_from_rotation, rotation_from_particle, wrap_rotation_vector};

@@ -26,6 +26,22 @@ pub fn rotation_from_particle(x: &[f64; 3]) -> UnitQuaternion<f64> {
     UnitQuaternion::from_scaled_axis(Vector3::new(x[0], x[1], x[2]))
 }
 
+/// Maps a rotation vector to the equivalent one in the ball `|x| <= π` (same rotation):
+/// `x (1 - 2π/|x|)` while `|x| > π`. With it the search space of a swarm over rotation
+/// vectors has no boundary: a particle leaving the ball re-enters on the other side.
+#[inline]
+pub fn wrap_rotation_vector(x: &mut [f64; 3]) {
+    use std::f64::consts::PI;
+    let mut n = (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sqrt();
+    while n > PI && n.is_finite() {
+        let f = 1.0 - 2.0 * PI / n;
+        for v in x.iter_mut() {
+            *v *= f;
+        }
+        n = (n - 2.0 * PI).abs();
+    }
+}
+
 /// The rotation vector (radians, `|x| <= π`) of a unit quaternion; inverse of
 /// [`rotation_from_particle`] on that ball.
 #[must_use]
@@ -60,6 +76,22 @@ mod tests {
                 (q.to_rotation_matrix().matrix() - neg.to_rotation_matrix().matrix()).norm() < 1e-15
             }
         );
+    }
+
+    #[test]
+    fn wrapping_keeps_the_rotation() {
+        for x in [
+            [4.0, 0.0, 0.0],
+            [3.0, 3.0, 3.0],
+            [-7.0, 1.0, 0.5],
+            [0.1, 0.2, 0.3],
+        ] {
+            let mut w = x;
+            wrap_rotation_vector(&mut w);
+            let n = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
+            assert!(n <= PI + 1e-12, "{w:?}");
+            assert!(rotation_from_particle(&x).angle_to(&rotation_from_particle(&w)) < 1e-12);
+        }
     }
 
     #[test]

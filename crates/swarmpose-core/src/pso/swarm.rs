@@ -118,8 +118,8 @@ impl ParticleSwarm {
         Self { config }
     }
 
-    /// Minimises `fitness` over the box `lower..=upper`. `initial` positions (clamped to
-    /// the box) seed the first particles, which start at rest; the rest start uniformly in
+    /// Minimises `fitness` over the box `lower..=upper` (positions are clamped to it).
+    /// `initial` positions (clamped to the box) seed the first particles, which start at rest; the rest start uniformly in
     /// the box with velocities uniform in `±clamp`.
     ///
     /// A score that does not compare (NaN) never becomes a best.
@@ -132,11 +132,41 @@ impl ParticleSwarm {
         upper: [f64; D],
         initial: &[[f64; D]],
         rng: &mut SeededRng,
+        fitness: F,
+    ) -> Result<PsoOutcome<D, S>, PoseError>
+    where
+        S: PartialOrd + Copy,
+        F: FnMut(&[f64; D]) -> S,
+    {
+        let clamp = |x: &mut [f64; D]| {
+            for d in 0..D {
+                x[d] = x[d].clamp(lower[d], upper[d]);
+            }
+        };
+        self.minimize_projected(lower, upper, initial, rng, clamp, fitness)
+    }
+
+    /// [`ParticleSwarm::minimize`] on a space whose own `project` maps every moved
+    /// position back into it, instead of clamping to the box; the box then only sets
+    /// where unseeded particles start and the velocity clamp. For a periodic space (such
+    /// as rotation vectors, see [`crate::geometry::wrap_rotation_vector`]) this avoids the
+    /// false minima that clamping creates on the box faces.
+    ///
+    /// # Errors
+    /// As [`ParticleSwarm::minimize`].
+    pub fn minimize_projected<const D: usize, S, F, P>(
+        &self,
+        lower: [f64; D],
+        upper: [f64; D],
+        initial: &[[f64; D]],
+        rng: &mut SeededRng,
+        project: P,
         mut fitness: F,
     ) -> Result<PsoOutcome<D, S>, PoseError>
     where
         S: PartialOrd + Copy,
         F: FnMut(&[f64; D]) -> S,
+        P: Fn(&mut [f64; D]),
     {
         let cfg = &self.config;
         cfg.validate()?;
@@ -158,13 +188,14 @@ impl ParticleSwarm {
             for d in 0..D {
                 // A seeded particle is a hypothesis to refine: it starts at rest.
                 (x[d], v[d]) = match initial.get(i) {
-                    Some(p) => (p[d].clamp(lower[d], upper[d]), 0.0),
+                    Some(p) => (p[d], 0.0),
                     None => (
                         rng.random_range(lower[d]..=upper[d]),
                         rng.random_range(-vmax[d]..=vmax[d]),
                     ),
                 };
             }
+            project(&mut x);
             pos.push(x);
             vel.push(v);
         }
@@ -192,8 +223,9 @@ impl ParticleSwarm {
                         + cfg.acceleration * phi1 * (best_pos[i][d] - x[d])
                         + cfg.acceleration * phi2 * (global_pos[d] - x[d]);
                     v[d] = nv.clamp(-vmax[d], vmax[d]);
-                    x[d] = (x[d] + v[d]).clamp(lower[d], upper[d]);
+                    x[d] += v[d];
                 }
+                project(x);
                 let s = fitness(x);
                 evaluations += 1;
                 if better(&s, &best_score[i]) {

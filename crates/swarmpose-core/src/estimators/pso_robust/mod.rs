@@ -51,7 +51,9 @@ use super::consensus::{
 };
 use super::{Diagnostics, Estimate, Estimator, RunnerUp};
 use crate::error::PoseError;
-use crate::geometry::{Correspondences, MIN_CORRESPONDENCES, rotation_from_particle, spread};
+use crate::geometry::{
+    Correspondences, MIN_CORRESPONDENCES, rotation_from_particle, spread, wrap_rotation_vector,
+};
 use crate::pso::{ParticleSwarm, PsoConfig};
 use crate::rng::SeededRng;
 use graph::PairGraph;
@@ -236,9 +238,14 @@ impl PsoEstimator {
         }
         let seeds = graph.seeds(data, cfg.seeded_particles, rng);
         let swarm = ParticleSwarm::new(cfg.pso.clone());
-        let out = swarm.minimize([-PI; 3], [PI; 3], &seeds, rng, |x| {
-            graph.score(&rotation_from_particle(x))
-        })?;
+        let out = swarm.minimize_projected(
+            [-PI; 3],
+            [PI; 3],
+            &seeds,
+            rng,
+            wrap_rotation_vector,
+            |x| graph.score(&rotation_from_particle(x)),
+        )?;
         let rotation = rotation_from_particle(&out.best_position);
         let m = rotation.to_rotation_matrix().into_inner();
         let anchors = graph.anchors(&m, vote::ANCHORS);
