@@ -1,0 +1,119 @@
+//! A built-in synthetic stereo sequence, so that odometry runs with no data: a street
+//! of textured planes (ground, two house fronts, a far wall) rendered by the vision
+//! crate's ray caster from a stereo rig driving along a known, gently turning path.
+
+use std::path::{Path, PathBuf};
+
+use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
+use swarmpose_datasets::{DatasetError, StereoPair, StereoSequence};
+use swarmpose_vision::render::{TexturedPlane, render};
+use swarmpose_vision::stereo::RectifiedStereo;
+
+/// The rig of the synthetic sequence (KITTI-like baseline, a small image).
+pub const RIG: RectifiedStereo = RectifiedStereo {
+    fx: 450.0,
+    fy: 450.0,
+    cx: 239.5,
+    cy: 143.5,
+    baseline_m: 0.54,
+};
+/// Image size, pixels.
+pub const SIZE: (usize, usize) = (480, 288);
+
+/// The synthetic sequence: `n` frames, `step_m` forward and `yaw_rad` to the right per
+/// frame.
+#[derive(Debug, Clone)]
+pub struct SyntheticSequence {
+    root: PathBuf,
+    planes: Vec<TexturedPlane>,
+    poses: Vec<Isometry3<f64>>,
+    samples: usize,
+}
+
+impl SyntheticSequence {
+    /// `n` frames moving `step_m` metres forward and turning `yaw_rad` (about the camera
+    /// `y` axis, down: positive turns right) per frame.
+    #[must_use]
+    pub fn new(n: usize, step_m: f64, yaw_rad: f64) -> Self {
+        let plane =
+            |origin: [f64; 3], u: Vector3<f64>, v: Vector3<f64>, cell: f64, seed| TexturedPlane {
+                origin: Point3::new(origin[0], origin[1], origin[2]),
+                u,
+                v,
+                cell_m: cell,
+                seed,
+            };
+        let planes = vec![
+            // Ground 1.6 m below the camera (y is down).
+            plane([0.0, 1.6, 0.0], Vector3::x(), Vector3::z(), 0.12, 11),
+            // House fronts 5 m to the left and 6 m to the right.
+            plane([-5.0, 0.0, 0.0], Vector3::z(), Vector3::y(), 0.15, 12),
+            plane([6.0, 0.0, 0.0], Vector3::z(), Vector3::y(), 0.15, 13),
+            // A far wall.
+            plane([0.0, 0.0, 45.0], Vector3::x(), Vector3::y(), 0.3, 14),
+        ];
+        let mut poses = Vec::with_capacity(n);
+        let mut pose = Isometry3::identity();
+        for _ in 0..n {
+            poses.push(pose);
+            let step = Isometry3::from_parts(
+                Translation3::new(0.0, 0.0, step_m),
+                UnitQuaternion::from_axis_angle(&Vector3::y_axis(), yaw_rad),
+            );
+            pose *= step;
+        }
+        Self {
+            root: PathBuf::from("<built-in synthetic sequence>"),
+            planes,
+            poses,
+            samples: 2,
+        }
+    }
+}
+
+impl Default for SyntheticSequence {
+    /// 20 frames, 0.6 m and 1 degree to the right per frame.
+    fn default() -> Self {
+        Self::new(20, 0.6, 1f64.to_radians())
+    }
+}
+
+impl StereoSequence for SyntheticSequence {
+    fn layout(&self) -> &'static str {
+        "synthetic"
+    }
+
+    fn root(&self) -> &Path {
+        &self.root
+    }
+
+    fn len(&self) -> usize {
+        self.poses.len()
+    }
+
+    fn calibration(&self) -> RectifiedStereo {
+        RIG
+    }
+
+    fn image_size(&self) -> (usize, usize) {
+        SIZE
+    }
+
+    fn frame(&self, i: usize) -> Result<StereoPair, DatasetError> {
+        let Some(pose) = self.poses.get(i) else {
+            return Err(DatasetError::Missing {
+                path: self.root.join(format!("frame {i}")),
+                what: "synthetic frame",
+            });
+        };
+        let right = pose * Isometry3::translation(RIG.baseline_m, 0.0, 0.0);
+        Ok(StereoPair {
+            left: render(&RIG, pose, SIZE.0, SIZE.1, &self.planes, self.samples),
+            right: render(&RIG, &right, SIZE.0, SIZE.1, &self.planes, self.samples),
+        })
+    }
+
+    fn ground_truth(&self) -> Option<&[Isometry3<f64>]> {
+        Some(&self.poses)
+    }
+}
