@@ -190,3 +190,30 @@ fn kitti_run_writes_its_outputs() {
     );
     assert!((a - b).abs() < 1e-5 * a, "kitti {a} vs tum {b}");
 }
+
+#[test]
+fn no_sequence_runs_the_built_in_synthetic_one() {
+    let tmp = TempDir::new("odo-syn");
+    let out_dir = tmp.0.join("out");
+    let out = swarmpose(&["odometry", "--out", s(&out_dir), "--quiet"], None);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("built-in synthetic"), "{stderr}");
+    let v = json_of(&swarmpose(
+        &[
+            "evaluate",
+            s(&out_dir.join("trajectory.kitti.txt")),
+            s(&out_dir.join("groundtruth.kitti.txt")),
+            "--json",
+        ],
+        None,
+    ));
+    let drift = v["final_drift_percent"].as_f64().expect("drift");
+    assert!(drift < 2.0, "synthetic drift {drift} %");
+    assert!(out_dir.join("errors.png").is_file());
+}

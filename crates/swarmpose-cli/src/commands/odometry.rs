@@ -12,6 +12,7 @@ use nalgebra::Isometry3;
 use swarmpose_datasets::{StereoSequence, open};
 use swarmpose_odometry::output::{evaluate_run, write_text_outputs};
 use swarmpose_odometry::plots::write_plots;
+use swarmpose_odometry::synthetic::SyntheticSequence;
 use swarmpose_odometry::{DisparityOffset, OdometryConfig, OdometryError, OdometryRun, run};
 use swarmpose_vision::frontend::Frontend;
 use swarmpose_vision::surf::Surf;
@@ -39,7 +40,7 @@ summary counts it; never a silent identity.
 Exit status: 0 on success; 2 for bad options or an unreadable, malformed or too short \
 sequence; 1 when an output cannot be written.")]
 pub struct OdometryArgs {
-    /// Sequence directory.
+    /// Sequence directory; without it, the built-in synthetic stereo sequence.
     #[arg(value_name = "SEQUENCE_DIR")]
     pub sequence: Option<PathBuf>,
 
@@ -165,9 +166,15 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
         frame_period_s: args.frame_period,
     };
     let Some(dir) = &args.sequence else {
-        return Err(CliError::usage(
-            "no SEQUENCE_DIR given (the built-in synthetic sequence is not available in this build)",
-        ));
+        // No data: the built-in synthetic street, rendered along a known path.
+        let seq = SyntheticSequence::default();
+        eprintln!(
+            "swarmpose: no SEQUENCE_DIR: running on the built-in synthetic stereo sequence \
+             ({} frames rendered from a textured street along a known path)",
+            seq.len()
+        );
+        let r = run_sequence(&seq, args, &config)?;
+        return finish(&r, "built-in synthetic sequence", seq.ground_truth(), args);
     };
     let seq = open(dir).map_err(|e| CliError::usage(e.to_string()))?;
     if seq.len() < 2 {
