@@ -28,6 +28,9 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// Reproduce the paper's simulation (section 6, figures 6 and 7): every estimator
+    /// against noise and outliers; writes runs.csv, summary.md and the figures.
+    Simulate(commands::simulate::SimulateArgs),
     /// Estimate the rigid motion dst = R src + t of a correspondence CSV; prints one
     /// JSON object.
     Register(commands::register::RegisterArgs),
@@ -47,6 +50,7 @@ enum Command {
 
 fn run(cli: Cli) -> Result<(), CliError> {
     match cli.command {
+        Command::Simulate(args) => commands::simulate::run(&args),
         Command::Register(args) => commands::register::run(&args),
         Command::Bench(args) => commands::bench::run(&args),
         Command::Correspondences(args) => commands::correspondences::run(&args),

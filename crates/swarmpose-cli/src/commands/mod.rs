@@ -7,3 +7,4 @@ pub mod correspondences;
 pub mod evaluate;
 pub mod odometry;
 pub mod register;
+pub mod simulate;

@@ -1,0 +1,77 @@
+//! `swarmpose simulate`: a small grid end to end, and bad arguments refused before work.
+
+mod common;
+
+use common::{TempDir, check_error, swarmpose};
+
+#[test]
+fn writes_the_tables_and_figures() {
+    let dir = TempDir::new("simulate");
+    let out = dir.0.join("out");
+    let out_s = out.to_string_lossy().to_string();
+    let run = swarmpose(
+        &[
+            "simulate",
+            "--out",
+            &out_s,
+            "--runs",
+            "3",
+            "--noise",
+            "0,0.02",
+            "--fractions",
+            "0,0.5",
+        ],
+        None,
+    );
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    assert!(
+        stdout.contains("pso-paper") && stdout.contains("msac"),
+        "{stdout}"
+    );
+    for f in [
+        "runs.csv",
+        "summary.md",
+        "position_error.png",
+        "position_error.svg",
+        "processing_time.png",
+        "rotation_error.svg",
+        "success_rate.png",
+    ] {
+        let meta = std::fs::metadata(out.join(f)).unwrap_or_else(|e| panic!("{f}: {e}"));
+        assert!(meta.len() > 100, "{f} is nearly empty");
+    }
+    // 2 noise levels x 2 fractions x 3 runs x 4 estimators, plus the header.
+    let rows = std::fs::read_to_string(out.join("runs.csv")).expect("runs.csv");
+    assert_eq!(rows.lines().count(), 1 + 2 * 2 * 3 * 4);
+}
+
+#[test]
+fn bad_arguments_fail_before_any_work() {
+    let dir = TempDir::new("simulate-bad");
+    let out = dir.0.join("never");
+    let out_s = out.to_string_lossy().to_string();
+    check_error(
+        &swarmpose(&["simulate", "--out", &out_s, "--noise", "-0.1"], None),
+        &["noise"],
+    );
+    check_error(
+        &swarmpose(&["simulate", "--out", &out_s, "--fractions", "1.0"], None),
+        &["fraction"],
+    );
+    check_error(
+        &swarmpose(&["simulate", "--out", &out_s, "--runs", "0"], None),
+        &["runs"],
+    );
+    assert!(!out.exists(), "nothing is written for bad settings");
+    let file = dir.file("a-file", "x");
+    let inside = file.join("sub").to_string_lossy().to_string();
+    check_error(
+        &swarmpose(&["simulate", "--out", &inside], None),
+        &["a-file"],
+    );
+}
