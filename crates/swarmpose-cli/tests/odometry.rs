@@ -217,3 +217,33 @@ fn no_sequence_runs_the_built_in_synthetic_one() {
     assert!(drift < 2.0, "synthetic drift {drift} %");
     assert!(out_dir.join("errors.png").is_file());
 }
+
+#[test]
+fn tum_rgbd_directory() {
+    let tmp = TempDir::new("odo-rgbd");
+    let dir = tmp.0.join("rgbd");
+    swarmpose_odometry::synthetic::SyntheticSequence::new(6, 0.3, 0.02)
+        .write_tum_rgbd(&dir)
+        .expect("write");
+    let out_dir = tmp.0.join("out");
+    let out = swarmpose(
+        &["odometry", s(&dir), "--out", s(&out_dir), "--quiet"],
+        None,
+    );
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("TUM RGB-D") && text.contains("final drift"),
+        "{text}"
+    );
+    let tum = std::fs::read_to_string(out_dir.join("trajectory.tum.txt")).expect("tum");
+    assert!(tum.starts_with("1305031102.000000 "), "{tum}");
+    std::fs::write(dir.join("rgb.txt"), "1305031102.0\n").expect("w");
+    let out = swarmpose(&["odometry", s(&dir), "--out", s(&out_dir)], None);
+    check_error(&out, &["rgb.txt:1", "timestamp filename"]);
+}

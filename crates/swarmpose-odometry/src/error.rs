@@ -16,6 +16,16 @@ pub enum OdometryError {
         /// Its number of frames.
         n: usize,
     },
+    /// A malformed or missing file of a TUM RGB-D sequence (bad input).
+    #[error("{}{}: {message}", path.display(), if *line > 0 { format!(":{line}") } else { String::new() })]
+    Rgbd {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line, 0 for the whole file.
+        line: usize,
+        /// What is wrong.
+        message: String,
+    },
     /// An output file could not be written.
     #[error("{path}: cannot write: {message}")]
     Write {
@@ -33,6 +43,9 @@ impl OdometryError {
     /// True for bad input (the sequence), false for a failure to write outputs.
     #[must_use]
     pub fn is_input(&self) -> bool {
-        matches!(self, Self::Dataset(_) | Self::TooFewFrames { .. })
+        matches!(
+            self,
+            Self::Dataset(_) | Self::TooFewFrames { .. } | Self::Rgbd { .. }
+        )
     }
 }

@@ -11,6 +11,7 @@ pub mod error;
 pub mod output;
 pub mod pipeline;
 pub mod plots;
+pub mod rgbd;
 pub mod synthetic;
 
 pub use error::OdometryError;

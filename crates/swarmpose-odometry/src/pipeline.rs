@@ -22,8 +22,11 @@ use nalgebra::Isometry3;
 use swarmpose_core::Estimator;
 use swarmpose_core::geometry::chain;
 use swarmpose_datasets::StereoSequence;
-use swarmpose_vision::features::FeatureExtractor;
-use swarmpose_vision::frontend::{CHI2_3_99, FrameMatches, Frontend, StereoFrame, refine_stereo};
+use swarmpose_vision::features::{Descriptor, FeatureExtractor};
+use swarmpose_vision::frontend::{
+    CHI2_3_99, FrameMatches, Frontend, StereoFrame, match_frames, refine_stereo,
+};
+use swarmpose_vision::temporal::TemporalConfig;
 
 use crate::error::OdometryError;
 
@@ -196,24 +199,59 @@ pub fn run<E: FeatureExtractor>(
             n,
         });
     }
+    let mut make_frame =
+        |i: usize| -> Result<(StereoFrame<E::Descriptor>, StageTimes), OdometryError> {
+            let mut times = StageTimes::default();
+            let t = Instant::now();
+            let pair = seq.frame(i)?;
+            times.load_ms = ms(t);
+            let t = Instant::now();
+            let lf = frontend.extract(pair.left.view());
+            let rf = frontend.extract_right(pair.right.view());
+            times.features_ms = ms(t);
+            let t = Instant::now();
+            let frame =
+                frontend.stereo_from_features(&lf, &rf, pair.left.view(), pair.right.view());
+            times.stereo_ms = ms(t);
+            Ok((frame, times))
+        };
+    let stamps: Vec<f64> = (0..n).map(|i| i as f64 * config.frame_period_s).collect();
+    run_frames(
+        n,
+        &mut make_frame,
+        &frontend.temporal,
+        estimator,
+        config,
+        progress,
+        stamps,
+        frontend.extractor.name(),
+    )
+}
+
+/// The pipeline on any source of triangulated frames: `make_frame(i)` gives frame `i`
+/// and the time of its stages; `stamps` are the frames' timestamps.
+///
+/// # Errors
+/// Whatever `make_frame` returns.
+#[allow(clippy::too_many_arguments)]
+pub fn run_frames<D: Descriptor>(
+    n: usize,
+    make_frame: &mut dyn FnMut(usize) -> Result<(StereoFrame<D>, StageTimes), OdometryError>,
+    temporal: &TemporalConfig,
+    estimator: &dyn Estimator,
+    config: &OdometryConfig,
+    progress: &mut dyn FnMut(usize, usize),
+    stamps: Vec<f64>,
+    detector: &str,
+) -> Result<OdometryRun, OdometryError> {
     let mut frames: Vec<FrameRecord> = Vec::with_capacity(n);
-    let mut pairs: Vec<PairData> = Vec::with_capacity(n - 1);
-    let mut prev: Option<StereoFrame<E::Descriptor>> = None;
+    let mut pairs: Vec<PairData> = Vec::with_capacity(n.saturating_sub(1));
+    let mut prev: Option<StereoFrame<D>> = None;
     // Pass 1: front end on every frame, estimator on every pair.
-    let mut first_estimates: Vec<Option<Isometry3<f64>>> = Vec::with_capacity(n - 1);
-    let mut failures: Vec<Option<String>> = Vec::with_capacity(n - 1);
+    let mut first_estimates: Vec<Option<Isometry3<f64>>> = Vec::new();
+    let mut failures: Vec<Option<String>> = Vec::new();
     for i in 0..n {
-        let mut times = StageTimes::default();
-        let t = Instant::now();
-        let pair = seq.frame(i)?;
-        times.load_ms = ms(t);
-        let t = Instant::now();
-        let lf = frontend.extract(pair.left.view());
-        let rf = frontend.extract_right(pair.right.view());
-        times.features_ms = ms(t);
-        let t = Instant::now();
-        let frame = frontend.stereo_from_features(&lf, &rf, pair.left.view(), pair.right.view());
-        times.stereo_ms = ms(t);
+        let (frame, times) = make_frame(i)?;
         let mut record = FrameRecord {
             frame: i,
             n_left_features: frame.n_left_features,
@@ -227,7 +265,7 @@ pub fn run<E: FeatureExtractor>(
         };
         if let Some(p) = prev.take() {
             let t = Instant::now();
-            let m = frontend.match_frames(&p, &frame);
+            let m = match_frames(&p, &frame, temporal);
             record.times.match_ms = ms(t);
             let k = i - 1;
             let t = Instant::now();
@@ -333,12 +371,12 @@ pub fn run<E: FeatureExtractor>(
     }
     let poses = chain(Isometry3::identity(), &motions);
     Ok(OdometryRun {
-        stamps: (0..n).map(|i| i as f64 * config.frame_period_s).collect(),
+        stamps,
         poses,
         frames,
         disparity_offset_px: offset,
         method: estimator.name().to_owned(),
-        detector: frontend.extractor.name().to_owned(),
+        detector: detector.to_owned(),
     })
 }
 

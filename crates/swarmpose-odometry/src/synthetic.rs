@@ -6,7 +6,9 @@ use std::path::{Path, PathBuf};
 
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use swarmpose_datasets::{DatasetError, StereoPair, StereoSequence};
-use swarmpose_vision::render::{TexturedPlane, render};
+
+use crate::error::OdometryError;
+use swarmpose_vision::render::{TexturedPlane, depth_at, render};
 use swarmpose_vision::stereo::RectifiedStereo;
 
 /// The rig of the synthetic sequence (KITTI-like baseline, a small image).
@@ -68,6 +70,84 @@ impl SyntheticSequence {
             poses,
             samples: 2,
         }
+    }
+}
+
+impl SyntheticSequence {
+    /// Writes the sequence's left camera as a TUM RGB-D directory: `rgb/` (gray PNGs),
+    /// `depth/` (16-bit PNGs, 5000 per metre, 0 beyond 13 m), `rgb.txt`, `depth.txt`
+    /// (depth stamped 5 ms after colour), `groundtruth.txt` (the path in a world frame
+    /// that is not the first camera's) and `intrinsics.txt`; frames at 30 Hz.
+    ///
+    /// # Errors
+    /// [`OdometryError::Write`] naming the file.
+    pub fn write_tum_rgbd(&self, dir: &Path) -> Result<(), OdometryError> {
+        let werr = |path: &Path, e: &dyn std::fmt::Display| OdometryError::Write {
+            path: path.to_owned(),
+            message: e.to_string(),
+        };
+        for sub in ["rgb", "depth"] {
+            let d = dir.join(sub);
+            std::fs::create_dir_all(&d).map_err(|e| werr(&d, &e))?;
+        }
+        let world = Isometry3::new(Vector3::new(1.0, -2.0, 0.5), Vector3::new(0.1, 0.4, -0.2));
+        let (mut rgb, mut depth) = (
+            String::from("# color images\n# timestamp filename\n"),
+            String::from("# depth maps\n# timestamp filename\n"),
+        );
+        let mut gt_poses = Vec::new();
+        let mut stamps = Vec::new();
+        for (i, pose) in self.poses.iter().enumerate() {
+            let t = 1_305_031_102.0 + i as f64 / 30.0;
+            let img = render(&RIG, pose, SIZE.0, SIZE.1, &self.planes, self.samples);
+            let name = format!("rgb/{t:.6}.png");
+            let path = dir.join(&name);
+            img.save_png(&path).map_err(|e| werr(&path, &e))?;
+            rgb.push_str(&format!("{t:.6} {name}\n"));
+            let mut d = Vec::with_capacity(SIZE.0 * SIZE.1);
+            for v in 0..SIZE.1 {
+                for u in 0..SIZE.0 {
+                    let z = depth_at(&RIG, pose, &self.planes, u as f64, v as f64).unwrap_or(0.0);
+                    let units = (z * crate::rgbd::DEPTH_SCALE).round();
+                    d.push(if (1.0..65535.0).contains(&units) {
+                        units as u16
+                    } else {
+                        0
+                    });
+                }
+            }
+            let td = t + 0.005;
+            let name = format!("depth/{td:.6}.png");
+            let path = dir.join(&name);
+            image::ImageBuffer::<image::Luma<u16>, Vec<u16>>::from_raw(
+                SIZE.0 as u32,
+                SIZE.1 as u32,
+                d,
+            )
+            .ok_or_else(|| werr(&path, &"bad buffer"))?
+            .save(&path)
+            .map_err(|e| werr(&path, &e))?;
+            depth.push_str(&format!("{td:.6} {name}\n"));
+            gt_poses.push(world * pose);
+            stamps.push(t);
+        }
+        let files = [
+            ("rgb.txt", rgb),
+            ("depth.txt", depth),
+            (
+                "groundtruth.txt",
+                swarmpose_eval::trajectory::tum_text(&stamps, &gt_poses),
+            ),
+            (
+                "intrinsics.txt",
+                format!("{} {} {} {}\n", RIG.fx, RIG.fy, RIG.cx, RIG.cy),
+            ),
+        ];
+        for (name, text) in files {
+            let path = dir.join(name);
+            std::fs::write(&path, text).map_err(|e| werr(&path, &e))?;
+        }
+        Ok(())
     }
 }
 

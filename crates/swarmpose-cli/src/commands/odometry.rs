@@ -176,6 +176,9 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
         let r = run_sequence(&seq, args, &config)?;
         return finish(&r, "built-in synthetic sequence", seq.ground_truth(), args);
     };
+    if swarmpose_odometry::rgbd::detect(dir) {
+        return run_rgbd_command(dir, args, &config);
+    }
     let seq = open(dir).map_err(|e| CliError::usage(e.to_string()))?;
     if seq.len() < 2 {
         return Err(CliError::usage(format!(
@@ -192,6 +195,59 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
         ins_summary(dir, &r);
     }
     Ok(())
+}
+
+/// A TUM RGB-D directory (`rgb.txt`, `depth.txt`).
+fn run_rgbd_command(
+    dir: &std::path::Path,
+    args: &OdometryArgs,
+    config: &OdometryConfig,
+) -> Result<(), CliError> {
+    use swarmpose_odometry::rgbd::{RgbdSequence, run_rgbd};
+    use swarmpose_vision::stereo::RectifiedStereo;
+    if args.detector != Detector::Orb {
+        return Err(CliError::usage(
+            "--detector surf is not available for RGB-D input (use orb)",
+        ));
+    }
+    if args.disparity_offset.is_some() {
+        return Err(CliError::usage(
+            "--disparity-offset does not apply to RGB-D input",
+        ));
+    }
+    let seq = RgbdSequence::open(dir).map_err(odometry_error)?;
+    if seq.len() < 2 {
+        return Err(CliError::usage(format!(
+            "{}: {} frame(s): odometry needs at least 2",
+            dir.display(),
+            seq.len()
+        )));
+    }
+    let k = seq.intrinsics();
+    let rig = RectifiedStereo {
+        fx: k.fx,
+        fy: k.fy,
+        cx: k.cx,
+        cy: k.cy,
+        baseline_m: 0.075,
+    };
+    let estimator = build(args.method, &args.options)?;
+    let pb = progress_bar(args.quiet);
+    pb.set_prefix("odometry (RGB-D)");
+    let r = run_rgbd(
+        &seq,
+        &Frontend::orb(rig),
+        estimator.as_ref(),
+        config,
+        &mut |done, total| {
+            pb.set_length(total as u64);
+            pb.set_position(done as u64);
+        },
+    );
+    pb.finish_and_clear();
+    let r = r.map_err(odometry_error)?;
+    let title = format!("{} (TUM RGB-D)", dir.display());
+    finish(&r, &title, seq.ground_truth(), args)
 }
 
 /// Karlsruhe has no camera ground truth, only rough INS positions of the vehicle in
