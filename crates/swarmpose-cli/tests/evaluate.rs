@@ -280,3 +280,35 @@ fn bad_input_gives_one_clear_line() {
     );
     check_error(&out, &["est.txt:1:", "8 numbers"]);
 }
+
+#[test]
+fn evo_agrees_on_the_files_odometry_writes() {
+    if !evo_available() {
+        return;
+    }
+    // The built-in synthetic sequence: no data needed.
+    let dir = TempDir::new("evo-odo");
+    let out = dir.0.join("out");
+    let run = swarmpose(
+        &["odometry", "--out", out.to_str().expect("utf-8"), "--quiet"],
+        None,
+    );
+    assert_eq!(
+        run.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    compare_with_evo(
+        "kitti",
+        &out.join("trajectory.kitti.txt"),
+        &out.join("groundtruth.kitti.txt"),
+        &dir.0,
+    );
+    compare_with_evo(
+        "tum",
+        &out.join("trajectory.tum.txt"),
+        &out.join("groundtruth.tum.txt"),
+        &dir.0,
+    );
+}
