@@ -17,6 +17,9 @@ use nalgebra::{Isometry3, Matrix3, Point3, Rotation3, Translation3, UnitQuaterni
 use crate::error::{DegeneracyKind, PoseError};
 use crate::geometry::check_spread;
 
+/// Iteration cap of the 3x3 decompositions (they converge in a handful).
+pub(crate) const MAX_DECOMPOSITION_ITERATIONS: usize = 200;
+
 /// Relative size of the second singular value of `H` below which it counts as rank 1.
 const RANK_TOLERANCE: f64 = 1e-12;
 
@@ -118,7 +121,9 @@ pub fn rotation_from_cross_covariance(h: &Matrix3<f64>) -> Option<UnitQuaternion
     if !h.iter().all(|v| v.is_finite()) {
         return None;
     }
-    let svd = h.svd(true, true); // singular values sorted descending
+    // Capped iterations: nalgebra's plain `svd` has no cap and can spin on pathological
+    // input. Singular values come sorted descending.
+    let svd = h.try_svd(true, true, f64::EPSILON, MAX_DECOMPOSITION_ITERATIONS)?;
     let (u, v_t) = (svd.u?, svd.v_t?);
     let sv = svd.singular_values;
     if sv[0] <= 0.0 || sv[1] <= RANK_TOLERANCE * sv[0] {

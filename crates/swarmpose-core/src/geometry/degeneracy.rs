@@ -38,7 +38,14 @@ where
         scatter += d * d.transpose();
     }
     scatter /= n as f64;
-    let eig = scatter.symmetric_eigenvalues();
+    // Capped iterations (the uncapped decomposition can spin on pathological input); a
+    // failure to converge reports no spread, so the set is refused rather than trusted.
+    let Some(eig) = scatter
+        .try_symmetric_eigen(f64::EPSILON, crate::arun::MAX_DECOMPOSITION_ITERATIONS)
+        .map(|e| e.eigenvalues)
+    else {
+        return [0.0; 3];
+    };
     let mut ev = [
         eig[0].max(0.0).sqrt(),
         eig[1].max(0.0).sqrt(),
