@@ -127,6 +127,15 @@ pub fn read_poses(path: &Path) -> Result<Vec<Isometry3<f64>>, DatasetError> {
                 format!("a 3x4 pose needs 12 numbers, found {}", v.len()),
             ));
         }
+        let r = nalgebra::Matrix3::new(v[0], v[1], v[2], v[4], v[5], v[6], v[8], v[9], v[10]);
+        let off = (r * r.transpose() - nalgebra::Matrix3::identity()).norm();
+        if off > 1e-2 || r.determinant() < 0.0 {
+            return Err(parse_error(
+                path,
+                k + 1,
+                format!("the 3x3 part is not a rotation (|R Rᵀ - I| = {off:.3e})"),
+            ));
+        }
         out.push(pose_from_3x4(&v));
     }
     Ok(out)

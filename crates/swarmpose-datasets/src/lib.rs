@@ -207,10 +207,22 @@ pub(crate) fn first_size(path: &Path) -> Result<(usize, usize), DatasetError> {
     Ok((img.width, img.height))
 }
 
+/// The rotation nearest a 3x3 matrix read from a file, with a capped iteration count
+/// (nalgebra's uncapped `Rotation3::from_matrix` can spin on a matrix far from any
+/// rotation, such as a corrupted file's).
+pub(crate) fn nearest_rotation(m: &nalgebra::Matrix3<f64>) -> nalgebra::UnitQuaternion<f64> {
+    use nalgebra::{Rotation3, UnitQuaternion};
+    UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_eps(
+        m,
+        1e-12,
+        100,
+        Rotation3::identity(),
+    ))
+}
+
 /// Rows of 12 numbers as row-major 3x4 `[R | t]` poses.
 pub(crate) fn pose_from_3x4(m: &[f64]) -> Isometry3<f64> {
-    use nalgebra::{Matrix3, Rotation3, Translation3, UnitQuaternion};
+    use nalgebra::{Matrix3, Translation3};
     let r = Matrix3::new(m[0], m[1], m[2], m[4], m[5], m[6], m[8], m[9], m[10]);
-    let rot = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix(&r));
-    Isometry3::from_parts(Translation3::new(m[3], m[7], m[11]), rot)
+    Isometry3::from_parts(Translation3::new(m[3], m[7], m[11]), nearest_rotation(&r))
 }

@@ -152,3 +152,18 @@ fn an_unknown_layout_says_what_was_expected() {
     let e = error_of(&k.path("image_0"));
     assert!(e.contains("unknown sequence layout"), "{e}");
 }
+
+#[test]
+fn a_ground_truth_pose_that_is_not_a_rotation_is_named() {
+    let dir = std::env::temp_dir().join(format!("swarmpose-poses-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let path = dir.join("poses.txt");
+    std::fs::write(&path, "1 0 0 0 0 1 0 0 0 0 1 0\n0 0 0 1 0 0 0 2 0 0 0 3\n").expect("write");
+    let err = swarmpose_datasets::kitti::read_poses(&path).expect_err("not a rotation");
+    let text = err.to_string();
+    assert!(
+        text.contains("poses.txt") && text.contains(":2") && text.contains("not a rotation"),
+        "{text}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

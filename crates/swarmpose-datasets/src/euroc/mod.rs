@@ -11,7 +11,7 @@ pub mod yaml;
 
 use std::path::{Path, PathBuf};
 
-use nalgebra::{Isometry3, Quaternion, Rotation3, Translation3, UnitQuaternion};
+use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
 use swarmpose_vision::rectify::{
     RemapTable, StereoRectification, rectify_map, remap, stereo_rectify,
 };
@@ -185,9 +185,7 @@ impl EurocSequence {
             // The rectified left camera in the world: T_WB T_BS0 R_rect⁻¹.
             let cam_from_rect = Isometry3::from_parts(
                 Translation3::identity(),
-                UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix(
-                    &rectification.rect_from_left.transpose(),
-                )),
+                crate::nearest_rotation(&rectification.rect_from_left.transpose()),
             );
             let world: Option<Vec<Isometry3<f64>>> = timestamps_ns
                 .iter()

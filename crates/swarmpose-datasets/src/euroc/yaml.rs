@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion};
+use nalgebra::{Isometry3, Matrix3, Translation3};
 use swarmpose_vision::rectify::RadTanCamera;
 
 use crate::error::DatasetError;
@@ -85,7 +85,7 @@ pub fn read_sensor_yaml(path: &Path) -> Result<SensorYaml, DatasetError> {
         ));
     }
     let r = Matrix3::new(t[0], t[1], t[2], t[4], t[5], t[6], t[8], t[9], t[10]);
-    let rot = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix(&r));
+    let rot = crate::nearest_rotation(&r);
     Ok(SensorYaml {
         camera: RadTanCamera {
             fx: k[0],
