@@ -28,6 +28,9 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// The main jobs on built-in data: `simulate`, then `odometry` on the built-in
+    /// synthetic stereo sequence.
+    Demo(commands::demo::DemoArgs),
     /// Reproduce the paper's simulation (section 6, figures 6 and 7): every estimator
     /// against noise and outliers; writes runs.csv, summary.md and the figures.
     Simulate(commands::simulate::SimulateArgs),
@@ -50,6 +53,7 @@ enum Command {
 
 fn run(cli: Cli) -> Result<(), CliError> {
     match cli.command {
+        Command::Demo(args) => commands::demo::run(&args),
         Command::Simulate(args) => commands::simulate::run(&args),
         Command::Register(args) => commands::register::run(&args),
         Command::Bench(args) => commands::bench::run(&args),

@@ -75,3 +75,13 @@ fn bad_arguments_fail_before_any_work() {
         &["a-file"],
     );
 }
+
+#[test]
+fn demo_help_names_both_jobs() {
+    // The demo itself is the README's first command (run by hand: it writes out/); here
+    // only its wiring is checked, cheaply.
+    let out = swarmpose(&["demo", "--help"], None);
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("simulate") && text.contains("odometry"), "{text}");
+}

@@ -4,6 +4,7 @@
 
 pub mod bench;
 pub mod correspondences;
+pub mod demo;
 pub mod evaluate;
 pub mod odometry;
 pub mod register;

@@ -53,7 +53,7 @@ pub struct OdometryArgs {
     pub detector: Detector,
 
     /// Output directory (created if needed).
-    #[arg(long, value_name = "DIR", default_value = "odometry-out")]
+    #[arg(long, value_name = "DIR", default_value = "out/odometry")]
     pub out: PathBuf,
 
     /// Seed of the estimator (pair k uses seed + k).
