@@ -83,5 +83,8 @@ fn demo_help_names_both_jobs() {
     let out = swarmpose(&["demo", "--help"], None);
     assert!(out.status.success());
     let text = String::from_utf8_lossy(&out.stdout);
-    assert!(text.contains("simulate") && text.contains("odometry"), "{text}");
+    assert!(
+        text.contains("simulate") && text.contains("odometry"),
+        "{text}"
+    );
 }
