@@ -11,7 +11,7 @@ use crate::error::DatasetError;
 use crate::text::{is_png, list_sorted, numbers, parse_error, read_text};
 use crate::{
     RectifiedStereo, StereoPair, StereoSequence, check_counts, check_partners, first_size,
-    load_pair, pose_from_3x4,
+    load_indexed_pair, pose_from_3x4,
 };
 
 /// True when `dir` looks like a KITTI sequence.
@@ -222,14 +222,11 @@ impl StereoSequence for KittiSequence {
     }
 
     fn frame(&self, i: usize) -> Result<StereoPair, DatasetError> {
-        let (Some(l), Some(r)) = (self.left.get(i), self.right.get(i)) else {
-            return Err(DatasetError::FrameOutOfRange {
-                dir: self.root.clone(),
-                index: i,
-                len: self.len(),
-            });
-        };
-        load_pair(l, r, Some((self.size, &self.left[0])))
+        let first = self
+            .left
+            .first()
+            .map_or(self.root.as_path(), PathBuf::as_path);
+        load_indexed_pair(&self.root, &self.left, &self.right, i, (self.size, first))
     }
 
     fn ground_truth(&self) -> Option<&[Isometry3<f64>]> {

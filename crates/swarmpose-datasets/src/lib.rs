@@ -220,6 +220,28 @@ pub(crate) fn nearest_rotation(m: &nalgebra::Matrix3<f64>) -> nalgebra::UnitQuat
     ))
 }
 
+/// Frame `i` of index-aligned left/right image lists of the sequence at `root`, checked
+/// against the expected size (`expected`: the size and the file it was read from).
+///
+/// # Errors
+/// [`DatasetError::FrameOutOfRange`], or as [`load_pair`].
+pub(crate) fn load_indexed_pair(
+    root: &Path,
+    left: &[PathBuf],
+    right: &[PathBuf],
+    i: usize,
+    expected: ((usize, usize), &Path),
+) -> Result<StereoPair, DatasetError> {
+    let (Some(l), Some(r)) = (left.get(i), right.get(i)) else {
+        return Err(DatasetError::FrameOutOfRange {
+            dir: root.to_owned(),
+            index: i,
+            len: left.len(),
+        });
+    };
+    load_pair(l, r, Some(expected))
+}
+
 /// Rows of 12 numbers as row-major 3x4 `[R | t]` poses.
 pub(crate) fn pose_from_3x4(m: &[f64]) -> Isometry3<f64> {
     use nalgebra::{Matrix3, Translation3};

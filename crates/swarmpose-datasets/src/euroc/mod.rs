@@ -18,7 +18,7 @@ use swarmpose_vision::rectify::{
 
 use crate::error::DatasetError;
 use crate::text::{numbers, parse_error, read_text};
-use crate::{RectifiedStereo, StereoPair, StereoSequence, check_counts, load_pair};
+use crate::{RectifiedStereo, StereoPair, StereoSequence, check_counts, load_indexed_pair};
 
 pub use yaml::{SensorYaml, read_sensor_yaml};
 
@@ -232,17 +232,13 @@ impl EurocSequence {
     /// # Errors
     /// As [`StereoSequence::frame`].
     pub fn raw_frame(&self, i: usize) -> Result<StereoPair, DatasetError> {
-        let (Some(l), Some(r)) = (self.left.get(i), self.right.get(i)) else {
-            return Err(DatasetError::FrameOutOfRange {
-                dir: self.root.clone(),
-                index: i,
-                len: self.left.len(),
-            });
-        };
-        load_pair(
-            l,
-            r,
-            Some((self.raw_size, &self.root.join("mav0/cam0/sensor.yaml"))),
+        let yaml = self.root.join("mav0/cam0/sensor.yaml");
+        load_indexed_pair(
+            &self.root,
+            &self.left,
+            &self.right,
+            i,
+            (self.raw_size, &yaml),
         )
     }
 }
