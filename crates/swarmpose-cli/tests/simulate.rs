@@ -88,3 +88,57 @@ fn demo_help_names_both_jobs() {
         "{text}"
     );
 }
+
+#[test]
+fn quick_keeps_explicit_runs_and_fractions() {
+    let dir = TempDir::new("simulate-quick");
+    let out = dir.0.join("out");
+    let out_s = out.to_string_lossy().to_string();
+    let run = swarmpose(
+        &[
+            "simulate",
+            "--quick",
+            "--out",
+            &out_s,
+            "--runs",
+            "2",
+            "--noise",
+            "0.05",
+            "--fractions",
+            "0,0.4",
+            "--threads",
+            "1",
+        ],
+        None,
+    );
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    // 1 noise level x 2 fractions x 2 runs x 4 estimators, plus the header.
+    let rows = std::fs::read_to_string(out.join("runs.csv")).expect("runs.csv");
+    assert_eq!(rows.lines().count(), 1 + 2 * 2 * 4);
+    assert!(
+        rows.lines()
+            .skip(1)
+            .all(|l| l.starts_with("0.05,0,") || l.starts_with("0.05,0.4,"))
+    );
+}
+
+#[test]
+fn help_shows_the_defaults() {
+    let run = swarmpose(&["simulate", "--help"], None);
+    assert_eq!(run.status.code(), Some(0));
+    let help = String::from_utf8_lossy(&run.stdout);
+    for needle in [
+        "[default: out/simulate]",
+        "[default: 50, or 10 with --quick]",
+        "with --quick]",
+        "[default: random]",
+        "[default: 1000]",
+        "[default: one per core]",
+    ] {
+        assert!(help.contains(needle), "{needle} not in help: {help}");
+    }
+}

@@ -1,10 +1,13 @@
 //! `swarmpose simulate`: the paper's simulation (section 6, figures 6 and 7), the main
 //! job on a built-in default.
 
-use std::path::PathBuf;
+use std::io::Write;
+use std::path::{Path, PathBuf};
 
 use clap::{Args, ValueEnum};
-use swarmpose_sim::experiment::{DEFAULT_FRACTIONS, DEFAULT_NOISE, DEFAULT_RUNS, DEFAULT_SEED};
+use swarmpose_sim::experiment::{
+    DEFAULT_FRACTIONS, DEFAULT_NOISE, DEFAULT_RUNS, DEFAULT_SEED, QUICK_FRACTIONS, QUICK_RUNS,
+};
 use swarmpose_sim::{Experiment, OutlierMode, SimError, SimOptions, default_estimators, simulate};
 
 use crate::error::CliError;
@@ -31,19 +34,24 @@ pub struct SimulateArgs {
     #[arg(long, value_name = "DIR", default_value = swarmpose_sim::simulate::DEFAULT_OUT)]
     pub out: PathBuf,
 
-    /// Runs per noise level and outlier fraction.
-    #[arg(long, value_name = "N", default_value_t = DEFAULT_RUNS)]
-    pub runs: usize,
+    /// Runs per noise level and outlier fraction [default: 50, or 10 with --quick].
+    #[arg(long, value_name = "N")]
+    pub runs: Option<usize>,
 
     /// Noise levels σ per axis, metres, comma separated.
     #[arg(long, value_name = "LIST", value_delimiter = ',', allow_negative_numbers = true,
           default_values_t = DEFAULT_NOISE)]
     pub noise: Vec<f64>,
 
-    /// Outlier fractions in [0, 1), comma separated.
-    #[arg(long, value_name = "LIST", value_delimiter = ',', allow_negative_numbers = true,
-          default_values_t = DEFAULT_FRACTIONS)]
-    pub fractions: Vec<f64>,
+    /// Outlier fractions in [0, 1), comma separated [default: 0,0.1,0.2,...,0.9, or
+    /// 0,0.3,0.5,0.7,0.9 with --quick].
+    #[arg(
+        long,
+        value_name = "LIST",
+        value_delimiter = ',',
+        allow_negative_numbers = true
+    )]
+    pub fractions: Option<Vec<f64>>,
 
     /// How outliers are made.
     #[arg(long, value_enum, default_value_t = Mode::Random)]
@@ -67,22 +75,26 @@ pub struct SimulateArgs {
     pub export: Option<PathBuf>,
 }
 
-fn sim_error(e: &SimError) -> CliError {
-    match e {
-        SimError::InvalidConfig(_) | SimError::Io { .. } => CliError::usage(e.to_string()),
-        _ => CliError::failure(e.to_string()),
-    }
-}
+// Keep the help text's defaults in step with the library's.
+const _: () = assert!(DEFAULT_RUNS == 50 && QUICK_RUNS == 10);
+const _: () = assert!(DEFAULT_FRACTIONS.len() == 10 && QUICK_FRACTIONS.len() == 5);
 
 /// Runs `simulate`.
 ///
 /// # Errors
-/// Bad settings or an unwritable folder (before any work), or a failure while writing.
+/// Bad settings or an unwritable folder (exit status 2, before any work), or a failure
+/// while writing the results (exit status 1).
 pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
-    let mut experiment = Experiment {
+    // --quick sets the defaults; --runs and --fractions given explicitly still win.
+    let base = if args.quick {
+        Experiment::quick()
+    } else {
+        Experiment::default()
+    };
+    let experiment = Experiment {
         noise_levels: args.noise.clone(),
-        fractions: args.fractions.clone(),
-        runs: args.runs,
+        fractions: args.fractions.clone().unwrap_or(base.fractions),
+        runs: args.runs.unwrap_or(base.runs),
         seed: args.seed,
         mode: match args.mode {
             Mode::Random => OutlierMode::Random,
@@ -91,13 +103,8 @@ pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
         ..Experiment::default()
     };
     let mut out = args.out.clone();
-    if args.quick {
-        let quick = Experiment::quick();
-        experiment.runs = quick.runs;
-        experiment.fractions = quick.fractions;
-        if out == std::path::Path::new(swarmpose_sim::simulate::DEFAULT_OUT) {
-            out = PathBuf::from("out/simulate-quick");
-        }
+    if args.quick && out == Path::new(swarmpose_sim::simulate::DEFAULT_OUT) {
+        out = PathBuf::from("out/simulate-quick");
     }
     let opts = SimOptions {
         experiment,
@@ -106,10 +113,19 @@ pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
         threads: args.threads,
         progress: true,
     };
-    let outcome = simulate(&opts, &default_estimators()).map_err(|e| sim_error(&e))?;
-    print!("{}", outcome.console);
+    // Settings and folders first: nothing runs when one is bad.
+    opts.check().map_err(|e| CliError::usage(e.to_string()))?;
+    let outcome = simulate(&opts, &default_estimators()).map_err(|e| match e {
+        SimError::InvalidConfig(_) => CliError::usage(e.to_string()),
+        other => CliError::failure(other.to_string()),
+    })?;
+    let mut text = outcome.console.clone();
     for f in &outcome.files {
-        println!("wrote {}", f.display());
+        text.push_str(&format!("wrote {}\n", f.display()));
     }
-    Ok(())
+    let mut stdout = std::io::stdout().lock();
+    stdout
+        .write_all(text.as_bytes())
+        .and_then(|()| stdout.flush())
+        .map_err(|e| CliError::failure(format!("cannot write to standard output: {e}")))
 }
