@@ -69,6 +69,70 @@ fn prints_tables_per_cell() {
 }
 
 #[test]
+fn writes_one_row_per_run_and_the_oracle_reference() {
+    let dir = TempDir::new("bench-runs");
+    suite(&dir, &[0.5], 3);
+    let path = dir.0.to_string_lossy().to_string();
+    let runs = dir.0.join("runs.csv");
+    let runs_arg = runs.to_string_lossy().to_string();
+    let args = [
+        "bench",
+        &path,
+        "--methods",
+        "pso,oracle-inliers",
+        "--runs-csv",
+        &runs_arg,
+    ];
+    let out = swarmpose(&args, None);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(&runs).expect("runs CSV written");
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(
+        lines[0],
+        "scenario,method,success,rotation_deg,translation_m,time_ms,inliers"
+    );
+    assert_eq!(lines.len(), 1 + 3 * 2, "{text}");
+    // The oracle fits exactly the 60 true inliers of 120 correspondences.
+    let oracle: Vec<&str> = lines
+        .iter()
+        .copied()
+        .filter(|l| l.contains(",oracle-inliers,"))
+        .collect();
+    assert_eq!(oracle.len(), 3);
+    assert!(
+        oracle
+            .iter()
+            .all(|l| l.ends_with(",60") && l.contains(",1,")),
+        "{text}"
+    );
+    // Seeds follow the scenario, not its position: a filtered run repeats the same row.
+    let only = [
+        "bench",
+        &path,
+        "--methods",
+        "pso",
+        "--filter",
+        "r002",
+        "--runs-csv",
+        &runs_arg,
+    ];
+    let pso_row = |t: &str| {
+        t.lines()
+            .find(|l| l.starts_with("random_n0.020_o0.50_r002,pso,"))
+            .map(|l| l.rsplitn(3, ',').nth(2).unwrap_or_default().to_owned())
+    };
+    let first = pso_row(&text);
+    assert!(swarmpose(&only, None).status.success());
+    let again = std::fs::read_to_string(&runs).expect("runs CSV written");
+    assert!(first.is_some());
+    assert_eq!(first, pso_row(&again), "{text}\n{again}");
+}
+
+#[test]
 fn bad_arguments_are_one_line_errors() {
     let dir = TempDir::new("bench-bad");
     let path = dir.0.to_string_lossy().to_string();

@@ -21,7 +21,14 @@ const SUCCESS_ROTATION_DEG: f64 = 2.0;
 /// Largest translation error of a success, metres (as the peers).
 const SUCCESS_TRANSLATION_M: f64 = 0.2;
 /// Every estimator the bench knows, in table order.
-const ALL_METHODS: [&str; 5] = ["pso", "pso-auto", "msac", "pso-paper", "svd"];
+const ALL_METHODS: [&str; 6] = [
+    "pso",
+    "pso-auto",
+    "msac",
+    "pso-paper",
+    "svd",
+    "oracle-inliers",
+];
 
 /// Arguments of `swarmpose bench`.
 #[derive(Debug, Args)]
@@ -29,7 +36,8 @@ const ALL_METHODS: [&str; 5] = ["pso", "pso-auto", "msac", "pso-paper", "svd"];
 Each NAME.csv in SUITE_DIR needs its truth NAME.json beside it (gen_scenarios.py writes \
 both). Estimators run one at a time on one thread; the time is that of the estimation call \
 only. Thresholds: the peers' oracle max(3.368 sigma, 0.01) m from the truth's noise_sigma, \
-except pso-auto, which estimates its own. Success: rotation error < 2 deg and translation \
+except pso-auto, which estimates its own; oracle-inliers is SVD on the truth's inlier \
+labels, the ceiling of any method that ends with a least-squares fit. Success: rotation error < 2 deg and translation \
 error < 0.2 m. Prints Markdown tables per outlier mode and noise level: success rate, \
 median and 90th-percentile rotation error, median translation error, median time.")]
 pub struct BenchArgs {
@@ -37,7 +45,8 @@ pub struct BenchArgs {
     #[arg(value_name = "SUITE_DIR")]
     pub suite: PathBuf,
 
-    /// Estimators, comma separated, from pso, pso-auto, msac, pso-paper, svd.
+    /// Estimators, comma separated, from pso, pso-auto, msac, pso-paper, svd and
+    /// oracle-inliers (SVD on the truth's inliers only: the least-squares ceiling).
     #[arg(long, value_delimiter = ',', default_value = "pso,pso-auto,msac")]
     pub methods: Vec<String>,
 
@@ -45,17 +54,63 @@ pub struct BenchArgs {
     #[arg(long, value_name = "TEXT", default_value = "")]
     pub filter: String,
 
-    /// Seed of every estimation (the run index is added).
+    /// Seed of every estimation (a hash of the scenario's file name is added, so a
+    /// scenario gets the same seed whatever the filter).
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub seed: u64,
+
+    /// Also write one row per (scenario, method) to this CSV file: scenario, method,
+    /// success, rotation_deg, translation_m, time_ms, inliers (empty fields on failure).
+    #[arg(long, value_name = "FILE")]
+    pub runs_csv: Option<PathBuf>,
 }
 
 /// One estimation judged against the truth.
 struct Outcome {
+    scenario: String,
+    inliers: Option<usize>,
     success: bool,
     rotation_deg: f64,
     translation_m: f64,
     elapsed_ms: f64,
+}
+
+/// FNV-1a of `text`: a seed offset that does not depend on the platform or the filter.
+fn stable_hash(text: &str) -> u64 {
+    text.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+    })
+}
+
+/// One CSV row per (scenario, method), in table order.
+fn runs_csv(results: &Results) -> String {
+    let mut out =
+        String::from("scenario,method,success,rotation_deg,translation_m,time_ms,inliers\n");
+    let opt = |v: f64| {
+        if v.is_finite() {
+            format!("{v:.6}")
+        } else {
+            String::new()
+        }
+    };
+    for fractions in results.values() {
+        for methods in fractions.values() {
+            for (method, outcomes) in methods {
+                for o in outcomes {
+                    out.push_str(&format!(
+                        "{},{method},{},{},{},{:.4},{}\n",
+                        o.scenario,
+                        u8::from(o.success),
+                        opt(o.rotation_deg),
+                        opt(o.translation_m),
+                        o.elapsed_ms,
+                        o.inliers.map_or_else(String::new, |n| n.to_string()),
+                    ));
+                }
+            }
+        }
+    }
+    out
 }
 
 /// The peers' oracle threshold for noise σ (metres).
@@ -76,7 +131,7 @@ fn estimator(name: &str, sigma: f64) -> Option<Box<dyn Estimator>> {
         "pso-paper" => Box::new(PsoPaperEstimator::new(
             PsoPaperConfig::default().with_threshold(thr),
         )),
-        "svd" => Box::new(SvdEstimator),
+        "svd" | "oracle-inliers" => Box::new(SvdEstimator),
         _ => return None,
     })
 }
@@ -137,7 +192,11 @@ pub fn run(args: &BenchArgs) -> Result<(), CliError> {
     let mut results: BTreeMap<CellKey, BTreeMap<u64, BTreeMap<String, Vec<Outcome>>>> =
         BTreeMap::new();
     let started = Instant::now();
-    for (run, csv) in files.iter().enumerate() {
+    for csv in &files {
+        let scenario = csv
+            .file_stem()
+            .map_or_else(String::new, |s| s.to_string_lossy().into_owned());
+        let seed = args.seed.wrapping_add(stable_hash(&scenario));
         let data =
             correspondence_csv::read_path(csv).map_err(|e| CliError::usage(e.to_string()))?;
         let truth_path = truth::path_for_csv(csv);
@@ -147,12 +206,20 @@ pub fn run(args: &BenchArgs) -> Result<(), CliError> {
             .map_err(|e| CliError::usage(format!("{}: {e}", truth_path.display())))?;
         let cell = (t.mode.clone(), (t.noise_sigma * 1e6).round() as u64);
         let fraction = (t.outlier_fraction * 1e6).round() as u64;
+        let true_inliers = data.select(&t.inlier_indices());
         for name in &args.methods {
             let Some(est) = estimator(name, t.noise_sigma) else {
                 continue;
             };
+            // The reference: least squares on exactly the true inliers, the best any
+            // method that ends with a least-squares fit can do.
+            let input = if name == "oracle-inliers" {
+                &true_inliers
+            } else {
+                &data
+            };
             let t0 = Instant::now();
-            let result = est.estimate_seeded(&data, args.seed.wrapping_add(run as u64));
+            let result = est.estimate_seeded(input, seed);
             let outer_ms = t0.elapsed().as_secs_f64() * 1e3;
             let outcome = match result {
                 Ok(e) => {
@@ -160,6 +227,8 @@ pub fn run(args: &BenchArgs) -> Result<(), CliError> {
                         .to_degrees();
                     let tr = (e.transform.translation.vector - true_pose.translation.vector).norm();
                     Outcome {
+                        scenario: scenario.clone(),
+                        inliers: Some(e.inliers.len()),
                         success: r < SUCCESS_ROTATION_DEG && tr < SUCCESS_TRANSLATION_M,
                         rotation_deg: r,
                         translation_m: tr,
@@ -167,6 +236,8 @@ pub fn run(args: &BenchArgs) -> Result<(), CliError> {
                     }
                 }
                 Err(_) => Outcome {
+                    scenario: scenario.clone(),
+                    inliers: None,
                     success: false,
                     rotation_deg: f64::NAN,
                     translation_m: f64::NAN,
@@ -182,6 +253,14 @@ pub fn run(args: &BenchArgs) -> Result<(), CliError> {
                 .or_default()
                 .push(outcome);
         }
+    }
+    if let Some(path) = &args.runs_csv {
+        std::fs::write(path, runs_csv(&results)).map_err(|e| {
+            CliError::failure(format!(
+                "{}: cannot write the runs CSV: {e}",
+                path.display()
+            ))
+        })?;
     }
     print!("{}", tables(&results, &args.methods));
     println!(

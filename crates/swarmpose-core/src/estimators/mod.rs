@@ -2,6 +2,7 @@
 //! method, the baselines and new ideas are compared by the same code.
 
 mod consensus;
+mod mixture;
 mod msac;
 mod pso_paper;
 mod pso_robust;

@@ -29,6 +29,10 @@
 //! 5. **Ambiguity.** If the points left over could hold a second motion with at least
 //!    `ambiguity_ratio` of the winner's support (a moving object), steps 1-4 run on them and
 //!    the runner-up is reported ([`Diagnostics::runner_up`]).
+//! 6. **Mixture refinement.** The final pose maximises the likelihood of a Gaussian
+//!    (inliers) plus uniform (wrong matches) model of the residuals, by a few EM rounds of
+//!    weighted SVD ([`super::mixture`]): inliers in the noise's tail count, wrong matches
+//!    do not. The reported inliers are those within δ_i of that pose.
 //!
 //! The tolerance δ_i is `sigma_multiplier · σ_i` when the correspondences carry a noise
 //! level per point ([`Correspondences::with_noise_sigma`]), else the fixed threshold, else
@@ -47,8 +51,10 @@ use nalgebra::{Isometry3, Translation3};
 use rand::seq::index::sample;
 
 use super::consensus::{
-    Tolerance, check_input, check_threshold, refine_within, residual_rms, truncated_cost_within,
+    Tolerance, check_input, check_support, check_threshold, collect_inliers_within, refine_within,
+    residual_rms, truncated_cost_within,
 };
+use super::mixture::{Mixture, refine_mixture};
 use super::{Diagnostics, Estimate, Estimator, RunnerUp};
 use crate::error::PoseError;
 use crate::geometry::{
@@ -104,6 +110,15 @@ pub struct PsoEstimatorConfig {
     /// Report a runner-up motion when its support reaches this fraction of the winner's
     /// [0.5]; 0 turns the check off.
     pub ambiguity_ratio: f64,
+    /// Extra swarm searches on the same graph when the consensus holds fewer than
+    /// `restart_below_ratio` of the correspondences (or none was found); the largest
+    /// consensus wins [3]. Few inliers make the search hard, like RANSAC's sample count.
+    pub restarts: usize,
+    /// See `restarts` [0.2].
+    pub restart_below_ratio: f64,
+    /// Most rounds of the final Gaussian-uniform mixture refinement (step 6) [10]; 0
+    /// ends with the hard-band SVD refit of step 4.
+    pub mixture_rounds: usize,
 }
 
 impl Default for PsoEstimatorConfig {
@@ -122,6 +137,9 @@ impl Default for PsoEstimatorConfig {
             max_pairs: 256,
             refine_rounds: 5,
             ambiguity_ratio: 0.5,
+            restarts: 3,
+            restart_below_ratio: 0.2,
+            mixture_rounds: 10,
         }
     }
 }
@@ -148,6 +166,20 @@ impl PsoEstimatorConfig {
         self
     }
 
+    /// Sets the extra swarm searches made when the consensus is small (0 turns them off).
+    #[must_use]
+    pub fn with_restarts(mut self, restarts: usize) -> Self {
+        self.restarts = restarts;
+        self
+    }
+
+    /// Sets the rounds of the final mixture refinement (0 turns it off).
+    #[must_use]
+    pub fn with_mixture_rounds(mut self, rounds: usize) -> Self {
+        self.mixture_rounds = rounds;
+        self
+    }
+
     /// Sets the ambiguity ratio (0 turns the check off).
     #[must_use]
     pub fn with_ambiguity_ratio(mut self, ratio: f64) -> Self {
@@ -166,6 +198,11 @@ impl PsoEstimatorConfig {
         if self.max_points < MIN_CORRESPONDENCES || self.max_pairs == 0 || self.refine_rounds == 0 {
             return Err(PoseError::InvalidConfig(
                 "max_points must be >= 4, max_pairs and refine_rounds >= 1".into(),
+            ));
+        }
+        if !(0.0..=1.0).contains(&self.restart_below_ratio) {
+            return Err(PoseError::InvalidConfig(
+                "restart_below_ratio must be in [0, 1]".into(),
             ));
         }
         if !(0.0..=1.0).contains(&self.ambiguity_ratio) {
@@ -207,7 +244,8 @@ struct Found {
 }
 
 impl PsoEstimator {
-    /// Steps 1-4 on all of `data` with tolerance `tol`.
+    /// Steps 1-4 on all of `data` with tolerance `tol`; with few inliers, steps 2-4 are
+    /// repeated up to `restarts` times on the same graph and the largest consensus wins.
     fn find(
         &self,
         data: &Correspondences,
@@ -229,13 +267,53 @@ impl PsoEstimator {
         };
         let min_len_m = (5.0 * typical_tol).min(0.1 * spread(data.src())[0]);
         let graph = PairGraph::build(data, points, tol, cfg.max_pairs, min_len_m);
-        let no_support = PoseError::InsufficientSupport {
-            support: 0,
-            needed: MIN_CORRESPONDENCES,
-        };
         if graph.scored() == 0 {
-            return Err(no_support);
+            return Err(no_support());
         }
+        let mut best = self.search(data, &graph, tol, rng);
+        let few = |f: &Result<Found, PoseError>| {
+            f.as_ref().map_or(true, |f| {
+                (f.inliers.len() as f64) < cfg.restart_below_ratio * n as f64
+            })
+        };
+        for _ in 0..cfg.restarts {
+            if !few(&best) {
+                break;
+            }
+            let next = self.search(data, &graph, tol, rng);
+            best = match (best, next) {
+                (Ok(a), Ok(b)) => {
+                    let (work_i, work_e) =
+                        (a.iterations + b.iterations, a.evaluations + b.evaluations);
+                    let mut w = if b.inliers.len() > a.inliers.len()
+                        || (b.inliers.len() == a.inliers.len()
+                            && truncated_cost_within(data, &b.pose, tol)
+                                < truncated_cost_within(data, &a.pose, tol))
+                    {
+                        b
+                    } else {
+                        a
+                    };
+                    w.iterations = work_i;
+                    w.evaluations = work_e;
+                    Ok(w)
+                }
+                (Ok(a), Err(_)) => Ok(a),
+                (Err(_), next) => next,
+            };
+        }
+        Ok((best?, graph))
+    }
+
+    /// Steps 2-4 on a built graph.
+    fn search(
+        &self,
+        data: &Correspondences,
+        graph: &PairGraph,
+        tol: Tolerance<'_>,
+        rng: &mut SeededRng,
+    ) -> Result<Found, PoseError> {
+        let cfg = &self.config;
         let seeds = graph.seeds(data, cfg.seeded_particles, rng);
         let swarm = ParticleSwarm::new(cfg.pso.clone());
         let out = swarm.minimize_projected(
@@ -249,17 +327,16 @@ impl PsoEstimator {
         let rotation = rotation_from_particle(&out.best_position);
         let m = rotation.to_rotation_matrix().into_inner();
         let anchors = graph.anchors(&m, vote::ANCHORS);
-        let t = vote::translation(data, &m, &anchors, tol).ok_or(no_support)?;
+        let t = vote::translation(data, &m, &anchors, tol).ok_or_else(no_support)?;
         let hypothesis = Isometry3::from_parts(Translation3::from(t), rotation);
-        let mut inliers = Vec::with_capacity(n);
+        let mut inliers = Vec::with_capacity(data.len());
         let pose = refine_within(data, &hypothesis, tol, cfg.refine_rounds, &mut inliers)?;
-        let found = Found {
+        Ok(Found {
             pose,
             inliers,
             iterations: out.iterations,
             evaluations: out.evaluations,
-        };
-        Ok((found, graph))
+        })
     }
 
     /// Re-estimates δ from the inlier residuals and refits (Threshold::Auto).
@@ -302,6 +379,30 @@ impl PsoEstimator {
         Ok(delta)
     }
 
+    /// Step 6: the mixture refinement of [`super::mixture`]; the inliers stay those within
+    /// δ_i of the refined pose. Keeps `found` when the refined pose loses the support.
+    fn polish(
+        &self,
+        data: &Correspondences,
+        found: &mut Found,
+        tol: Tolerance<'_>,
+        free_scale: bool,
+    ) {
+        let settings = Mixture {
+            multiplier: self.config.sigma_multiplier,
+            free_scale,
+            rounds: self.config.mixture_rounds,
+        };
+        let mut weights = Vec::with_capacity(data.len());
+        let pose = refine_mixture(data, &found.pose, tol, settings, &mut weights);
+        let mut inliers = Vec::with_capacity(data.len());
+        collect_inliers_within(data, &pose, tol, &mut inliers);
+        if check_support(data, &inliers).is_ok() {
+            found.pose = pose;
+            found.inliers = inliers;
+        }
+    }
+
     /// Step 5: a second motion among the points the first left over, if it could reach
     /// `ambiguity_ratio` of the winner's support.
     fn runner_up(
@@ -338,6 +439,14 @@ impl PsoEstimator {
             transform: found.pose,
             inliers: found.inliers.iter().map(|&k| rest[k]).collect(),
         })
+    }
+}
+
+/// The error of a search that found no motion.
+fn no_support() -> PoseError {
+    PoseError::InsufficientSupport {
+        support: 0,
+        needed: MIN_CORRESPONDENCES,
     }
 }
 
@@ -391,6 +500,10 @@ impl Estimator for PsoEstimator {
             (Some(_), _) => (first_tol, None),
         };
         let runner_up = self.runner_up(data, &found, &graph, tol, rng);
+        if cfg.mixture_rounds > 0 {
+            let free_scale = per_point.is_none() && cfg.threshold == Threshold::Auto;
+            self.polish(data, &mut found, tol, free_scale);
+        }
         Ok(Estimate {
             diagnostics: Diagnostics {
                 iterations: found.iterations,
