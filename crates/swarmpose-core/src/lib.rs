@@ -44,8 +44,9 @@ pub mod synthetic;
 pub use arun::{arun, arun_weighted};
 pub use error::{DegeneracyKind, PoseError};
 pub use estimators::{
-    Diagnostics, Estimate, Estimator, MsacConfig, MsacEstimator, PsoEstimator, PsoEstimatorConfig,
-    PsoPaperConfig, PsoPaperEstimator, RunnerUp, SvdEstimator, Threshold,
+    CHI2_3_99, Diagnostics, Estimate, Estimator, MsacConfig, MsacEstimator, PsoEstimator,
+    PsoEstimatorConfig, PsoPaperConfig, PsoPaperEstimator, RunnerUp, SvdEstimator, Threshold,
+    refine_mahalanobis,
 };
 pub use geometry::{Correspondences, MIN_CORRESPONDENCES};
 pub use rng::SeededRng;

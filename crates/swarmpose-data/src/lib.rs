@@ -15,7 +15,7 @@
 pub mod correspondence_csv;
 pub mod truth;
 
-pub use correspondence_csv::{CsvError, CsvErrorKind, HEADER, STDIN_NAME};
+pub use correspondence_csv::{CsvError, CsvErrorKind, HEADER, HEADER_WITH_COVARIANCE, STDIN_NAME};
 pub use truth::{InvalidTruth, ScenarioTruth, TruthError, TruthErrorKind};
 
 #[cfg(test)]

@@ -32,10 +32,13 @@ pub enum Detector {
 #[command(after_help = "\
 SEQUENCE_DIR is a KITTI odometry sequence (image_0/, image_1/, calib.txt), a Karlsruhe \
 sequence (I1_*.png, I2_*.png, calib.txt) or a EuRoC MAV sequence (mav0/cam0, mav0/cam1; \
-rectified on load). Frames are 0-based indices. The CSV has the header \
+rectified on load). Frames are 0-based indices. The CSV has the columns \
 src_x,src_y,src_z,dst_x,dst_y,dst_z: src in the left camera frame of frame J, dst in that \
-of frame I (x right, y down, z forward, metres). A one-line summary goes to standard \
-error.
+of frame I (x right, y down, z forward, metres), then the 12 columns \
+src_cxx,src_cxy,src_cxz,src_cyy,src_cyz,src_czz,dst_cxx,...,dst_czz: the upper triangles \
+of both points' stereo noise covariances (m^2, from the pixel noise; elongated along the \
+viewing ray), which `register` uses for a Mahalanobis inlier test and fit (omit them with \
+--no-covariance). A one-line summary goes to standard error.
 
 Exit status: 0 on success; 2 for bad options or an unreadable or malformed sequence; 1 \
 when an output cannot be written.")]
@@ -80,6 +83,10 @@ pub struct CorrespondencesArgs {
         allow_negative_numbers = true
     )]
     pub disparity_offset: f32,
+
+    /// Write only the six coordinate columns, without the stereo noise covariances.
+    #[arg(long)]
+    pub no_covariance: bool,
 
     /// Self-calibrate the disparity offset from the first N consecutive pairs of the
     /// sequence (image data only: the median of offsets estimated jointly with each
@@ -210,7 +217,16 @@ pub fn run(args: &CorrespondencesArgs) -> Result<(), CliError> {
             &b,
         )?,
     };
-    correspondence_csv::write_path(&args.out, &m.correspondences)?;
+    let data = if args.no_covariance {
+        m.correspondences.clone()
+    } else {
+        m.correspondences_with_covariance().map_err(|e| {
+            CliError::failure(format!(
+                "the stereo covariances are not usable ({e}); --no-covariance writes the points only"
+            ))
+        })?
+    };
+    correspondence_csv::write_path(&args.out, &data)?;
     if let Some(png) = &args.draw {
         let flags = match &args.inliers {
             Some(p) => Some(read_inliers(p, m.correspondences.len())?),
@@ -264,6 +280,7 @@ mod tests {
             detector: Detector::Orb,
             circular_check: false,
             disparity_offset: 0.0,
+            no_covariance: false,
             self_calibrate: None,
         }
     }
@@ -287,7 +304,14 @@ mod tests {
         run(&a).expect("run");
         let data = correspondence_csv::read_path(dir.join("c.csv")).expect("csv");
         assert!(data.len() >= 300, "{}", data.len());
+        assert!(data.noise_covariance().is_some(), "covariances written");
         assert!(dir.join("m.png").is_file());
+        let mut plain = args(root.clone(), [3, 4], dir.join("p.csv"));
+        plain.no_covariance = true;
+        run(&plain).expect("run");
+        let points = correspondence_csv::read_path(dir.join("p.csv")).expect("csv");
+        assert!(points.noise_covariance().is_none());
+        assert_eq!(points.src(), data.src());
         // Errors: a frame out of range, a missing directory, a bad offset.
         let e = run(&args(root.clone(), [0, 51], dir.join("x.csv"))).expect_err("range");
         assert!(

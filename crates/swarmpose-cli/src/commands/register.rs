@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use clap::Args;
 use serde::Serialize;
 use swarmpose_core::geometry::quaternion_wxyz;
-use swarmpose_core::{Estimate, PoseError};
+use swarmpose_core::{Correspondences, Estimate, PoseError};
 
 use crate::error::CliError;
 use crate::input::{display_name, read_correspondences};
@@ -18,7 +18,10 @@ use crate::methods::{EstimatorOptions, Method, build};
 #[command(after_help = "\
 Output: one JSON object on standard output, one line: method, input, seed, \
 n_correspondences, rotation_wxyz ([w, x, y, z], w >= 0), translation ([x, y, z], metres), \
-inliers (0-based row indices), inlier_ratio, threshold_m (null for svd), final_cost (m^2), \
+inliers (0-based row indices), inlier_ratio, noise_model (\"covariance\" when the CSV has \
+the 12 covariance columns and the method is pso: Mahalanobis inlier test and fit; \
+\"threshold\"; \"none\" for svd), threshold_m (null for svd and with covariances), \
+final_cost (m^2), \
 residual_rms_m, iterations, cost_evaluations, elapsed_ms, ambiguous (a second motion \
 with at least half the support was found: pso only) and runner_up (its rotation_wxyz, \
 translation, n_inliers; null when none).
@@ -28,7 +31,9 @@ Exit status: 0 on success; 1 when the estimator found no pose with enough suppor
 points).")]
 pub struct RegisterArgs {
     /// Correspondence CSV with header src_x,src_y,src_z,dst_x,dst_y,dst_z (metres,
-    /// dst = R src + t), or '-' for standard input.
+    /// dst = R src + t), optionally followed by the 12 covariance columns
+    /// src_cxx,src_cxy,src_cxz,src_cyy,src_cyz,src_czz,dst_cxx,...,dst_czz (m²), or '-'
+    /// for standard input.
     #[arg(value_name = "FILE.csv|-")]
     pub input: PathBuf,
 
@@ -56,6 +61,9 @@ struct Report<'a> {
     /// Translation of dst = R src + t, metres.
     translation: [f64; 3],
     inlier_ratio: f64,
+    /// How the inliers were tested: "covariance" (per-point covariances from the CSV,
+    /// Mahalanobis; pso only), "threshold" or "none" (svd).
+    noise_model: &'static str,
     threshold_m: Option<f64>,
     final_cost: f64,
     residual_rms_m: f64,
@@ -78,7 +86,19 @@ struct RunnerUpReport {
 }
 
 impl<'a> Report<'a> {
-    fn new(method: &'a str, input: &'a str, seed: u64, n: usize, e: &'a Estimate) -> Self {
+    fn new(
+        method: &'a str,
+        input: &'a str,
+        seed: u64,
+        data: &Correspondences,
+        e: &'a Estimate,
+    ) -> Self {
+        let n = data.len();
+        let noise_model = match (method, data.noise_covariance().is_some()) {
+            ("pso", true) => "covariance",
+            ("svd", _) => "none",
+            _ => "threshold",
+        };
         let t = e.transform.translation.vector;
         let d = &e.diagnostics;
         Self {
@@ -89,6 +109,7 @@ impl<'a> Report<'a> {
             rotation_wxyz: quaternion_wxyz(&e.transform.rotation),
             translation: [t.x, t.y, t.z],
             inlier_ratio: e.inlier_ratio(n),
+            noise_model,
             threshold_m: d.threshold_m,
             final_cost: d.final_cost,
             residual_rms_m: d.residual_rms_m,
@@ -141,7 +162,7 @@ pub fn run(args: &RegisterArgs) -> Result<(), CliError> {
     let estimate = estimator
         .estimate_seeded(&data, args.seed)
         .map_err(|e| estimation_error(&name, args.method, &e))?;
-    let report = Report::new(estimator.name(), &name, args.seed, data.len(), &estimate);
+    let report = Report::new(estimator.name(), &name, args.seed, &data, &estimate);
     let mut line = serde_json::to_string(&report)
         .map_err(|e| CliError::failure(format!("cannot encode the result as JSON: {e}")))?;
     line.push('\n');

@@ -2,11 +2,14 @@
 //! method, the baselines and new ideas are compared by the same code.
 
 mod consensus;
+mod mahalanobis;
 mod mixture;
 mod msac;
 mod pso_paper;
 mod pso_robust;
 mod svd;
+#[cfg(test)]
+mod test_scenes;
 
 use std::time::Duration;
 
@@ -20,6 +23,7 @@ pub use consensus::{
     Tolerance, collect_inliers, collect_inliers_within, residual_rms, truncated_cost,
     truncated_cost_within,
 };
+pub use mahalanobis::{CHI2_3_99, refine_mahalanobis};
 pub use msac::{MsacConfig, MsacEstimator};
 pub use pso_paper::{PsoPaperConfig, PsoPaperEstimator};
 pub use pso_robust::{PsoEstimator, PsoEstimatorConfig, Threshold};

@@ -1,7 +1,8 @@
 //! Matched 3D point pairs.
 
-use nalgebra::Point3;
+use nalgebra::{Matrix3, Point3};
 
+use super::covariance::{check_covariance, largest_eigenvalue};
 use crate::error::PoseError;
 
 /// The fewest correspondences any estimator accepts: after the paper (section 5), four
@@ -18,6 +19,19 @@ pub struct Correspondences {
     src: Vec<Point3<f64>>,
     dst: Vec<Point3<f64>>,
     noise_sigma_m: Option<Vec<f64>>,
+    covariance_m2: Option<NoiseCovariance>,
+}
+
+/// The per-point covariances `(src_cov, dst_cov)`, m², as returned by
+/// [`Correspondences::noise_covariance`].
+pub type CovariancePair<'a> = (&'a [Matrix3<f64>], &'a [Matrix3<f64>]);
+
+/// Per-point noise covariances of both sets, m² (see
+/// [`Correspondences::with_noise_covariance`]).
+#[derive(Debug, Clone, PartialEq)]
+struct NoiseCovariance {
+    src: Vec<Matrix3<f64>>,
+    dst: Vec<Matrix3<f64>>,
 }
 
 impl Correspondences {
@@ -45,6 +59,7 @@ impl Correspondences {
             src,
             dst,
             noise_sigma_m: None,
+            covariance_m2: None,
         })
     }
 
@@ -73,13 +88,70 @@ impl Correspondences {
         Ok(self)
     }
 
+    /// Attaches the noise covariance of every point, m², each in its own frame:
+    /// `src_cov[i]` of `src_i` (source frame), `dst_cov[i]` of `dst_i` (destination frame).
+    /// The residual of a correct match then has covariance
+    /// `Σ_i(R) = R src_cov[i] Rᵀ + dst_cov[i]`, and estimators that support it test and
+    /// weigh correspondences by the Mahalanobis norm `rᵀ Σ_i⁻¹ r`. Stereo points are the
+    /// typical case: their noise is elongated along the viewing ray.
+    ///
+    /// Also sets the isotropic noise level of [`Correspondences::noise_sigma`] to
+    /// `σ_i = sqrt(λ_max(src_cov[i]) + λ_max(dst_cov[i]))`, the largest standard deviation
+    /// the residual can have in any direction, whatever the rotation (replacing one set
+    /// before).
+    ///
+    /// # Errors
+    /// [`PoseError::LengthMismatch`] for a wrong length, [`PoseError::InvalidConfig`] for a
+    /// matrix that is not finite, symmetric and positive definite.
+    pub fn with_noise_covariance(
+        mut self,
+        src_cov: Vec<Matrix3<f64>>,
+        dst_cov: Vec<Matrix3<f64>>,
+    ) -> Result<Self, PoseError> {
+        for cov in [&src_cov, &dst_cov] {
+            if cov.len() != self.src.len() {
+                return Err(PoseError::LengthMismatch {
+                    src: self.src.len(),
+                    dst: cov.len(),
+                });
+            }
+        }
+        for (set, cov) in [("source", &src_cov), ("destination", &dst_cov)] {
+            for (i, c) in cov.iter().enumerate() {
+                check_covariance(c).map_err(|why| {
+                    PoseError::InvalidConfig(format!("noise covariance of {set} point {i} {why}"))
+                })?;
+            }
+        }
+        let sigma = src_cov
+            .iter()
+            .zip(&dst_cov)
+            .map(|(s, d)| (largest_eigenvalue(s) + largest_eigenvalue(d)).sqrt())
+            .collect();
+        self.noise_sigma_m = Some(sigma);
+        self.covariance_m2 = Some(NoiseCovariance {
+            src: src_cov,
+            dst: dst_cov,
+        });
+        Ok(self)
+    }
+
+    /// The per-point noise covariances `(src_cov, dst_cov)`, m², if attached.
+    #[must_use]
+    pub fn noise_covariance(&self) -> Option<CovariancePair<'_>> {
+        self.covariance_m2
+            .as_ref()
+            .map(|c| (c.src.as_slice(), c.dst.as_slice()))
+    }
+
     /// Per-correspondence noise σ_i (metres per axis), if attached.
     #[must_use]
     pub fn noise_sigma(&self) -> Option<&[f64]> {
         self.noise_sigma_m.as_deref()
     }
 
-    /// The correspondences at `indices`, in that order (noise levels included).
+    /// The correspondences at `indices`, in that order (noise levels and covariances
+    /// included).
     ///
     /// # Panics
     /// Never for indices below [`Correspondences::len`]; an index out of range panics.
@@ -92,6 +164,10 @@ impl Correspondences {
                 .noise_sigma_m
                 .as_ref()
                 .map(|s| indices.iter().map(|&i| s[i]).collect()),
+            covariance_m2: self.covariance_m2.as_ref().map(|c| NoiseCovariance {
+                src: indices.iter().map(|&i| c.src[i]).collect(),
+                dst: indices.iter().map(|&i| c.dst[i]).collect(),
+            }),
         }
     }
 
@@ -183,6 +259,43 @@ mod tests {
         );
         let c = c.with_noise_sigma(vec![0.1, 0.2, 0.3]).expect("valid");
         assert_eq!(c.select(&[2, 0]).noise_sigma(), Some(&[0.3, 0.1][..]));
+    }
+
+    #[test]
+    fn noise_covariance_is_checked_selected_and_bounds_sigma() {
+        let p = Point3::origin();
+        let c = Correspondences::from_pairs(vec![(p, p); 2]).expect("valid");
+        let ray = Matrix3::from_diagonal(&nalgebra::Vector3::new(1e-4, 1e-4, 0.04));
+        let iso = Matrix3::identity() * 1e-4;
+        assert!(
+            c.clone()
+                .with_noise_covariance(vec![ray], vec![iso, iso])
+                .is_err()
+        );
+        let mut asym = iso;
+        asym[(0, 1)] = 1e-5;
+        assert!(
+            c.clone()
+                .with_noise_covariance(vec![ray, asym], vec![iso, iso])
+                .is_err()
+        );
+        let singular = Matrix3::from_diagonal(&nalgebra::Vector3::new(1e-4, 0.0, 1e-4));
+        assert!(
+            c.clone()
+                .with_noise_covariance(vec![ray, singular], vec![iso, iso])
+                .is_err()
+        );
+        let c = c
+            .with_noise_covariance(vec![ray, iso], vec![iso, iso])
+            .expect("valid");
+        let sigma = c.noise_sigma().expect("derived");
+        assert!(
+            (sigma[0] - (0.04f64 + 1e-4).sqrt()).abs() < 1e-12,
+            "{sigma:?}"
+        );
+        assert!((sigma[1] - 2e-4f64.sqrt()).abs() < 1e-12, "{sigma:?}");
+        let picked = c.select(&[1]);
+        assert_eq!(picked.noise_covariance(), Some((&[iso][..], &[iso][..])));
     }
 
     #[test]

@@ -5,11 +5,13 @@
 //! unit quaternion, so it is always a proper rotation.
 
 mod correspondences;
+mod covariance;
 mod degeneracy;
 mod pose;
 mod rotation_map;
 
-pub use correspondences::{Correspondences, MIN_CORRESPONDENCES};
+pub use correspondences::{Correspondences, CovariancePair, MIN_CORRESPONDENCES};
+pub use covariance::check_covariance;
 pub use degeneracy::{check_spread, spread};
 pub use pose::{
     chain, frobenius_rotation_error, quaternion_wxyz, rodrigues_rotate, rotation_angle_between,

@@ -121,6 +121,18 @@ impl FrameMatches {
             .with_noise_sigma(self.noise_sigma_m.clone())
     }
 
+    /// The correspondences with both points' stereo covariances attached
+    /// ([`Correspondences::with_noise_covariance`]): the estimators then test and fit
+    /// Mahalanobis residuals, which respects that stereo noise lies along the viewing ray.
+    ///
+    /// # Errors
+    /// As [`Correspondences::with_noise_covariance`].
+    pub fn correspondences_with_covariance(&self) -> Result<Correspondences, PoseError> {
+        self.correspondences
+            .clone()
+            .with_noise_covariance(self.src_covariances.clone(), self.dst_covariances.clone())
+    }
+
     /// The same matches with `offset_px` added to every disparity: each point `p` of
     /// disparity `d` becomes `p d / (d + offset)` (a correction of the stereo
     /// calibration, e.g. from [`refine_stereo_offset`]). Covariances are scaled alike.

@@ -51,19 +51,18 @@ pub fn refine_weighted(
     Ok((pose, inliers))
 }
 
-/// 99 % quantile of χ² with 3 degrees of freedom: the Mahalanobis gate of
-/// [`refine_stereo`].
-pub const CHI2_3_99: f64 = 11.345;
+pub use swarmpose_core::CHI2_3_99;
 
 /// Refines `start` by minimising the Mahalanobis residuals of stereo points: residual
 /// `r_i = dst_i - (R src_i + t)` with covariance `R Σ_src,i Rᵀ + Σ_dst,i` (elongated
 /// along the viewing rays, so depth noise does not swamp the precise lateral
-/// positions). Each round keeps the correspondences with `r_iᵀ Σ_i⁻¹ r_i < gate` and
-/// takes Gauss-Newton steps on them. Returns the motion and its inliers.
+/// positions). The core's [`swarmpose_core::refine_mahalanobis`] on `data` with these
+/// covariances attached. Returns the motion and its inliers.
 ///
 /// # Errors
-/// [`PoseError::TooFewPoints`] when fewer than [`MIN_CORRESPONDENCES`] points pass the
-/// gate.
+/// [`PoseError::LengthMismatch`] or [`PoseError::InvalidConfig`] for covariances of the
+/// wrong length or not positive definite; [`PoseError::InsufficientSupport`] when fewer
+/// than [`MIN_CORRESPONDENCES`] points pass the gate.
 pub fn refine_stereo(
     data: &Correspondences,
     src_cov: &[nalgebra::Matrix3<f64>],
@@ -72,82 +71,9 @@ pub fn refine_stereo(
     gate: f64,
     rounds: usize,
 ) -> Result<(Isometry3<f64>, Vec<usize>), PoseError> {
-    use nalgebra::{Matrix3, Matrix6, Translation3, UnitQuaternion, Vector3, Vector6};
-    if src_cov.len() != data.len() || dst_cov.len() != data.len() {
-        return Err(PoseError::LengthMismatch {
-            src: src_cov.len(),
-            dst: dst_cov.len(),
-        });
-    }
-    let info = |pose: &Isometry3<f64>, i: usize| -> Option<Matrix3<f64>> {
-        let r = pose.rotation.to_rotation_matrix();
-        let c = r.matrix() * src_cov[i] * r.matrix().transpose() + dst_cov[i];
-        c.try_inverse()
-    };
-    let inliers_of = |pose: &Isometry3<f64>, gate: f64| -> Vec<usize> {
-        (0..data.len())
-            .filter(|&i| {
-                let r = data.dst()[i] - pose * data.src()[i];
-                info(pose, i).is_some_and(|w| (r.transpose() * w * r)[0] < gate)
-            })
-            .collect()
-    };
-    let mut pose = *start;
-    // The start comes from an isotropic test: open the gate wide first, then close it.
-    let schedule = |round: usize| gate * [16.0, 4.0].get(round).copied().unwrap_or(1.0);
-    let mut inliers = inliers_of(&pose, schedule(0));
-    for round in 0..rounds.max(3) {
-        if inliers.len() < MIN_CORRESPONDENCES {
-            return Err(PoseError::TooFewPoints {
-                needed: MIN_CORRESPONDENCES,
-                got: inliers.len(),
-            });
-        }
-        for _ in 0..5 {
-            let mut h = Matrix6::<f64>::zeros();
-            let mut g = Vector6::<f64>::zeros();
-            for &i in &inliers {
-                let Some(w) = info(&pose, i) else { continue };
-                let q = (pose * data.src()[i]).coords;
-                let r = data.dst()[i].coords - q;
-                // Left perturbation q' = exp(ω) q + δt: r' ≈ r + [q]ₓ ω - δt.
-                let mut j = nalgebra::Matrix3x6::<f64>::zeros();
-                j.fixed_view_mut::<3, 3>(0, 0).copy_from(&q.cross_matrix());
-                j.fixed_view_mut::<3, 3>(0, 3)
-                    .copy_from(&(-Matrix3::identity()));
-                h += j.transpose() * w * j;
-                g += j.transpose() * w * r;
-            }
-            let Some(delta) = h.lu().solve(&(-g)) else {
-                break;
-            };
-            let omega = Vector3::new(delta[0], delta[1], delta[2]);
-            let dt = Vector3::new(delta[3], delta[4], delta[5]);
-            let dr = UnitQuaternion::from_scaled_axis(omega);
-            // New pose: R' = dR R, t' = dR t + δt (left perturbation, rotation about the
-            // destination origin).
-            pose = Isometry3::from_parts(
-                Translation3::from(dr * pose.translation.vector + dt),
-                dr * pose.rotation,
-            );
-            if delta.norm() < 1e-9 {
-                break;
-            }
-        }
-        let next = inliers_of(&pose, schedule(round + 1));
-        if next == inliers && round >= 2 {
-            break;
-        }
-        inliers = next;
-    }
-    let inliers = inliers_of(&pose, gate);
-    if inliers.len() < MIN_CORRESPONDENCES {
-        return Err(PoseError::TooFewPoints {
-            needed: MIN_CORRESPONDENCES,
-            got: inliers.len(),
-        });
-    }
-    Ok((pose, inliers))
+    let with_cov = Correspondences::new(data.src().to_vec(), data.dst().to_vec())?
+        .with_noise_covariance(src_cov.to_vec(), dst_cov.to_vec())?;
+    swarmpose_core::refine_mahalanobis(&with_cov, start, gate, rounds)
 }
 
 /// [`refine_stereo`] that also estimates a disparity offset `δ` (pixels) common to both

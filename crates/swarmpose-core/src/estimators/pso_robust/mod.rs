@@ -15,7 +15,9 @@
 //!    match rarely does) and whose source length is at least `min(5δ, extent/10)`. Rank the
 //!    pairs by their number of common neighbours (correct matches form a dense cluster) and
 //!    score the best `max_pairs` ([`graph`]).
-//! 2. **Swarm.** Particles are rotation vectors mapped to unit quaternions
+//! 2. **Swarm.** (Repeated up to `restarts` times on the same graph when the consensus
+//!    found holds less than `restart_below_ratio` of the points; the largest wins.)
+//!    Particles are rotation vectors mapped to unit quaternions
 //!    ([`crate::geometry::rotation_from_particle`]). A particle's support is the number of
 //!    scored pairs with `|e_k| < δ_i + δ_j`; the best particle has the most support, ties
 //!    broken by the lower truncated cost. Part of the swarm starts at rotations solved from
@@ -29,10 +31,13 @@
 //! 5. **Ambiguity.** If the points left over could hold a second motion with at least
 //!    `ambiguity_ratio` of the winner's support (a moving object), steps 1-4 run on them and
 //!    the runner-up is reported ([`Diagnostics::runner_up`]).
-//! 6. **Mixture refinement.** The final pose maximises the likelihood of a Gaussian
-//!    (inliers) plus uniform (wrong matches) model of the residuals, by a few EM rounds of
-//!    weighted SVD ([`super::mixture`]): inliers in the noise's tail count, wrong matches
-//!    do not. The reported inliers are those within δ_i of that pose.
+//! 6. **Final refinement.** Without covariances, the final pose maximises the likelihood
+//!    of a Gaussian (inliers) plus uniform (wrong matches) model of the residuals, by a
+//!    few EM rounds of weighted SVD ([`super::mixture`]): inliers in the noise's tail
+//!    count, wrong matches do not; the reported inliers are those within δ_i of that pose.
+//!    With per-point covariances ([`Correspondences::with_noise_covariance`], anisotropic
+//!    noise such as stereo's), a Gauss-Newton fit of the Mahalanobis residuals, gated at
+//!    `sigma_multiplier²` in χ²(3) units ([`super::mahalanobis`]).
 //!
 //! The tolerance δ_i is `sigma_multiplier · σ_i` when the correspondences carry a noise
 //! level per point ([`Correspondences::with_noise_sigma`]), else the fixed threshold, else
@@ -54,6 +59,7 @@ use super::consensus::{
     Tolerance, check_input, check_support, check_threshold, collect_inliers_within, refine_within,
     residual_rms, truncated_cost_within,
 };
+use super::mahalanobis::refine_mahalanobis;
 use super::mixture::{Mixture, refine_mixture};
 use super::{Diagnostics, Estimate, Estimator, RunnerUp};
 use crate::error::PoseError;
@@ -379,8 +385,11 @@ impl PsoEstimator {
         Ok(delta)
     }
 
-    /// Step 6: the mixture refinement of [`super::mixture`]; the inliers stay those within
-    /// δ_i of the refined pose. Keeps `found` when the refined pose loses the support.
+    /// Step 6: with per-point covariances, the Mahalanobis refinement of
+    /// [`super::mahalanobis`] (its inliers pass the χ²(3) gate `sigma_multiplier²`);
+    /// otherwise the mixture refinement of [`super::mixture`] (the inliers stay those
+    /// within δ_i of the refined pose). Keeps `found` when the refined pose loses the
+    /// support.
     fn polish(
         &self,
         data: &Correspondences,
@@ -388,10 +397,24 @@ impl PsoEstimator {
         tol: Tolerance<'_>,
         free_scale: bool,
     ) {
+        let cfg = &self.config;
+        if data.noise_covariance().is_some() {
+            let gate = cfg.sigma_multiplier * cfg.sigma_multiplier;
+            if let Ok((pose, inliers)) =
+                refine_mahalanobis(data, &found.pose, gate, cfg.refine_rounds.max(3))
+            {
+                found.pose = pose;
+                found.inliers = inliers;
+            }
+            return;
+        }
+        if cfg.mixture_rounds == 0 {
+            return;
+        }
         let settings = Mixture {
-            multiplier: self.config.sigma_multiplier,
+            multiplier: cfg.sigma_multiplier,
             free_scale,
-            rounds: self.config.mixture_rounds,
+            rounds: cfg.mixture_rounds,
         };
         let mut weights = Vec::with_capacity(data.len());
         let pose = refine_mixture(data, &found.pose, tol, settings, &mut weights);
@@ -500,10 +523,8 @@ impl Estimator for PsoEstimator {
             (Some(_), _) => (first_tol, None),
         };
         let runner_up = self.runner_up(data, &found, &graph, tol, rng);
-        if cfg.mixture_rounds > 0 {
-            let free_scale = per_point.is_none() && cfg.threshold == Threshold::Auto;
-            self.polish(data, &mut found, tol, free_scale);
-        }
+        let free_scale = per_point.is_none() && cfg.threshold == Threshold::Auto;
+        self.polish(data, &mut found, tol, free_scale);
         Ok(Estimate {
             diagnostics: Diagnostics {
                 iterations: found.iterations,

@@ -176,3 +176,34 @@ fn a_moving_object_covering_half_the_view_is_flagged() {
         .expect("solvable");
     assert!(!out.is_ambiguous());
 }
+
+#[test]
+fn anisotropic_stereo_noise_uses_the_covariances() {
+    // Stereo-like noise (metres along the ray at 40 m, centimetres across), half the
+    // matches wrong. With the covariances `pso` fits the Mahalanobis residuals; with only
+    // the isotropic bound σ_i it must fit spheres as large as the depth noise.
+    let (mut with_cov, mut iso_only) = (0, 0);
+    for seed in 0..10 {
+        let (data, truth, _) = crate::estimators::test_scenes::stereo_scene(40 + seed, 2);
+        let sigma = data
+            .noise_sigma()
+            .expect("derived from the covariances")
+            .to_vec();
+        let iso = Correspondences::new(data.src().to_vec(), data.dst().to_vec())
+            .and_then(|c| c.with_noise_sigma(sigma))
+            .expect("valid");
+        let ok = |c: &Correspondences| {
+            PsoEstimator::default()
+                .estimate_seeded(c, seed)
+                .is_ok_and(|e| {
+                    let (r, t) = errors(&e.transform, &truth);
+                    r < 0.2 && t < 0.05
+                })
+        };
+        with_cov += usize::from(ok(&data));
+        iso_only += usize::from(ok(&iso));
+    }
+    println!("within 0.2 deg / 5 cm: {with_cov}/10 with covariances, {iso_only}/10 isotropic");
+    assert!(with_cov >= 9, "{with_cov}/10 with covariances");
+    assert!(with_cov > iso_only, "{with_cov} vs {iso_only}");
+}
