@@ -5,6 +5,9 @@
 //! median and minimum wall-clock times are printed. The image is
 //! `$SWARMPOSE_DATA/kitti_vo_seq2/image_0/000000.png` (default data root
 //! `../../../shared/data` from this crate); without it the bench prints why and exits.
+//!
+//! The "paper" configuration turns off the smoothed octaves and the finest-layer maxima
+//! (with the threshold of the former default, 0.0004), to show what they cost.
 
 use std::hint::black_box;
 use std::path::{Path, PathBuf};
@@ -58,6 +61,15 @@ fn main() {
     for (name, config) in [
         ("surf (default)", SurfConfig::default()),
         ("upright-surf", SurfConfig::upright()),
+        (
+            "upright-surf, paper",
+            SurfConfig {
+                smoothing: 0.0,
+                finest_layer_maxima: false,
+                hessian_threshold: 0.0004,
+                ..SurfConfig::upright()
+            },
+        ),
         (
             "surf, initial step 2",
             SurfConfig {

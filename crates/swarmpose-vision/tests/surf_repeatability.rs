@@ -9,7 +9,13 @@
 //! `p = c + σ R(θ) (q − c)`, with a bilinear warp `B(p) = A(H⁻¹ p)`. Every keypoint `q`
 //! of `A` whose image `H q` falls in the part of `B` that is filled from `A`, at least
 //! `MARGIN` pixels from both images' borders, counts; it is repeated when `B` has a
-//! detection within 2 px of `H q`.
+//! detection within 2 px of `H q`. The repeatability is repeated / counted.
+//!
+//! Beside it the tests print the keypoint counts of `A` and `B` and the symmetric form
+//! repeated / min(counted, `B`'s keypoints in the same overlap), so that a detector
+//! cannot look repeatable by flooding `B` with detections (the symmetric form counts
+//! keypoints of `A`, several of which may share one of `B`, so it can exceed 100 % when
+//! `B` has far fewer keypoints).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -131,14 +137,41 @@ fn inside_by(x: f32, y: f32, w: usize, h: usize) -> f32 {
     x.min(y).min((w - 1) as f32 - x).min((h - 1) as f32 - y)
 }
 
-/// (counted, repeated) keypoints of `a` found again in `b` under `warp`.
-fn repeatability(
-    a: &[Keypoint],
-    b: &[Keypoint],
-    w: usize,
-    h: usize,
-    warp: Similarity,
-) -> (usize, usize) {
+/// Counts of [`repeatability`].
+#[derive(Debug, Clone, Copy)]
+struct Counts {
+    /// Keypoints of `A` whose image lies in the overlap (the denominator).
+    counted: usize,
+    /// Those with a keypoint of `B` within `TOLERANCE`.
+    repeated: usize,
+    /// Keypoints of `B` in the same overlap (for the symmetric form only).
+    b_counted: usize,
+    /// All keypoints of `B`.
+    b_total: usize,
+}
+
+impl Counts {
+    /// repeated / counted.
+    fn rate(&self) -> f32 {
+        self.repeated as f32 / self.counted.max(1) as f32
+    }
+
+    /// repeated / min(counted, b_counted).
+    fn symmetric_rate(&self) -> f32 {
+        self.repeated as f32 / self.counted.min(self.b_counted).max(1) as f32
+    }
+}
+
+/// The keypoints of `a` found again in `b` under `warp`.
+fn repeatability(a: &[Keypoint], b: &[Keypoint], w: usize, h: usize, warp: Similarity) -> Counts {
+    let inv = warp.inverse();
+    let b_counted = b
+        .iter()
+        .filter(|q| {
+            let (x, y) = inv.apply(q.x, q.y);
+            inside_by(q.x, q.y, w, h) >= MARGIN && inside_by(x, y, w, h) >= MARGIN / warp.scale
+        })
+        .count();
     let (mut counted, mut repeated) = (0, 0);
     for k in a {
         let (px, py) = warp.apply(k.x, k.y);
@@ -154,7 +187,12 @@ fn repeatability(
         });
         repeated += usize::from(hit);
     }
-    (counted, repeated)
+    Counts {
+        counted,
+        repeated,
+        b_counted,
+        b_total: b.len(),
+    }
 }
 
 /// The detector, the KITTI frame and its keypoints.
@@ -188,7 +226,7 @@ impl Setup {
     }
 
     /// Warps the frame by `warp_h`, detects in it and counts the repeated keypoints.
-    fn repeatability_under(&self, warp_h: Similarity) -> (usize, usize) {
+    fn repeatability_under(&self, warp_h: Similarity) -> Counts {
         let Frame { w, h, .. } = self.frame;
         let warped = Frame {
             w,
@@ -208,31 +246,37 @@ impl Setup {
             scale,
             angle: degrees.to_radians(),
         };
-        let (counted, repeated) = self.repeatability_under(warp_h);
-        let rate = repeated as f32 / counted.max(1) as f32;
+        let counts = self.repeatability_under(warp_h);
+        let Counts {
+            counted,
+            repeated,
+            b_counted,
+            b_total,
+        } = counts;
         println!(
-            "{label:<20} scale {scale:.2} rotation {degrees:>4.1}°: {repeated} / {counted} keypoints repeated within {TOLERANCE} px = {:.1} %",
-            100.0 * rate
+            "{label:<20} scale {scale:.2} rotation {degrees:>4.1}°: {repeated} / {counted} keypoints repeated within {TOLERANCE} px = {:.1} %; \
+             keypoints A {} B {b_total} (in the overlap {counted} and {b_counted}), symmetric {repeated} / {} = {:.1} %",
+            100.0 * counts.rate(),
+            self.keypoints.len(),
+            counted.min(b_counted),
+            100.0 * counts.symmetric_rate(),
         );
         assert!(
             counted >= 100,
             "{label}: only {counted} keypoints in the overlap"
         );
-        rate
+        counts.rate()
     }
 }
 
 /// The issue's acceptance criterion: >= 60 % under rotation 30° and scale 0.8.
 ///
-/// Not met: this faithful SURF repeats 43 % of the keypoints of this frame within 2 px
-/// under that warp (56 % under the scale alone, 47 % under the rotation alone). Smooth
-/// synthetic textures reach 65-80 % under the same warps, and an exact 90° rotation
-/// gives 99 % (see `surf_repeatability_regression`), so the shortfall comes from the
-/// frame (foliage and grass, whose box-filter maxima move or vanish under resampling and
-/// rotation) and from the 2 px tolerance at large scales, not from a defect found in the
-/// detector.
+/// Measured with the default configuration: 562 / 871 = 64.5 % (1249 keypoints in `A`,
+/// 1131 in `B`; symmetric form 562 / 744 = 75.5 %). The paper's algorithm as first
+/// written repeated 43 % (1163 keypoints); the gain comes from the finest-layer maxima,
+/// the smoothed octaves and keeping the maxima whose interpolation does not settle (see
+/// the `surf` module documentation for what each contributes).
 #[test]
-#[ignore = "acceptance criterion not met: 43 % measured on this frame (see the doc comment)"]
 fn surf_detects_repeatably_under_a_known_similarity() {
     let Some(setup) = Setup::kitti() else {
         return;
@@ -255,10 +299,15 @@ fn surf_repeatability_regression() {
     let both = setup.run("rotation and scale", 0.8, 30.0);
     let scale_only = setup.run("scale only", 0.8, 0.0);
     let rotation_only = setup.run("rotation only", 1.0, 30.0);
-    assert!(both >= 0.38, "rotation and scale: {:.1} %", 100.0 * both);
-    assert!(scale_only >= 0.5, "scale only: {:.1} %", 100.0 * scale_only);
+    // Measured 64.5 %, 64.6 % and 70.4 %.
+    assert!(both >= 0.62, "rotation and scale: {:.1} %", 100.0 * both);
     assert!(
-        rotation_only >= 0.42,
+        scale_only >= 0.62,
+        "scale only: {:.1} %",
+        100.0 * scale_only
+    );
+    assert!(
+        rotation_only >= 0.68,
         "rotation only: {:.1} %",
         100.0 * rotation_only
     );
@@ -271,14 +320,17 @@ fn surf_repeatability_regression() {
         scale: 1.0,
         angle: std::f32::consts::FRAC_PI_2,
     };
-    let (counted, repeated) = setup.repeatability_under(exact);
-    let rate = repeated as f32 / counted.max(1) as f32;
+    let counts = setup.repeatability_under(exact);
+    let (counted, repeated) = (counts.counted, counts.repeated);
+    let rate = counts.rate();
+    // Measured 340 / 341 = 99.7 %.
     println!(
-        "exact 90° rotation: {repeated} / {counted} keypoints repeated = {:.1} %",
-        100.0 * rate
+        "exact 90° rotation: {repeated} / {counted} keypoints repeated = {:.1} %; symmetric {:.1} %",
+        100.0 * rate,
+        100.0 * counts.symmetric_rate()
     );
     assert!(
-        counted >= 100 && rate >= 0.95,
+        counted >= 100 && rate >= 0.97,
         "exact 90°: {:.1} %",
         100.0 * rate
     );
@@ -376,10 +428,10 @@ fn oriented_descriptors_match_under_rotation_and_scale() {
         );
         rates.push((matches, correct, rate));
     }
-    // Measured: 143 / 212 = 67.5 %. The wrong ones are mostly keypoints of the original
-    // that were not detected again (43 % are, within 2 px), whose nearest descriptor
-    // still passes the ratio test; for those that are, the orientation error is below
-    // 10° for four in five and the median descriptor distance is 0.16.
+    // Measured: 130 / 185 = 70.3 % (143 / 212 = 67.5 % before the detector changes that
+    // raised the repeatability from 43 % to 64.5 %). The wrong ones are mostly keypoints
+    // of the original that were not detected again, whose nearest descriptor still
+    // passes the ratio test.
     let (matches, correct, rate) = rates[0];
     assert!(matches >= 100 && rate >= 0.6, "surf: {correct} / {matches}");
     // Upright SURF is not made for a 30° roll: it finds fewer correct matches.

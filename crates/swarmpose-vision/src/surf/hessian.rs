@@ -16,8 +16,8 @@
 //! * `Dxy`: four `l × l` lobes in the quadrants around the centre, `+1` where `x·y > 0`
 //!   and `−1` elsewhere, separated by a one-pixel cross.
 //!
-//! Responses are divided by the filter area `L²` (and intensities by 255) so that they are
-//! comparable across scales, and the blob response is the approximated determinant
+//! Responses are divided by the filter area `L²` (and intensities by the white level, 255
+//! for 8-bit images) so that they are comparable across scales, and the blob response is the approximated determinant
 //!
 //! ```text
 //! det(H_approx) = Dxx · Dyy − (0.9 · Dxy)²,
@@ -38,10 +38,17 @@
 //! Octave `o` (from 0) holds `intervals + 2` filters of sizes
 //! `L(o, i) = 3 · (2^(o+1) · (i + 1) + 1)` — 9, 15, 21, 27; 15, 27, 39, 51; 27, 51, 75, 99;
 //! … — sampled every `step · 2^o` pixels. Maxima are searched in the inner `intervals`
-//! layers of each octave and refined by [`super::refine`].
+//! layers of each octave and refined by [`super::refine`], and optionally in the finest
+//! layer of octave 0 (see [`detect_octave`]).
+//!
+//! The geometry was checked for half-pixel shifts: every filter size is odd and each box
+//! is symmetric about the centre pixel `r = (L − 1) / 2` of the window, so sample
+//! `(c, r)` is the pixel `(c · step, r · step)` exactly, and [`super::refine`] converts
+//! its offsets by the sampling step (positions) and by the filter spacing of the octave
+//! (scale).
 
 use super::integral::IntegralImage;
-use super::refine::{Block, refine};
+use super::refine::{Block, refine, refine_finest};
 
 /// Filter size `L` of layer `layer` (0-based, `0..intervals + 2`) in octave `octave`:
 /// `3 · (2^(octave+1) · (layer + 1) + 1)`.
@@ -99,7 +106,7 @@ impl ResponseLayer {
         let q_tr = at(r + 1, r - l);
         let q_bl = at(r - l, r + 1);
         let q_br = at(r + 1, r + 1);
-        let norm = 1.0 / (255.0 * (filter * filter) as f32);
+        let norm = 1.0 / (integral.white() as f32 * (filter * filter) as f32);
 
         let c_lo = r.div_ceil(step);
         let r_lo = c_lo;
@@ -218,68 +225,150 @@ pub(crate) struct Detection {
     pub octave: u8,
 }
 
-/// Detects scale-space maxima of `det(H_approx)` above `threshold` and appends them to
-/// `out`. `layers` is scratch space reused across octaves (and calls).
+/// What [`detect_octave`] searches.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Search {
+    /// Scale layers searched per octave.
+    pub intervals: usize,
+    /// Sampling step of octave 0, pixels.
+    pub initial_step: usize,
+    /// Minimum response.
+    pub threshold: f32,
+    /// Also keep maxima of the finest layer of octave 0 (see [`detect_octave`]).
+    pub finest_layer: bool,
+}
+
+/// Detects scale-space maxima of `det(H_approx)` above the threshold over all octaves of
+/// one integral image (no per-octave smoothing) and appends them to `out`.
+#[cfg(test)]
 pub(crate) fn detect(
     integral: &IntegralImage,
     octaves: usize,
-    intervals: usize,
-    initial_step: usize,
-    threshold: f32,
+    search: Search,
     layers: &mut Vec<ResponseLayer>,
     out: &mut Vec<Detection>,
 ) {
+    for octave in 0..octaves {
+        if !detect_octave(integral, octave, search, layers, out) {
+            break;
+        }
+    }
+}
+
+/// Detects the maxima of octave `octave` in `integral` (the image as smoothed for that
+/// octave) and appends them to `out`; `layers` is scratch space reused across octaves
+/// (and calls). Returns `false` when the octave's filters do not fit in the image (nor
+/// will those of any later octave).
+///
+/// A maximum is a sample of an inner layer strictly above its 26 neighbours in the
+/// 3×3×3 block of (column, row, layer). With `search.finest_layer`, the finest layer of
+/// octave 0 (filter 9), which has no layer below it, also yields its samples strictly
+/// above their 8 neighbours in that layer and the 9 nearest samples of the next layer
+/// (filter 15): structures finer than the smallest searched scale, which would
+/// otherwise not be detected at all. They keep the scale `s = 1.2` of the filter.
+pub(crate) fn detect_octave(
+    integral: &IntegralImage,
+    octave: usize,
+    search: Search,
+    layers: &mut Vec<ResponseLayer>,
+    out: &mut Vec<Detection>,
+) -> bool {
+    let Search {
+        intervals,
+        initial_step,
+        threshold,
+        finest_layer,
+    } = search;
     let per_octave = intervals + 2;
     if layers.len() < per_octave {
         layers.resize_with(per_octave, ResponseLayer::default);
     }
     let (w, h) = (integral.width(), integral.height());
-    for octave in 0..octaves.min(24) {
-        let step = initial_step.max(1) << octave;
-        let top = filter_size(octave, per_octave - 1);
-        if top + 2 * step > w || top + 2 * step > h {
-            break;
-        }
-        for (layer, slot) in layers.iter_mut().take(per_octave).enumerate() {
-            slot.compute(integral, filter_size(octave, layer), step);
-        }
-        // The largest filter bounds where all three scales of a 3×3×3 block exist.
-        let (Some((c_lo, c_hi)), Some((r_lo, r_hi))) = (
-            layers[per_octave - 1].valid_range(w),
-            layers[per_octave - 1].valid_range(h),
-        ) else {
-            break;
-        };
-        if c_hi < c_lo + 2 || r_hi < r_lo + 2 {
-            break;
-        }
-        for mid in 1..=intervals {
-            let (below, centre, above) = (&layers[mid - 1], &layers[mid], &layers[mid + 1]);
-            let layers = &layers[..per_octave];
-            for row in r_lo + 1..r_hi {
-                for col in c_lo + 1..c_hi {
-                    let v = centre.at(col, row);
-                    if v <= threshold || !is_local_max(v, below, centre, above, col, row) {
-                        continue;
-                    }
-                    let block = Block { mid, col, row };
-                    let bounds = Block {
-                        mid: intervals,
-                        col: c_hi - 1,
-                        row: r_hi - 1,
-                    };
-                    let lower = Block {
-                        mid: 1,
-                        col: c_lo + 1,
-                        row: r_lo + 1,
-                    };
-                    if let Some(d) = refine(layers, block, lower, bounds, octave) {
-                        out.push(d);
-                    }
+    if !octave_fits(w, h, octave, search) {
+        return false;
+    }
+    let step = initial_step.max(1) << octave;
+    for (layer, slot) in layers.iter_mut().take(per_octave).enumerate() {
+        slot.compute(integral, filter_size(octave, layer), step);
+    }
+    // The largest filter bounds where all three scales of a 3×3×3 block exist.
+    let (Some((c_lo, c_hi)), Some((r_lo, r_hi))) = (
+        layers[per_octave - 1].valid_range(w),
+        layers[per_octave - 1].valid_range(h),
+    ) else {
+        return false;
+    };
+    if c_hi < c_lo + 2 || r_hi < r_lo + 2 {
+        return false;
+    }
+    let layers = &layers[..per_octave];
+    if octave == 0 && finest_layer {
+        let (finest, next) = (&layers[0], &layers[1]);
+        for row in r_lo + 1..r_hi {
+            for col in c_lo + 1..c_hi {
+                let v = finest.at(col, row);
+                if v > threshold && is_finest_max(v, finest, next, col, row) {
+                    out.push(refine_finest(finest, col, row));
                 }
             }
         }
     }
+    let bounds = Block {
+        mid: intervals,
+        col: c_hi - 1,
+        row: r_hi - 1,
+    };
+    let lower = Block {
+        mid: 1,
+        col: c_lo + 1,
+        row: r_lo + 1,
+    };
+    for mid in 1..=intervals {
+        let (below, centre, above) = (&layers[mid - 1], &layers[mid], &layers[mid + 1]);
+        for row in r_lo + 1..r_hi {
+            for col in c_lo + 1..c_hi {
+                let v = centre.at(col, row);
+                if v <= threshold || !is_local_max(v, below, centre, above, col, row) {
+                    continue;
+                }
+                let block = Block { mid, col, row };
+                if let Some(d) = refine(layers, block, lower, bounds, octave) {
+                    out.push(d);
+                }
+            }
+        }
+    }
+    true
+}
+
+/// True when the filters of octave `octave` fit in a `w × h` image with room for a
+/// 3×3 block of samples.
+pub(crate) fn octave_fits(w: usize, h: usize, octave: usize, search: Search) -> bool {
+    if octave >= 24 {
+        return false;
+    }
+    let step = search.initial_step.max(1) << octave;
+    let top = filter_size(octave, search.intervals + 1);
+    top + 2 * step <= w && top + 2 * step <= h
+}
+
+/// True when `v = finest(col, row)` is strictly larger than its 8 neighbours in `finest`
+/// and the 9 samples around `(col, row)` in `next` (same grid).
+fn is_finest_max(
+    v: f32,
+    finest: &ResponseLayer,
+    next: &ResponseLayer,
+    col: usize,
+    row: usize,
+) -> bool {
+    for rr in row - 1..=row + 1 {
+        for cc in col - 1..=col + 1 {
+            if next.at(cc, rr) >= v || ((rr, cc) != (row, col) && finest.at(cc, rr) >= v) {
+                return false;
+            }
+        }
+    }
+    true
 }
 
 /// True when `v = centre(col, row)` is strictly larger than its 26 neighbours.
@@ -366,6 +455,36 @@ mod tests {
     }
 
     #[test]
+    fn blobs_finer_than_the_second_filter_need_the_finest_layer() {
+        // A blob of sigma 1.2 peaks at L ≈ 6, below the finest filter: the paper's search
+        // (inner layers only) misses it, the finest-layer search finds it at s = 1.2.
+        let n = 81;
+        let img = gaussian_blob(n, n, 1.2, false);
+        let ii = IntegralImage::new(GrayView {
+            width: n,
+            height: n,
+            data: &img,
+        });
+        let search = |finest_layer| Search {
+            intervals: 2,
+            initial_step: 1,
+            threshold: 1e-3,
+            finest_layer,
+        };
+        let c = (n / 2) as f32;
+        let near = |d: &Detection| (d.x - c).abs() < 1.0 && (d.y - c).abs() < 1.0;
+        let mut found = Vec::new();
+        detect(&ii, 2, search(false), &mut Vec::new(), &mut found);
+        assert!(!found.iter().any(near), "{found:?}");
+        detect(&ii, 2, search(true), &mut Vec::new(), &mut found);
+        let hit = found.iter().find(|d| near(d));
+        assert!(
+            hit.is_some_and(|d| d.scale == 1.2 && d.laplacian_positive),
+            "{found:?}"
+        );
+    }
+
+    #[test]
     fn detector_finds_a_blob_at_its_position_and_scale() {
         let n = 161;
         for sigma in [3.0f32, 5.0] {
@@ -376,7 +495,13 @@ mod tests {
                 data: &img,
             });
             let mut found = Vec::new();
-            detect(&ii, 4, 2, 1, 1e-4, &mut Vec::new(), &mut found);
+            let search = Search {
+                intervals: 2,
+                initial_step: 1,
+                threshold: 1e-4,
+                finest_layer: false,
+            };
+            detect(&ii, 4, search, &mut Vec::new(), &mut found);
             let best = found
                 .iter()
                 .max_by(|a, b| a.response.total_cmp(&b.response))

@@ -27,6 +27,8 @@ pub struct IntegralImage {
     height: usize,
     /// `(width + 1) * (height + 1)` entries; `sums[y * (width + 1) + x] = S(x, y)`.
     sums: Vec<u32>,
+    /// The value of a white pixel: 255 for an 8-bit image.
+    white: u32,
 }
 
 impl IntegralImage {
@@ -42,26 +44,51 @@ impl IntegralImage {
 
     /// Rebuilds in place for a new image, reusing the allocation when it is large enough.
     pub fn rebuild(&mut self, image: GrayView<'_>) {
-        let (w, h) = (image.width, image.height);
+        self.build(image.width, image.height, image.data, 255);
+    }
+
+    /// Rebuilds in place for a `width × height` image of 16-bit values, row-major, in
+    /// which a white pixel has the value `white` (missing pixels count as 0). Box sums
+    /// stay exact while they are below 2³².
+    pub fn rebuild_fixed(&mut self, width: usize, height: usize, data: &[u16], white: u32) {
+        self.build(width, height, data, white);
+    }
+
+    fn build<T: Copy + Into<u32>>(&mut self, w: usize, h: usize, data: &[T], white: u32) {
         let stride = w + 1;
         self.width = w;
         self.height = h;
+        self.white = white;
         self.sums.clear();
         self.sums.resize(stride * (h + 1), 0);
+        let len = data.len();
         for y in 0..h {
-            let len = image.data.len();
-            let row = image
-                .data
+            let row = data
                 .get((y * w).min(len)..((y + 1) * w).min(len))
                 .unwrap_or(&[]);
             let (above, current) = self.sums.split_at_mut((y + 1) * stride);
-            let above = &above[y * stride..];
+            let above = &above[y * stride + 1..];
+            let current = &mut current[1..stride];
+            // Running sum of the row (sequential), then the row above added (vectorised).
             let mut running = 0u32;
-            for x in 0..w {
-                running = running.wrapping_add(u32::from(row.get(x).copied().unwrap_or(0)));
-                current[x + 1] = above[x + 1].wrapping_add(running);
+            for (c, &v) in current.iter_mut().zip(row) {
+                running = running.wrapping_add(v.into());
+                *c = running;
+            }
+            for c in current.iter_mut().skip(row.len()) {
+                *c = running;
+            }
+            for (c, &a) in current.iter_mut().zip(above) {
+                *c = c.wrapping_add(a);
             }
         }
+    }
+
+    /// The value of a white pixel in the summed image: 255 for an 8-bit image (at least
+    /// 1).
+    #[must_use]
+    pub fn white(&self) -> u32 {
+        self.white.max(1)
     }
 
     /// Image width, pixels.

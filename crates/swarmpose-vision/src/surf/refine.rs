@@ -65,10 +65,14 @@ const MAX_MOVES: usize = 2;
 ///
 /// with `g` and `H` from [`derivatives`] over (column, row, layer). When a component of
 /// `δ*` exceeds 0.5 the extremum is closer to the neighbouring sample in that direction:
-/// the fit is repeated there, at most [`MAX_MOVES`] times, within `lower..=upper`. Returns
-/// `None` when `H` is singular, when the offset still exceeds 0.5 after the last move
-/// (rejected), or when a move lands on another local maximum (which is refined on its
-/// own).
+/// the fit is repeated there, at most [`MAX_MOVES`] times, within `lower..=upper`.
+///
+/// Returns `None` only when a move lands on another local maximum (which is refined on
+/// its own). When the fit does not settle (the offset still exceeds 0.5 after the last
+/// move, a move would leave `lower..=upper`, or `H` is singular) the sample maximum is
+/// kept with the offset of its own fit clamped to ±0.5: it is a strict maximum of its 26
+/// neighbours, and whether the fit settles depends on small changes of the image
+/// (keeping these adds about a point of repeatability on the KITTI test frame).
 pub(super) fn refine(
     layers: &[ResponseLayer],
     start: Block,
@@ -76,26 +80,45 @@ pub(super) fn refine(
     upper: Block,
     octave: usize,
 ) -> Option<Detection> {
+    match settle(layers, start, lower, upper) {
+        Fit::Settled(at, v, g, offset) => Some(detection(layers, at, v, g, offset, octave)),
+        Fit::OtherMaximum => None,
+        Fit::Unsettled => {
+            let (v, g, hessian) = derivatives(layers, start.mid, start.col, start.row);
+            let offset = hessian
+                .try_inverse()
+                .map(|inv| -(inv * g))
+                .filter(|o| o.iter().all(|c| c.is_finite()))
+                .map_or_else(nalgebra::Vector3::zeros, |o| o.map(|c| c.clamp(-0.5, 0.5)));
+            Some(detection(layers, start, v, g, offset, octave))
+        }
+    }
+}
+
+/// The outcome of the iterated fit.
+enum Fit {
+    /// Sample, response, gradient and offset (all components within ±0.5).
+    Settled(Block, f64, nalgebra::Vector3<f64>, nalgebra::Vector3<f64>),
+    /// A move landed on another local maximum.
+    OtherMaximum,
+    /// No offset within ±0.5 was reached.
+    Unsettled,
+}
+
+/// The iterated fit of [`refine`].
+fn settle(layers: &[ResponseLayer], start: Block, lower: Block, upper: Block) -> Fit {
     let mut at = start;
     for moves in 0..=MAX_MOVES {
         let (v, g, hessian) = derivatives(layers, at.mid, at.col, at.row);
-        let offset = -(hessian.try_inverse()? * g);
+        let Some(inverse) = hessian.try_inverse() else {
+            return Fit::Unsettled;
+        };
+        let offset = -(inverse * g);
         if offset.iter().any(|o| !o.is_finite()) {
-            return None;
+            return Fit::Unsettled;
         }
         if offset.iter().all(|o| o.abs() <= 0.5) {
-            let centre = &layers[at.mid];
-            let step = centre.step as f64;
-            let filter_step = (layers[at.mid + 1].filter - centre.filter) as f64;
-            let filter = centre.filter as f64 + offset.z * filter_step;
-            return Some(Detection {
-                x: ((at.col as f64 + offset.x) * step) as f32,
-                y: ((at.row as f64 + offset.y) * step) as f32,
-                scale: (1.2 * filter / 9.0) as f32,
-                response: (v + 0.5 * g.dot(&offset)) as f32,
-                laplacian_positive: centre.laplacian_positive[at.row * centre.cols + at.col],
-                octave: octave as u8,
-            });
+            return Fit::Settled(at, v, g, offset);
         }
         if moves == MAX_MOVES {
             break;
@@ -109,18 +132,79 @@ pub(super) fn refine(
                 Some(i)
             }
         };
-        at = Block {
-            mid: shift(offset.z, at.mid, lower.mid, upper.mid)?,
-            col: shift(offset.x, at.col, lower.col, upper.col)?,
-            row: shift(offset.y, at.row, lower.row, upper.row)?,
+        let moved = (|| {
+            Some(Block {
+                mid: shift(offset.z, at.mid, lower.mid, upper.mid)?,
+                col: shift(offset.x, at.col, lower.col, upper.col)?,
+                row: shift(offset.y, at.row, lower.row, upper.row)?,
+            })
+        })();
+        let Some(moved) = moved else {
+            return Fit::Unsettled;
         };
+        at = moved;
         let (below, centre, above) = (&layers[at.mid - 1], &layers[at.mid], &layers[at.mid + 1]);
         let value = centre.at(at.col, at.row);
         if is_local_max(value, below, centre, above, at.col, at.row) {
-            return None;
+            return Fit::OtherMaximum;
         }
     }
-    None
+    Fit::Unsettled
+}
+
+/// The detection at sample `at` moved by `offset` (columns, rows, layers).
+fn detection(
+    layers: &[ResponseLayer],
+    at: Block,
+    v: f64,
+    g: nalgebra::Vector3<f64>,
+    offset: nalgebra::Vector3<f64>,
+    octave: usize,
+) -> Detection {
+    let centre = &layers[at.mid];
+    let step = centre.step as f64;
+    let filter_step = (layers[at.mid + 1].filter - centre.filter) as f64;
+    let filter = centre.filter as f64 + offset.z * filter_step;
+    Detection {
+        x: ((at.col as f64 + offset.x) * step) as f32,
+        y: ((at.row as f64 + offset.y) * step) as f32,
+        scale: (1.2 * filter / 9.0) as f32,
+        response: (v + 0.5 * g.dot(&offset)) as f32,
+        laplacian_positive: centre.laplacian_positive[at.row * centre.cols + at.col],
+        octave: octave as u8,
+    }
+}
+
+/// Sub-pixel position of a maximum `(col, row)` of the finest layer `layer` (which has
+/// no layer below it): a 2D quadratic fit over (column, row) as in [`refine`], the offset
+/// clamped to ±0.5 samples, at the layer's own filter size.
+pub(super) fn refine_finest(layer: &ResponseLayer, col: usize, row: usize) -> Detection {
+    let d = |dc: isize, dr: isize| -> f64 {
+        f64::from(layer.at(col.wrapping_add_signed(dc), row.wrapping_add_signed(dr)))
+    };
+    let v = d(0, 0);
+    let g = nalgebra::Vector2::new((d(1, 0) - d(-1, 0)) / 2.0, (d(0, 1) - d(0, -1)) / 2.0);
+    let dxy = (d(1, 1) - d(-1, 1) - d(1, -1) + d(-1, -1)) / 4.0;
+    let hessian = nalgebra::Matrix2::new(
+        d(1, 0) + d(-1, 0) - 2.0 * v,
+        dxy,
+        dxy,
+        d(0, 1) + d(0, -1) - 2.0 * v,
+    );
+    let offset = hessian
+        .try_inverse()
+        .map(|inv| -(inv * g))
+        .filter(|o| o.iter().all(|c| c.is_finite()))
+        .map_or_else(nalgebra::Vector2::zeros, |o| o.map(|c| c.clamp(-0.5, 0.5)));
+    let step = layer.step as f64;
+    Detection {
+        x: ((col as f64 + offset.x) * step) as f32,
+        y: ((row as f64 + offset.y) * step) as f32,
+        scale: (1.2 * layer.filter as f64 / 9.0) as f32,
+        response: (v + 0.5 * g.dot(&offset)) as f32,
+        laplacian_positive: layer.laplacian_positive[row * layer.cols + col],
+        octave: 0,
+    }
 }
 
 #[cfg(test)]
@@ -198,5 +282,39 @@ mod tests {
             (d.x - 2.0 * 4.6).abs() < 1e-3 && (d.y - 2.0 * 4.2).abs() < 1e-3,
             "{d:?}"
         );
+    }
+
+    #[test]
+    fn unsettled_fit_keeps_the_sample_with_a_clamped_offset() {
+        // The peak lies 0.8 columns right of column 7, the last column a move may reach:
+        // the fit cannot settle, and the maximum is kept half a sample to the right.
+        let layers = layers(|c, r, l| {
+            let (dc, dr, dl) = (c - 7.8, r - 4.0, l - 1.0);
+            1.0 - 0.01 * dc * dc - 0.1 * dr * dr - 0.2 * dl * dl
+        });
+        let start = Block {
+            mid: 1,
+            col: 7,
+            row: 4,
+        };
+        let Some(d) = refine(&layers, start, LOWER, UPPER, 0) else {
+            panic!("rejected");
+        };
+        assert!(
+            (d.x - 2.0 * 7.5).abs() < 1e-3 && (d.y - 2.0 * 4.0).abs() < 1e-3,
+            "{d:?}"
+        );
+        assert!((d.scale - 1.2 * 15.0 / 9.0).abs() < 1e-3, "{d:?}");
+    }
+
+    #[test]
+    fn finest_layer_maximum_is_refined_in_the_plane() {
+        let layers = layers(|c, r, _| 1.0 - 0.05 * (c - 3.3).powi(2) - 0.05 * (r - 5.2).powi(2));
+        let d = refine_finest(&layers[0], 3, 5);
+        assert!(
+            (d.x - 2.0 * 3.3).abs() < 1e-3 && (d.y - 2.0 * 5.2).abs() < 1e-3,
+            "{d:?}"
+        );
+        assert!((d.scale - 1.2).abs() < 1e-6 && d.octave == 0);
     }
 }
