@@ -19,11 +19,11 @@ use crate::rng::seeded;
 /// What to generate. Defaults in brackets.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SyntheticSpec {
-    /// Number of correspondences [200].
+    /// Number of correspondences \[200\].
     pub n: usize,
     /// Gaussian noise σ per axis on `dst`, metres [0.02].
     pub noise_sigma_m: f64,
-    /// Fraction of correspondences that are wrong matches, in `[0, 1]` [0].
+    /// Fraction of correspondences that are wrong matches, in `[0, 1]` \[0\].
     pub outlier_fraction: f64,
     /// Largest rotation angle, radians [20° = 0.349].
     pub max_rotation_rad: f64,

@@ -4,9 +4,7 @@
 
 use swarmpose_core::{Estimator, PsoEstimator, PsoEstimatorConfig};
 use swarmpose_datasets::open;
-use swarmpose_vision::frontend::{
-    CHI2_3_99, Frontend, refine_stereo, refine_stereo_offset, refine_weighted,
-};
+use swarmpose_vision::frontend::{CHI2_3_99, Frontend, refine_stereo, refine_weighted};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
@@ -109,11 +107,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 est.estimate_seeded(&m.correspondences, i as u64)?
             };
             let (pose, ninl) = if refine {
-                let (p, inl) = if env("JOINT", 0.0) > 0.5 {
-                    let (p, dl, inl) = refine_stereo_offset(&m, &e.transform, CHI2_3_99, 10)?;
-                    deltas.push(dl);
-                    (p, inl)
-                } else if env("MAHA", 1.0) > 0.5 {
+                let (p, inl) = if env("MAHA", 1.0) > 0.5 {
                     refine_stereo(
                         &m.correspondences,
                         &m.src_covariances,

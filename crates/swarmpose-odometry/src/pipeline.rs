@@ -7,10 +7,10 @@
 //! in camera `i`).
 //!
 //! The disparity offset of the stereo calibration is self-calibrated from the images
-//! unless fixed ([`calibrate_offset`]: the offset that makes the moving pairs most
-//! rigid, by a robust Mahalanobis cost with covariances rescaled with the points):
-//! kitti_vo_seq2's right principal point is off by about 1.85 px, which makes every
-//! translation about 6 % too long.
+//! unless fixed ([`swarmpose_vision::frontend::calibrate_offset`]: the offset that makes
+//! the moving pairs most rigid, by a robust Mahalanobis cost with covariances rescaled
+//! with the points): kitti_vo_seq2's disparities are about 1.4 px short of its
+//! calibration, which makes every translation about 6 % too long.
 //!
 //! A pair without a motion (the estimator fails, or fewer than
 //! [`OdometryConfig::min_inliers`] inliers) is never given a silent identity: the
@@ -24,7 +24,8 @@ use swarmpose_core::geometry::chain;
 use swarmpose_datasets::StereoSequence;
 use swarmpose_vision::features::{Descriptor, FeatureExtractor};
 use swarmpose_vision::frontend::{
-    CHI2_3_99, FrameMatches, Frontend, StereoFrame, match_frames, refine_stereo,
+    CHI2_3_99, FrameMatches, Frontend, MIN_CALIBRATION_TRANSLATION_M, StereoFrame,
+    calibrate_offset, match_frames, refine_stereo,
 };
 use swarmpose_vision::temporal::TemporalConfig;
 
@@ -315,7 +316,7 @@ pub fn run_frames<D: Descriptor>(
                 .zip(&first_estimates)
                 .filter_map(|(p, e)| Some((p.matches.as_ref()?, (*e)?)))
                 // The offset is only observable from a translation.
-                .filter(|(_, e)| e.translation.vector.norm() >= 0.2)
+                .filter(|(_, e)| e.translation.vector.norm() >= MIN_CALIBRATION_TRANSLATION_M)
                 .collect();
             let offset = calibrate_offset(&moving);
             let per_pair = ms(t) / pairs.len().max(1) as f64;
@@ -378,94 +379,6 @@ pub fn run_frames<D: Descriptor>(
         method: estimator.name().to_owned(),
         detector: detector.to_owned(),
     })
-}
-
-/// Pairs used to calibrate the disparity offset (evenly spread over the moving ones).
-pub const CALIBRATION_PAIRS: usize = 8;
-/// Offsets searched, pixels.
-pub const OFFSET_RANGE_PX: (f64, f64) = (-3.0, 5.0);
-
-/// Robust Mahalanobis cost of the pairs with the disparity offset `delta` applied: per
-/// pair the motion refined on the corrected points from `start`, then the sum over
-/// every correspondence of its squared Mahalanobis residual, truncated at the 99 %
-/// gate. The covariances are rescaled with the points, so a uniform shrinking of the
-/// scene does not lower the cost.
-fn offset_cost(pairs: &[(&FrameMatches, Isometry3<f64>)], delta: f64) -> f64 {
-    let mut total = 0.0;
-    for (m, start) in pairs {
-        let Ok(c) = m.with_disparity_offset(delta) else {
-            return f64::INFINITY;
-        };
-        let n = c.correspondences.len();
-        let Ok((pose, _)) = refine_stereo(
-            &c.correspondences,
-            &c.src_covariances,
-            &c.dst_covariances,
-            start,
-            CHI2_3_99,
-            5,
-        ) else {
-            total += n as f64 * CHI2_3_99;
-            continue;
-        };
-        let r = pose.rotation.to_rotation_matrix();
-        let data = &c.correspondences;
-        for i in 0..n {
-            let res = data.dst()[i] - pose * data.src()[i];
-            let cov =
-                r.matrix() * c.src_covariances[i] * r.matrix().transpose() + c.dst_covariances[i];
-            let d2 = cov
-                .try_inverse()
-                .map_or(CHI2_3_99, |w| (res.transpose() * w * res)[0]);
-            total += d2.min(CHI2_3_99);
-        }
-    }
-    total
-}
-
-/// The disparity offset that minimises [`offset_cost`] over up to
-/// [`CALIBRATION_PAIRS`] of `moving`: a grid of 1 px over [`OFFSET_RANGE_PX`], then a
-/// golden-section search around the best. 0 for fewer than 3 pairs.
-#[must_use]
-pub fn calibrate_offset(moving: &[(&FrameMatches, Isometry3<f64>)]) -> f64 {
-    if moving.len() < 3 {
-        return 0.0;
-    }
-    let k = moving.len().min(CALIBRATION_PAIRS);
-    let chosen: Vec<(&FrameMatches, Isometry3<f64>)> =
-        (0..k).map(|j| moving[j * moving.len() / k]).collect();
-    let cost = |d: f64| offset_cost(&chosen, d);
-    let (lo, hi) = OFFSET_RANGE_PX;
-    let steps = (hi - lo).round() as usize;
-    let grid: Vec<(f64, f64)> = (0..=steps)
-        .map(|i| {
-            let d = lo + i as f64;
-            (d, cost(d))
-        })
-        .collect();
-    let Some(&(best, _)) = grid.iter().min_by(|a, b| a.1.total_cmp(&b.1)) else {
-        return 0.0;
-    };
-    let (mut a, mut b) = ((best - 1.0).max(lo), (best + 1.0).min(hi));
-    let g = (5f64.sqrt() - 1.0) / 2.0;
-    let (mut x1, mut x2) = (b - g * (b - a), a + g * (b - a));
-    let (mut f1, mut f2) = (cost(x1), cost(x2));
-    for _ in 0..10 {
-        if f1 < f2 {
-            b = x2;
-            x2 = x1;
-            f2 = f1;
-            x1 = b - g * (b - a);
-            f1 = cost(x1);
-        } else {
-            a = x1;
-            x1 = x2;
-            f1 = f2;
-            x2 = a + g * (b - a);
-            f2 = cost(x2);
-        }
-    }
-    (a + b) / 2.0
 }
 
 /// The motion of pair `p` refined with the disparity offset applied.

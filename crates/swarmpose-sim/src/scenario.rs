@@ -31,7 +31,7 @@ const MAX_BATCHES: usize = 10_000;
 /// How the scene and camera 2 are drawn. Defaults in brackets (those of `gen_scenarios.py`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct SceneSpec {
-    /// Scene points drawn per batch [400].
+    /// Scene points drawn per batch \[400\].
     pub n_scene: usize,
     /// Draw batches until at least this many points are visible, then keep exactly this
     /// many [`None`: one batch, keep every visible point].
@@ -40,7 +40,7 @@ pub struct SceneSpec {
     pub box_lo: [f64; 3],
     /// Upper corner of the scene box, metres [(6, 6, 25)].
     pub box_hi: [f64; 3],
-    /// Largest rotation of camera 2, degrees [20].
+    /// Largest rotation of camera 2, degrees \[20\].
     pub max_rotation_deg: f64,
     /// Largest translation of camera 2, metres [1.5].
     pub max_translation_m: f64,

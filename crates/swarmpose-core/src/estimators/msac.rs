@@ -23,11 +23,11 @@ pub struct MsacConfig {
     /// Probability that at least one all-inlier sample was drawn when sampling stops
     /// [0.999].
     pub confidence: f64,
-    /// Cap on the number of samples [100000].
+    /// Cap on the number of samples \[100000\].
     pub max_iterations: usize,
-    /// Least number of samples drawn whatever the adaptive count says [10].
+    /// Least number of samples drawn whatever the adaptive count says \[10\].
     pub min_iterations: usize,
-    /// Rounds of (inliers, SVD refit) after sampling [5].
+    /// Rounds of (inliers, SVD refit) after sampling \[5\].
     pub refine_rounds: usize,
 }
 

@@ -8,9 +8,9 @@ use crate::rng::SeededRng;
 /// Settings of a [`ParticleSwarm`]. Defaults in brackets.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PsoConfig {
-    /// Number of particles [32].
+    /// Number of particles \[32\].
     pub swarm_size: usize,
-    /// Iteration budget after the initial evaluation [100].
+    /// Iteration budget after the initial evaluation \[100\].
     pub max_iterations: usize,
     /// Inertia `α` of eq. (5) [0.9]; with the random factor `φ0` its mean effect is `α/2`.
     pub inertia: f64,

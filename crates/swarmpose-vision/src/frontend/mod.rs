@@ -5,11 +5,14 @@
 //! ([`StereoFrame`]). Per pair of frames: match the left features of the triangulated
 //! points ([`Frontend::match_frames`]), optionally confirmed by the right images.
 
+mod calibrate;
 mod refine;
 
-pub use refine::{
-    CHI2_3_99, estimate_disparity_offset, refine_stereo, refine_stereo_offset, refine_weighted,
+pub use calibrate::{
+    CALIBRATION_PAIRS, MIN_CALIBRATION_TRANSLATION_M, OFFSET_RANGE_PX, calibrate_offset,
+    self_calibrate_offset,
 };
+pub use refine::{CHI2_3_99, refine_stereo, refine_weighted};
 
 use nalgebra::{Matrix3, Point3};
 use swarmpose_core::{Correspondences, PoseError};
@@ -135,7 +138,7 @@ impl FrameMatches {
 
     /// The same matches with `offset_px` added to every disparity: each point `p` of
     /// disparity `d` becomes `p d / (d + offset)` (a correction of the stereo
-    /// calibration, e.g. from [`refine_stereo_offset`]). Covariances are scaled alike.
+    /// calibration, e.g. from [`self_calibrate_offset`]). Covariances are scaled alike.
     ///
     /// # Errors
     /// [`PoseError::NonFinite`] if an offset makes a disparity non-positive.

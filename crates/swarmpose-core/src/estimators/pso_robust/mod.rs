@@ -105,24 +105,24 @@ pub struct PsoEstimatorConfig {
     /// The swarm [16 particles, 30 iterations, α = 0.9, c = 1.5, stop after 5
     /// iterations without a better best].
     pub pso: PsoConfig,
-    /// Particles started from graph triangles; the rest start uniformly [8].
+    /// Particles started from graph triangles; the rest start uniformly \[8\].
     pub seeded_particles: usize,
-    /// Most points in the consistency graph; larger sets are sampled [400].
+    /// Most points in the consistency graph; larger sets are sampled \[400\].
     pub max_points: usize,
-    /// Most pairs scored per fitness evaluation [256].
+    /// Most pairs scored per fitness evaluation \[256\].
     pub max_pairs: usize,
-    /// Rounds of (inliers, SVD refit) at the end [5].
+    /// Rounds of (inliers, SVD refit) at the end \[5\].
     pub refine_rounds: usize,
     /// Report a runner-up motion when its support reaches this fraction of the winner's
     /// [0.5]; 0 turns the check off.
     pub ambiguity_ratio: f64,
     /// Extra swarm searches on the same graph when the consensus holds fewer than
     /// `restart_below_ratio` of the correspondences (or none was found); the largest
-    /// consensus wins [3]. Few inliers make the search hard, like RANSAC's sample count.
+    /// consensus wins \[3\]. Few inliers make the search hard, like RANSAC's sample count.
     pub restarts: usize,
     /// See `restarts` [0.2].
     pub restart_below_ratio: f64,
-    /// Most rounds of the final Gaussian-uniform mixture refinement (step 6) [10]; 0
+    /// Most rounds of the final Gaussian-uniform mixture refinement (step 6) \[10\]; 0
     /// ends with the hard-band SVD refit of step 4.
     pub mixture_rounds: usize,
 }

@@ -1,0 +1,134 @@
+//! The front end's acceptance test, on the command line: on `kitti_vo_seq2`,
+//! `swarmpose correspondences` gives every consecutive pair at least 300 3D-3D
+//! correspondences (fast detector, with their stereo covariances), and
+//! `swarmpose register` on each CSV recovers the ground-truth relative motion within
+//! 0.2 degrees and 5 cm for at least 90 % of the pairs.
+//!
+//! The disparity offset is self-calibrated once from the images of the whole sequence
+//! (`--self-calibrate 50`, no ground truth) and passed to the other pairs with
+//! `--disparity-offset`: this copy of the sequence has disparities about 1.4 px short of
+//! its `calib.txt` (REPRODUCTION.md). From the first 8 pairs only, the self-calibration
+//! finds 0.77 px and 44 pairs pass: the shortfall varies over the image (about 0.6 px
+//! in the centre, 2 px at the edges), so a constant offset depends on where the features
+//! are.
+//! Skipped with a message when the data is absent, failing under `CI=true`.
+
+mod common;
+
+use common::{TempDir, json_of, swarmpose};
+use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
+use swarmpose_datasets::{dataset_for_test, open};
+
+/// The motion in a `register` report.
+fn pose_of(report: &serde_json::Value) -> Isometry3<f64> {
+    let v = |key: &str, i: usize| report[key][i].as_f64().expect("number");
+    let q = Quaternion::new(
+        v("rotation_wxyz", 0),
+        v("rotation_wxyz", 1),
+        v("rotation_wxyz", 2),
+        v("rotation_wxyz", 3),
+    );
+    Isometry3::from_parts(
+        Translation3::new(
+            v("translation", 0),
+            v("translation", 1),
+            v("translation", 2),
+        ),
+        UnitQuaternion::from_quaternion(q),
+    )
+}
+
+#[test]
+fn correspondences_then_register_recover_kitti_motions() {
+    let Some(dir) = dataset_for_test("kitti_vo_seq2") else {
+        return;
+    };
+    let seq_path = dir.to_string_lossy().to_string();
+    let seq = open(&dir).expect("open kitti_vo_seq2");
+    let tmp = TempDir::new("kitti-register");
+    let csv = |k: usize| {
+        tmp.0
+            .join(format!("{k:02}.csv"))
+            .to_string_lossy()
+            .to_string()
+    };
+
+    // Pair 0-1 with the self-calibration; its offset is printed on standard error.
+    let first = csv(0);
+    let out = swarmpose(
+        &[
+            "correspondences",
+            &seq_path,
+            "--frames",
+            "0",
+            "1",
+            "--self-calibrate",
+            "50",
+            "--out",
+            &first,
+        ],
+        None,
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr).to_string();
+    assert!(out.status.success(), "{stderr}");
+    let offset: f64 = stderr
+        .split("self-calibrated disparity offset ")
+        .nth(1)
+        .and_then(|rest| rest.split_whitespace().next())
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("no offset in {stderr:?}"));
+    assert!((0.5..3.0).contains(&offset), "offset {offset} px");
+    let offset_arg = format!("{offset}");
+
+    let (mut good, mut fewest) = (0, usize::MAX);
+    for k in 0..seq.len() - 1 {
+        let path = csv(k);
+        if k > 0 {
+            let (i, j) = (k.to_string(), (k + 1).to_string());
+            let out = swarmpose(
+                &[
+                    "correspondences",
+                    &seq_path,
+                    "--frames",
+                    &i,
+                    &j,
+                    "--disparity-offset",
+                    &offset_arg,
+                    "--out",
+                    &path,
+                ],
+                None,
+            );
+            assert!(
+                out.status.success(),
+                "{}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+        }
+        let seed = k.to_string();
+        let report = json_of(&swarmpose(&["register", &path, "--seed", &seed], None));
+        assert_eq!(report["noise_model"], "covariance");
+        let n = report["n_correspondences"].as_u64().expect("count") as usize;
+        fewest = fewest.min(n);
+        let truth = seq.relative_ground_truth(k, k + 1).expect("ground truth");
+        let d = truth.inverse() * pose_of(&report);
+        let (deg, cm) = (
+            d.rotation.angle().to_degrees(),
+            d.translation.vector.norm() * 100.0,
+        );
+        let ok = deg < 0.2 && cm < 5.0;
+        good += usize::from(ok);
+        eprintln!(
+            "pair {k:2}-{:2}: {n:4} correspondences, error {deg:.3} deg {cm:5.2} cm{}",
+            k + 1,
+            if ok { "" } else { "  <-- off" }
+        );
+    }
+    eprintln!(
+        "disparity offset {offset:.3} px; fewest correspondences {fewest}; within 0.2 deg and \
+         5 cm: {good}/{}",
+        seq.len() - 1
+    );
+    assert!(fewest >= 300, "a pair has only {fewest} correspondences");
+    assert!(good >= 45, "{good} of 50 pairs within 0.2 deg and 5 cm");
+}
