@@ -17,7 +17,8 @@
 //!    `w_i = γ N_i / (γ N_i + (1 - γ) / V)`;
 //! 2. (M) refits `R, t` by Arun's SVD with weights `w_i / σ_i²`, and sets `γ = mean(w)`;
 //!    when the noise scale is free (automatic threshold), `σ_i = k b_i` with
-//!    `k² = Σ w_i |r_i|² / b_i² / (3 Σ w_i)`.
+//!    `k² = Σ w_i |r_i|² / b_i² / (3 Σ w_i - 6)` (the fit takes 6 degrees of freedom
+//!    from the `3 Σ w_i` residual components).
 //!
 //! With no wrong matches this converges to least squares over all points (the maximum
 //! likelihood motion), and with many it keeps every inlier out to about `5 σ` while a
@@ -108,7 +109,8 @@ pub(crate) fn refine_mixture(
                     num += w * (dst[i] - next * src[i]).norm_squared() / (b * b);
                 }
             }
-            let k2 = num / (3.0 * wsum);
+            // 3 Σw residual components, less the 6 degrees of freedom of the fit.
+            let k2 = num / (3.0 * wsum - 6.0).max(1.0);
             if k2.is_finite() && k2 > 0.0 {
                 scale = k2.sqrt();
             }

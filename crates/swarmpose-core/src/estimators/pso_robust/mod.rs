@@ -30,7 +30,9 @@
 //!    [`PoseError::InsufficientSupport`].
 //! 5. **Ambiguity.** If the points left over could hold a second motion with at least
 //!    `ambiguity_ratio` of the winner's support (a moving object), steps 1-4 run on them and
-//!    the runner-up is reported ([`Diagnostics::runner_up`]).
+//!    the runner-up is reported ([`Diagnostics::runner_up`]). A runner-up with more
+//!    inliers than the winner (the swarm settled on the smaller motion) becomes the
+//!    winner.
 //! 6. **Final refinement.** Without covariances, the final pose maximises the likelihood
 //!    of a Gaussian (inliers) plus uniform (wrong matches) model of the residuals, by a
 //!    few EM rounds of weighted SVD ([`super::mixture`]): inliers in the noise's tail
@@ -43,11 +45,14 @@
 //! level per point ([`Correspondences::with_noise_sigma`]), else the fixed threshold, else
 //! (the default, [`Threshold::Auto`]) it is estimated: a first pass at
 //! `auto_initial_threshold_m` (halved up to three times while it finds no support), then
-//! `δ = sigma_multiplier · σ̂` with σ̂ from the median
-//! inlier residual, refitted.
+//! `δ = sigma_multiplier · σ̂` with σ̂ from the median inlier residual (corrected for the
+//! 6 degrees of freedom the fit takes), refitted; δ may grow to twice the first pass.
 
+mod config;
 mod graph;
 mod vote;
+
+pub use config::{PsoEstimatorConfig, Threshold};
 
 use std::f64::consts::PI;
 use std::time::Instant;
@@ -66,159 +71,9 @@ use crate::error::PoseError;
 use crate::geometry::{
     Correspondences, MIN_CORRESPONDENCES, rotation_from_particle, spread, wrap_rotation_vector,
 };
-use crate::pso::{ParticleSwarm, PsoConfig};
+use crate::pso::ParticleSwarm;
 use crate::rng::SeededRng;
 use graph::PairGraph;
-
-/// How `pso` chooses its inlier threshold when the data carry no per-point noise.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Threshold {
-    /// A fixed δ, metres.
-    Fixed(f64),
-    /// Estimated from the data (see the module documentation).
-    Auto,
-}
-
-impl std::fmt::Display for Threshold {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Threshold::Fixed(d) => write!(f, "{d}"),
-            Threshold::Auto => f.write_str("auto"),
-        }
-    }
-}
-
-/// Settings of [`PsoEstimator`]. Defaults in brackets.
-#[derive(Debug, Clone, PartialEq)]
-pub struct PsoEstimatorConfig {
-    /// Inlier threshold δ on `|dst - (R src + t)|` [`Threshold::Auto`]. A fixed δ of about
-    /// `3.4 σ` suits isotropic Gaussian noise of σ per axis. Ignored when the data carry a
-    /// noise level per point.
-    pub threshold: Threshold,
-    /// First-pass δ of [`Threshold::Auto`], metres [0.3]: must exceed the true `3.4 σ`.
-    pub auto_initial_threshold_m: f64,
-    /// Smallest δ [`Threshold::Auto`] may choose, metres [1e-4].
-    pub auto_min_threshold_m: f64,
-    /// δ_i = this · σ_i for per-point noise, and δ = this · σ̂ under
-    /// [`Threshold::Auto`] [3.368 = sqrt of the 99 % quantile of χ²(3)].
-    pub sigma_multiplier: f64,
-    /// The swarm [16 particles, 30 iterations, α = 0.9, c = 1.5, stop after 5
-    /// iterations without a better best].
-    pub pso: PsoConfig,
-    /// Particles started from graph triangles; the rest start uniformly \[8\].
-    pub seeded_particles: usize,
-    /// Most points in the consistency graph; larger sets are sampled \[400\].
-    pub max_points: usize,
-    /// Most pairs scored per fitness evaluation \[256\].
-    pub max_pairs: usize,
-    /// Rounds of (inliers, SVD refit) at the end \[5\].
-    pub refine_rounds: usize,
-    /// Report a runner-up motion when its support reaches this fraction of the winner's
-    /// [0.5]; 0 turns the check off.
-    pub ambiguity_ratio: f64,
-    /// Extra swarm searches on the same graph when the consensus holds fewer than
-    /// `restart_below_ratio` of the correspondences (or none was found); the largest
-    /// consensus wins \[3\]. Few inliers make the search hard, like RANSAC's sample count.
-    pub restarts: usize,
-    /// See `restarts` [0.2].
-    pub restart_below_ratio: f64,
-    /// Most rounds of the final Gaussian-uniform mixture refinement (step 6) \[10\]; 0
-    /// ends with the hard-band SVD refit of step 4.
-    pub mixture_rounds: usize,
-}
-
-impl Default for PsoEstimatorConfig {
-    fn default() -> Self {
-        Self {
-            threshold: Threshold::Auto,
-            auto_initial_threshold_m: 0.3,
-            auto_min_threshold_m: 1e-4,
-            sigma_multiplier: 3.368,
-            pso: PsoConfig::default()
-                .with_swarm_size(16)
-                .with_max_iterations(30)
-                .with_stall_iterations(Some(5)),
-            seeded_particles: 8,
-            max_points: 400,
-            max_pairs: 256,
-            refine_rounds: 5,
-            ambiguity_ratio: 0.5,
-            restarts: 3,
-            restart_below_ratio: 0.2,
-            mixture_rounds: 10,
-        }
-    }
-}
-
-impl PsoEstimatorConfig {
-    /// Sets a fixed δ (metres).
-    #[must_use]
-    pub fn with_threshold(mut self, threshold_m: f64) -> Self {
-        self.threshold = Threshold::Fixed(threshold_m);
-        self
-    }
-
-    /// Sets the swarm settings.
-    #[must_use]
-    pub fn with_pso(mut self, pso: PsoConfig) -> Self {
-        self.pso = pso;
-        self
-    }
-
-    /// Sets how many particles start from graph triangles.
-    #[must_use]
-    pub fn with_seeded_particles(mut self, n: usize) -> Self {
-        self.seeded_particles = n;
-        self
-    }
-
-    /// Sets the extra swarm searches made when the consensus is small (0 turns them off).
-    #[must_use]
-    pub fn with_restarts(mut self, restarts: usize) -> Self {
-        self.restarts = restarts;
-        self
-    }
-
-    /// Sets the rounds of the final mixture refinement (0 turns it off).
-    #[must_use]
-    pub fn with_mixture_rounds(mut self, rounds: usize) -> Self {
-        self.mixture_rounds = rounds;
-        self
-    }
-
-    /// Sets the ambiguity ratio (0 turns the check off).
-    #[must_use]
-    pub fn with_ambiguity_ratio(mut self, ratio: f64) -> Self {
-        self.ambiguity_ratio = ratio;
-        self
-    }
-
-    fn validate(&self) -> Result<(), PoseError> {
-        if let Threshold::Fixed(d) = self.threshold {
-            check_threshold(d)?;
-        }
-        check_threshold(self.auto_initial_threshold_m)?;
-        check_threshold(self.auto_min_threshold_m)?;
-        check_threshold(self.sigma_multiplier)?;
-        self.pso.validate()?;
-        if self.max_points < MIN_CORRESPONDENCES || self.max_pairs == 0 || self.refine_rounds == 0 {
-            return Err(PoseError::InvalidConfig(
-                "max_points must be >= 4, max_pairs and refine_rounds >= 1".into(),
-            ));
-        }
-        if !(0.0..=1.0).contains(&self.restart_below_ratio) {
-            return Err(PoseError::InvalidConfig(
-                "restart_below_ratio must be in [0, 1]".into(),
-            ));
-        }
-        if !(0.0..=1.0).contains(&self.ambiguity_ratio) {
-            return Err(PoseError::InvalidConfig(
-                "ambiguity_ratio must be in [0, 1]".into(),
-            ));
-        }
-        Ok(())
-    }
-}
 
 /// `pso`: the robust PSO/SVD estimator (see the module documentation).
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -237,6 +92,10 @@ impl PsoEstimator {
 
 /// Halvings of the first-pass δ tried by [`Threshold::Auto`] when a pass finds no support.
 const AUTO_RETRIES: usize = 3;
+
+/// The automatic δ may grow to this multiple of the first pass's (noise larger than the
+/// first pass assumed).
+const AUTO_GROWTH: f64 = 2.0;
 
 /// Median of the norm of a 3D isotropic Gaussian of unit σ per axis.
 const CHI3_MEDIAN: f64 = 1.538;
@@ -358,9 +217,13 @@ impl PsoEstimator {
                 .collect();
             let mid = r.len() / 2;
             let median = *r.select_nth_unstable_by(mid, f64::total_cmp).1;
-            let next = (cfg.sigma_multiplier * median / CHI3_MEDIAN)
+            // Fitted residuals are smaller than the noise: the fit took 6 of the 3n
+            // degrees of freedom.
+            let components = 3.0 * r.len() as f64;
+            let dof = (components / (components - 6.0).max(1.0)).sqrt();
+            let next = (cfg.sigma_multiplier * median * dof / CHI3_MEDIAN)
                 .max(cfg.auto_min_threshold_m)
-                .min(cfg.auto_initial_threshold_m);
+                .min(AUTO_GROWTH * cfg.auto_initial_threshold_m);
             let mut inliers = Vec::with_capacity(data.len());
             match refine_within(
                 data,
@@ -383,6 +246,38 @@ impl PsoEstimator {
             }
         }
         Ok(delta)
+    }
+
+    /// When the runner-up holds more inliers than the winner (the swarm settled on a
+    /// smaller motion, such as a moving object), it becomes the winner, refitted on all
+    /// the data; the old winner is then the runner-up if its support still reaches
+    /// `ambiguity_ratio` of the new winner's. Returns the runner-up to report.
+    fn larger_consensus_wins(
+        &self,
+        data: &Correspondences,
+        found: &mut Found,
+        runner_up: RunnerUp,
+        tol: Tolerance<'_>,
+    ) -> Option<RunnerUp> {
+        if runner_up.inliers.len() <= found.inliers.len() {
+            return Some(runner_up);
+        }
+        let mut inliers = Vec::with_capacity(data.len());
+        let Ok(pose) = refine_within(
+            data,
+            &runner_up.transform,
+            tol,
+            self.config.refine_rounds,
+            &mut inliers,
+        ) else {
+            return Some(runner_up);
+        };
+        let old = RunnerUp {
+            transform: std::mem::replace(&mut found.pose, pose),
+            inliers: std::mem::replace(&mut found.inliers, inliers),
+        };
+        let needed = self.config.ambiguity_ratio * found.inliers.len() as f64;
+        (old.inliers.len() as f64 >= needed).then_some(old)
     }
 
     /// Step 6: with per-point covariances, the Mahalanobis refinement of
@@ -522,7 +417,10 @@ impl Estimator for PsoEstimator {
             (None, Threshold::Fixed(d)) => (first_tol, Some(d)),
             (Some(_), _) => (first_tol, None),
         };
-        let runner_up = self.runner_up(data, &found, &graph, tol, rng);
+        let mut runner_up = self.runner_up(data, &found, &graph, tol, rng);
+        if let Some(r) = runner_up.take() {
+            runner_up = self.larger_consensus_wins(data, &mut found, r, tol);
+        }
         let free_scale = per_point.is_none() && cfg.threshold == Threshold::Auto;
         self.polish(data, &mut found, tol, free_scale);
         Ok(Estimate {

@@ -207,3 +207,49 @@ fn anisotropic_stereo_noise_uses_the_covariances() {
     assert!(with_cov >= 9, "{with_cov}/10 with covariances");
     assert!(with_cov > iso_only, "{with_cov} vs {iso_only}");
 }
+
+#[test]
+fn a_larger_runner_up_becomes_the_winner() {
+    // 60 % of the matches follow the camera's motion, 40 % a moving object's.
+    let s = SyntheticSpec::default().generate(9).expect("valid");
+    let object = Isometry3::new(Vector3::new(2.0, 0.0, 1.0), Vector3::new(0.0, 0.3, 0.0));
+    let n = s.data.len();
+    let on_object = |i: usize| i % 5 < 2;
+    let dst: Vec<Point3<f64>> = (0..n)
+        .map(|i| {
+            if on_object(i) {
+                object * s.data.src()[i]
+            } else {
+                s.data.dst()[i]
+            }
+        })
+        .collect();
+    let data = Correspondences::new(s.data.src().to_vec(), dst).expect("valid");
+    let (camera_set, object_set): (Vec<usize>, Vec<usize>) = (0..n).partition(|&i| !on_object(i));
+    let est = PsoEstimator::new(PsoEstimatorConfig::default().with_threshold(0.07));
+    let mut found = Found {
+        pose: object,
+        inliers: object_set.clone(),
+        iterations: 0,
+        evaluations: 0,
+    };
+    let runner_up = RunnerUp {
+        transform: s.truth,
+        inliers: camera_set.clone(),
+    };
+    let reported =
+        est.larger_consensus_wins(&data, &mut found, runner_up, Tolerance::Uniform(0.07));
+    let (r, t) = errors(&found.pose, &s.truth);
+    assert!(r < 0.1 && t < 0.02, "{r} deg, {t} m");
+    assert_eq!(found.inliers.len(), camera_set.len());
+    let reported = reported.expect("80 of 120 is above the ambiguity ratio");
+    assert_eq!(reported.inliers, object_set);
+    // A smaller runner-up stays the runner-up.
+    let small = RunnerUp {
+        transform: object,
+        inliers: object_set,
+    };
+    let kept = est.larger_consensus_wins(&data, &mut found, small, Tolerance::Uniform(0.07));
+    assert_eq!(kept.map(|r| r.inliers.len()), Some(80));
+    assert_eq!(found.inliers.len(), camera_set.len());
+}

@@ -1,0 +1,156 @@
+//! Settings of [`super::PsoEstimator`].
+
+use super::check_threshold;
+use crate::error::PoseError;
+use crate::geometry::MIN_CORRESPONDENCES;
+use crate::pso::PsoConfig;
+
+/// How `pso` chooses its inlier threshold when the data carry no per-point noise.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Threshold {
+    /// A fixed δ, metres.
+    Fixed(f64),
+    /// Estimated from the data (see the module documentation).
+    Auto,
+}
+
+impl std::fmt::Display for Threshold {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Threshold::Fixed(d) => write!(f, "{d}"),
+            Threshold::Auto => f.write_str("auto"),
+        }
+    }
+}
+
+/// Settings of [`PsoEstimator`]. Defaults in brackets.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PsoEstimatorConfig {
+    /// Inlier threshold δ on `|dst - (R src + t)|` [`Threshold::Auto`]. A fixed δ of about
+    /// `3.4 σ` suits isotropic Gaussian noise of σ per axis. Ignored when the data carry a
+    /// noise level per point.
+    pub threshold: Threshold,
+    /// First-pass δ of [`Threshold::Auto`], metres [0.3]: must exceed the true `3.4 σ`.
+    pub auto_initial_threshold_m: f64,
+    /// Smallest δ [`Threshold::Auto`] may choose, metres [1e-4].
+    pub auto_min_threshold_m: f64,
+    /// δ_i = this · σ_i for per-point noise, and δ = this · σ̂ under
+    /// [`Threshold::Auto`] [3.368 = sqrt of the 99 % quantile of χ²(3)].
+    pub sigma_multiplier: f64,
+    /// The swarm [16 particles, 30 iterations, α = 0.9, c = 1.5, stop after 5
+    /// iterations without a better best].
+    pub pso: PsoConfig,
+    /// Particles started from graph triangles; the rest start uniformly \[8\].
+    pub seeded_particles: usize,
+    /// Most points in the consistency graph; larger sets are sampled \[400\].
+    pub max_points: usize,
+    /// Most pairs scored per fitness evaluation \[256\].
+    pub max_pairs: usize,
+    /// Rounds of (inliers, SVD refit) at the end \[5\].
+    pub refine_rounds: usize,
+    /// Report a runner-up motion when its support reaches this fraction of the winner's
+    /// [0.5]; 0 turns the check off.
+    pub ambiguity_ratio: f64,
+    /// Extra swarm searches on the same graph when the consensus holds fewer than
+    /// `restart_below_ratio` of the correspondences (or none was found); the largest
+    /// consensus wins \[3\]. Few inliers make the search hard, like RANSAC's sample count.
+    pub restarts: usize,
+    /// See `restarts` [0.2].
+    pub restart_below_ratio: f64,
+    /// Most rounds of the final Gaussian-uniform mixture refinement (step 6) \[10\]; 0
+    /// ends with the hard-band SVD refit of step 4.
+    pub mixture_rounds: usize,
+}
+
+impl Default for PsoEstimatorConfig {
+    fn default() -> Self {
+        Self {
+            threshold: Threshold::Auto,
+            auto_initial_threshold_m: 0.3,
+            auto_min_threshold_m: 1e-4,
+            sigma_multiplier: 3.368,
+            pso: PsoConfig::default()
+                .with_swarm_size(16)
+                .with_max_iterations(30)
+                .with_stall_iterations(Some(5)),
+            seeded_particles: 8,
+            max_points: 400,
+            max_pairs: 256,
+            refine_rounds: 5,
+            ambiguity_ratio: 0.5,
+            restarts: 3,
+            restart_below_ratio: 0.2,
+            mixture_rounds: 10,
+        }
+    }
+}
+
+impl PsoEstimatorConfig {
+    /// Sets a fixed δ (metres).
+    #[must_use]
+    pub fn with_threshold(mut self, threshold_m: f64) -> Self {
+        self.threshold = Threshold::Fixed(threshold_m);
+        self
+    }
+
+    /// Sets the swarm settings.
+    #[must_use]
+    pub fn with_pso(mut self, pso: PsoConfig) -> Self {
+        self.pso = pso;
+        self
+    }
+
+    /// Sets how many particles start from graph triangles.
+    #[must_use]
+    pub fn with_seeded_particles(mut self, n: usize) -> Self {
+        self.seeded_particles = n;
+        self
+    }
+
+    /// Sets the extra swarm searches made when the consensus is small (0 turns them off).
+    #[must_use]
+    pub fn with_restarts(mut self, restarts: usize) -> Self {
+        self.restarts = restarts;
+        self
+    }
+
+    /// Sets the rounds of the final mixture refinement (0 turns it off).
+    #[must_use]
+    pub fn with_mixture_rounds(mut self, rounds: usize) -> Self {
+        self.mixture_rounds = rounds;
+        self
+    }
+
+    /// Sets the ambiguity ratio (0 turns the check off).
+    #[must_use]
+    pub fn with_ambiguity_ratio(mut self, ratio: f64) -> Self {
+        self.ambiguity_ratio = ratio;
+        self
+    }
+
+    pub(super) fn validate(&self) -> Result<(), PoseError> {
+        if let Threshold::Fixed(d) = self.threshold {
+            check_threshold(d)?;
+        }
+        check_threshold(self.auto_initial_threshold_m)?;
+        check_threshold(self.auto_min_threshold_m)?;
+        check_threshold(self.sigma_multiplier)?;
+        self.pso.validate()?;
+        if self.max_points < MIN_CORRESPONDENCES || self.max_pairs == 0 || self.refine_rounds == 0 {
+            return Err(PoseError::InvalidConfig(
+                "max_points must be >= 4, max_pairs and refine_rounds >= 1".into(),
+            ));
+        }
+        if !(0.0..=1.0).contains(&self.restart_below_ratio) {
+            return Err(PoseError::InvalidConfig(
+                "restart_below_ratio must be in [0, 1]".into(),
+            ));
+        }
+        if !(0.0..=1.0).contains(&self.ambiguity_ratio) {
+            return Err(PoseError::InvalidConfig(
+                "ambiguity_ratio must be in [0, 1]".into(),
+            ));
+        }
+        Ok(())
+    }
+}
