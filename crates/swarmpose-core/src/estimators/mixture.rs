@@ -15,10 +15,13 @@
 //!
 //! 1. (E) gives each correspondence its posterior inlier probability
 //!    `w_i = γ N_i / (γ N_i + (1 - γ) / V)`;
-//! 2. (M) refits `R, t` by Arun's SVD with weights `w_i / σ_i²`, and sets `γ = mean(w)`;
-//!    when the noise scale is free (automatic threshold), `σ_i = k b_i` with
-//!    `k² = Σ w_i |r_i|² / b_i² / (3 Σ w_i - 6)` (the fit takes 6 degrees of freedom
-//!    from the `3 Σ w_i` residual components).
+//! 2. (M) refits `R, t` by Arun's SVD with weights `w_i / σ_i²`, and sets `γ = mean(w)`.
+//!
+//! The σ_i stay those of the consensus (δ_i / multiplier). Re-estimating a common noise
+//! scale in the M step was tried and dropped: with stereo points given without a noise
+//! model, the residuals are heavy-tailed (depth noise grows with the square of the
+//! depth), the Gaussian widened to swallow the tail and the fit drifted off the consensus
+//! (half a metre on some KITTI pairs).
 //!
 //! With no wrong matches this converges to least squares over all points (the maximum
 //! likelihood motion), and with many it keeps every inlier out to about `5 σ` while a
@@ -43,8 +46,6 @@ const GAUSS_NORM_3D: f64 = 0.063_493_635_934_240_97;
 pub(crate) struct Mixture {
     /// δ_i = `multiplier · σ_i`: converts the tolerance into the noise σ_i (metres).
     pub multiplier: f64,
-    /// Re-estimate a common scale of the σ_i from the weighted residuals.
-    pub free_scale: bool,
     /// Most EM rounds.
     pub rounds: usize,
 }
@@ -63,8 +64,7 @@ pub(crate) fn refine_mixture(
     let n = data.len();
     let (src, dst) = (data.src(), data.dst());
     let volume = outlier_volume(data);
-    let mut scale = 1.0_f64;
-    let sigma = |i: usize, scale: f64| scale * tol.at(i) / settings.multiplier;
+    let sigma = |i: usize| tol.at(i) / settings.multiplier;
     // γ from the hard band at the start.
     let within = (0..n)
         .filter(|&i| (dst[i] - start * src[i]).norm() < tol.at(i))
@@ -77,7 +77,7 @@ pub(crate) fn refine_mixture(
         // E step.
         let outlier_density = (1.0 - gamma) / volume;
         for (i, w) in weights.iter_mut().enumerate() {
-            let s = sigma(i, scale);
+            let s = sigma(i);
             let r2 = (dst[i] - pose * src[i]).norm_squared();
             let inlier_density = gamma * GAUSS_NORM_3D / (s * s * s) * (-0.5 * r2 / (s * s)).exp();
             let total = inlier_density + outlier_density;
@@ -93,7 +93,7 @@ pub(crate) fn refine_mixture(
         }
         // M step.
         let pairs = (0..n).filter(|&i| weights[i] >= MIN_WEIGHT).map(|i| {
-            let s = sigma(i, scale);
+            let s = sigma(i);
             (&src[i], &dst[i], weights[i] / (s * s))
         });
         let Ok(next) = arun_pairs(pairs) else {
@@ -101,20 +101,6 @@ pub(crate) fn refine_mixture(
         };
         let wsum: f64 = weights.iter().sum();
         gamma = (wsum / n as f64).clamp(1.0 / n as f64, 1.0 - 1e-6);
-        if settings.free_scale {
-            let mut num = 0.0;
-            for (i, &w) in weights.iter().enumerate() {
-                if w >= MIN_WEIGHT {
-                    let b = sigma(i, 1.0);
-                    num += w * (dst[i] - next * src[i]).norm_squared() / (b * b);
-                }
-            }
-            // 3 Σw residual components, less the 6 degrees of freedom of the fit.
-            let k2 = num / (3.0 * wsum - 6.0).max(1.0);
-            if k2.is_finite() && k2 > 0.0 {
-                scale = k2.sqrt();
-            }
-        }
         let moved = (next.translation.vector - pose.translation.vector).norm()
             + next.rotation.angle_to(&pose.rotation);
         pose = next;
@@ -158,7 +144,6 @@ mod tests {
 
     const SETTINGS: Mixture = Mixture {
         multiplier: 3.368,
-        free_scale: false,
         rounds: 50,
     };
 
@@ -227,37 +212,6 @@ mod tests {
         }
         let (r, t) = gap(&pose, &s.truth);
         assert!(r < 0.1 && t < 0.02, "{r} deg, {t} m");
-    }
-
-    #[test]
-    fn free_scale_recovers_the_noise_level() {
-        // Started with σ 5 times too large, the free scale shrinks back to the data's.
-        let spec = SyntheticSpec {
-            outlier_fraction: 0.3,
-            noise_sigma_m: 0.02,
-            ..SyntheticSpec::default()
-        };
-        let s = spec.generate(5).expect("valid");
-        let mut w = Vec::new();
-        let settings = Mixture {
-            free_scale: true,
-            ..SETTINGS
-        };
-        let pose = refine_mixture(
-            &s.data,
-            &s.truth,
-            Tolerance::Uniform(3.368 * 0.1),
-            settings,
-            &mut w,
-        );
-        let (r, t) = gap(&pose, &s.truth);
-        assert!(r < 0.1 && t < 0.02, "{r} deg, {t} m");
-        let strong = w.iter().filter(|&&v| v > 0.5).count();
-        let inliers = s.inlier.iter().filter(|&&v| v).count();
-        assert!(
-            strong.abs_diff(inliers) <= 3,
-            "{strong} weighted inliers for {inliers} true"
-        );
     }
 
     #[test]

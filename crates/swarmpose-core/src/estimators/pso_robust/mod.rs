@@ -285,13 +285,7 @@ impl PsoEstimator {
     /// otherwise the mixture refinement of [`super::mixture`] (the inliers stay those
     /// within δ_i of the refined pose). Keeps `found` when the refined pose loses the
     /// support.
-    fn polish(
-        &self,
-        data: &Correspondences,
-        found: &mut Found,
-        tol: Tolerance<'_>,
-        free_scale: bool,
-    ) {
+    fn polish(&self, data: &Correspondences, found: &mut Found, tol: Tolerance<'_>) {
         let cfg = &self.config;
         if data.noise_covariance().is_some() {
             let gate = cfg.sigma_multiplier * cfg.sigma_multiplier;
@@ -308,7 +302,6 @@ impl PsoEstimator {
         }
         let settings = Mixture {
             multiplier: cfg.sigma_multiplier,
-            free_scale,
             rounds: cfg.mixture_rounds,
         };
         let mut weights = Vec::with_capacity(data.len());
@@ -421,8 +414,7 @@ impl Estimator for PsoEstimator {
         if let Some(r) = runner_up.take() {
             runner_up = self.larger_consensus_wins(data, &mut found, r, tol);
         }
-        let free_scale = per_point.is_none() && cfg.threshold == Threshold::Auto;
-        self.polish(data, &mut found, tol, free_scale);
+        self.polish(data, &mut found, tol);
         Ok(Estimate {
             diagnostics: Diagnostics {
                 iterations: found.iterations,

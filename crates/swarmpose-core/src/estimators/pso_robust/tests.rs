@@ -253,3 +253,34 @@ fn a_larger_runner_up_becomes_the_winner() {
     assert_eq!(kept.map(|r| r.inliers.len()), Some(80));
     assert_eq!(found.inliers.len(), camera_set.len());
 }
+
+#[test]
+fn heavy_tailed_stereo_noise_without_covariances_keeps_the_consensus() {
+    // Stereo-like points given as plain points (no noise model): residuals of far points
+    // are metres along the ray, so the automatic threshold sees a heavy-tailed mix. The
+    // final refinement must not trade the consensus for a fit of the tails. Measured:
+    // worst translation error 0.12 m, fewest inliers 31 (a single threshold keeps the near
+    // points); a mixture with a free noise scale drifted to 0.19 m here, and on KITTI
+    // pairs to half a metre.
+    let mut worst: (f64, usize) = (0.0, usize::MAX);
+    for seed in 0..10 {
+        let (with_cov, truth, _) = crate::estimators::test_scenes::stereo_scene(60 + seed, 4);
+        let plain =
+            Correspondences::new(with_cov.src().to_vec(), with_cov.dst().to_vec()).expect("valid");
+        let e = PsoEstimator::default()
+            .estimate_seeded(&plain, seed)
+            .expect("estimate");
+        let (_, t) = errors(&e.transform, &truth);
+        worst = (worst.0.max(t), worst.1.min(e.inliers.len()));
+    }
+    println!(
+        "worst translation error {:.3} m, fewest inliers {}",
+        worst.0, worst.1
+    );
+    assert!(worst.0 < 0.15, "translation off by {:.3} m", worst.0);
+    assert!(
+        worst.1 >= 25,
+        "only {} inliers of 150 correct matches",
+        worst.1
+    );
+}
