@@ -138,7 +138,9 @@ impl FrameMatches {
 
     /// The same matches with `offset_px` added to every disparity: each point `p` of
     /// disparity `d` becomes `p d / (d + offset)` (a correction of the stereo
-    /// calibration, e.g. from [`self_calibrate_offset`]). Covariances are scaled alike.
+    /// calibration, e.g. from [`self_calibrate_offset`]). Covariances follow exactly (see
+    /// `offset_jacobian`): the depth part shrinks with `k²`, the lateral part with `k`, for
+    /// `k = d / (d + offset)`.
     ///
     /// # Errors
     /// [`PoseError::NonFinite`] if an offset makes a disparity non-positive.
@@ -164,17 +166,20 @@ impl FrameMatches {
             .zip(self.src_disparities_px.iter().zip(&self.dst_disparities_px))
             .map(|(&s, (&a, &b))| s * scale(a).max(scale(b)).powi(2))
             .collect();
-        let scale_cov = |m: &[Matrix3<f64>], d: &[f64]| -> Vec<Matrix3<f64>> {
+        let move_cov = |m: &[Matrix3<f64>], p: &[Point3<f64>], d: &[f64]| -> Vec<Matrix3<f64>> {
             m.iter()
-                .zip(d)
-                .map(|(m, &d)| m * scale(d).powi(2))
+                .zip(p.iter().zip(d))
+                .map(|(m, (p, &d))| {
+                    let t = offset_jacobian(p, scale(d));
+                    t * m * t.transpose()
+                })
                 .collect()
         };
         Ok(Self {
             correspondences: data,
             noise_sigma_m,
-            src_covariances: scale_cov(&self.src_covariances, &self.src_disparities_px),
-            dst_covariances: scale_cov(&self.dst_covariances, &self.dst_disparities_px),
+            src_covariances: move_cov(&self.src_covariances, c.src(), &self.src_disparities_px),
+            dst_covariances: move_cov(&self.dst_covariances, c.dst(), &self.dst_disparities_px),
             src_disparities_px: self
                 .src_disparities_px
                 .iter()
@@ -403,4 +408,56 @@ pub fn match_frames<D: Descriptor>(
             .map(|&(i, _)| f64::from(dst.disparities_px[i]))
             .collect(),
     })
+}
+
+/// The map `T` with `Σ' = T Σ Tᵀ` from the covariance of a stereo point `p = (X, Y, Z)` of
+/// disparity `d` to that of the same measurement with disparity `d + δ`, where
+/// `k = d / (d + δ)`. The point is `b (u - cx, v - cy, f) / d`, so with `J` its Jacobian in
+/// `(u, v, d)` the new Jacobian is `J diag(k, k, k²)`, and
+/// `T = J diag(k, k, k²) J⁻¹ = [[k, 0, (X/Z)(k² - k)], [0, k, (Y/Z)(k² - k)], [0, 0, k²]]`,
+/// which needs neither the calibration nor the pixel (only the ratios `X/Z`, `Y/Z`).
+fn offset_jacobian(p: &Point3<f64>, k: f64) -> Matrix3<f64> {
+    let bend = k * k - k;
+    let (rx, ry) = if p.z.abs() > f64::EPSILON {
+        (p.x / p.z, p.y / p.z)
+    } else {
+        (0.0, 0.0)
+    };
+    Matrix3::new(k, 0.0, rx * bend, 0.0, k, ry * bend, 0.0, 0.0, k * k)
+}
+
+#[cfg(test)]
+mod offset_tests {
+    use super::*;
+
+    #[test]
+    fn offset_jacobian_moves_a_stereo_covariance_exactly() {
+        let rig = RectifiedStereo {
+            fx: 718.856,
+            fy: 718.856,
+            cx: 607.19,
+            cy: 185.22,
+            baseline_m: 0.537,
+        };
+        for &(u, v, d, delta) in &[
+            (100.0, 50.0, 8.0, 1.4),
+            (1200.0, 300.0, 30.0, -0.7),
+            (607.0, 185.0, 3.0, 2.0),
+        ] {
+            let p = Point3::new(
+                (u - rig.cx) * rig.baseline_m / d,
+                (v - rig.cy) * rig.baseline_m / d,
+                rig.fx * rig.baseline_m / d,
+            );
+            let before = rig.point_covariance(u, v, d, 0.3, 0.2);
+            let after = rig.point_covariance(u, v, d + delta, 0.3, 0.2);
+            let t = offset_jacobian(&p, d / (d + delta));
+            let moved = t * before * t.transpose();
+            let err = (moved - after).abs().max() / after.abs().max();
+            assert!(
+                err < 1e-12,
+                "relative error {err} at u={u}, d={d}, δ={delta}"
+            );
+        }
+    }
 }
