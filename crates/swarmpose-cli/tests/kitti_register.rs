@@ -6,11 +6,11 @@
 //!
 //! The disparity offset is self-calibrated once from the images of the whole sequence
 //! (`--self-calibrate 50`, no ground truth) and passed to the other pairs with
-//! `--disparity-offset`: this copy of the sequence has disparities about 1.4 px short of
-//! its `calib.txt` (REPRODUCTION.md). From the first 8 pairs only, the self-calibration
-//! finds 0.77 px and 44 pairs pass: the shortfall varies over the image (about 0.6 px
-//! in the centre, 2 px at the edges), so a constant offset depends on where the features
-//! are.
+//! `--disparity-offset`: this copy of the sequence has disparities about 1.2 px short of
+//! its `calib.txt` (docs/kitti-disparity-offset.md). From the first 8 pairs only, the
+//! self-calibration finds 0.62 px and 38 pairs pass: the shortfall varies over the image
+//! (about 0.6 px in the centre, 2 px at the edges), so a constant offset depends on where
+//! the features are.
 //! Skipped with a message when the data is absent, failing under `CI=true`.
 
 mod common;

@@ -5,7 +5,7 @@
 //!
 //! With the calibration as given, the translations from stereo are about 6 % too long
 //! (more for far points): the disparities of this copy of the sequence are short of its
-//! `calib.txt` by about 1.4 px. An independent OpenCV pipeline (SGBM or NCC disparities,
+//! `calib.txt` by about 1.2 px (self-calibrated; see docs/kitti-disparity-offset.md). An independent OpenCV pipeline (SGBM or NCC disparities,
 //! PnP) sees the same (see REPRODUCTION.md). The offset is self-calibrated from the image
 //! data alone, no ground truth ([`swarmpose_vision::frontend::self_calibrate_offset`]);
 //! the pairs are then registered with it applied. Both counts are printed.

@@ -9,7 +9,7 @@
 //! The disparity offset of the stereo calibration is self-calibrated from the images
 //! unless fixed ([`swarmpose_vision::frontend::calibrate_offset`]: the offset that makes
 //! the moving pairs most rigid, by a robust Mahalanobis cost with covariances rescaled
-//! with the points): kitti_vo_seq2's disparities are about 1.4 px short of its
+//! with the points): kitti_vo_seq2's disparities are about 1.2 px short of its
 //! calibration, which makes every translation about 6 % too long.
 //!
 //! A pair without a motion (the estimator fails, or fewer than
