@@ -24,20 +24,26 @@ use swarmpose_core::geometry::chain;
 use swarmpose_datasets::StereoSequence;
 use swarmpose_vision::features::{Descriptor, FeatureExtractor};
 use swarmpose_vision::frontend::{
-    CHI2_3_99, FrameMatches, Frontend, MIN_CALIBRATION_TRANSLATION_M, StereoFrame,
-    calibrate_offset, match_frames, refine_stereo,
+    CHI2_3_99, DisparityCorrection, FrameMatches, Frontend, MIN_CALIBRATION_TRANSLATION_M,
+    StereoFrame, calibrate_correction, calibrate_offset, match_frames, refine_stereo,
 };
 use swarmpose_vision::temporal::TemporalConfig;
 
 use crate::error::OdometryError;
 
-/// How the disparity offset is chosen.
+/// How the disparity correction is chosen.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum DisparityOffset {
-    /// Self-calibrated from the images (median over the moving pairs).
+    /// Self-calibrated from the images: the constant plus quadratic
+    /// [`DisparityCorrection`] that makes the moving pairs most rigid
+    /// ([`calibrate_correction`]).
     SelfCalibrate,
-    /// Fixed, pixels.
+    /// Self-calibrated constant offset only ([`swarmpose_vision::frontend::calibrate_offset`]).
+    SelfCalibrateConstant,
+    /// A fixed constant offset, pixels.
     Fixed(f64),
+    /// A fixed correction.
+    Correction(DisparityCorrection),
 }
 
 /// Settings of the pipeline (the front end and estimator are passed separately).
@@ -152,7 +158,10 @@ pub struct OdometryRun {
     pub stamps: Vec<f64>,
     /// Per-frame log.
     pub frames: Vec<FrameRecord>,
-    /// The disparity offset applied, pixels.
+    /// The disparity correction applied (its constant part is
+    /// [`OdometryRun::disparity_offset_px`]).
+    pub disparity_correction: DisparityCorrection,
+    /// The disparity offset applied at the image centre, pixels.
     pub disparity_offset_px: f64,
     /// The estimator's name.
     pub method: String,
@@ -306,10 +315,11 @@ pub fn run_frames<D: Descriptor>(
         progress(i + 1, n);
     }
 
-    // The disparity offset.
+    // The disparity correction.
     let offset = match config.disparity_offset {
-        DisparityOffset::Fixed(d) => d,
-        DisparityOffset::SelfCalibrate => {
+        DisparityOffset::Fixed(d) => DisparityCorrection::constant(d),
+        DisparityOffset::Correction(c) => c,
+        DisparityOffset::SelfCalibrate | DisparityOffset::SelfCalibrateConstant => {
             let t = Instant::now();
             let moving: Vec<(&FrameMatches, Isometry3<f64>)> = pairs
                 .iter()
@@ -318,12 +328,16 @@ pub fn run_frames<D: Descriptor>(
                 // The offset is only observable from a translation.
                 .filter(|(_, e)| e.translation.vector.norm() >= MIN_CALIBRATION_TRANSLATION_M)
                 .collect();
-            let offset = calibrate_offset(&moving);
+            let correction = if config.disparity_offset == DisparityOffset::SelfCalibrate {
+                calibrate_correction(&moving)
+            } else {
+                DisparityCorrection::constant(calibrate_offset(&moving))
+            };
             let per_pair = ms(t) / pairs.len().max(1) as f64;
             for f in frames.iter_mut().skip(1) {
                 f.times.refine_ms += per_pair;
             }
-            offset
+            correction
         }
     };
 
@@ -339,7 +353,7 @@ pub fn run_frames<D: Descriptor>(
             (None, None) => Err("no estimate".into()),
         };
         if let Ok((start, _)) = outcome
-            && (config.refine || offset != 0.0)
+            && (config.refine || offset != DisparityCorrection::default())
         {
             outcome = refined(p, &start, offset, config, estimator, k);
         }
@@ -375,7 +389,8 @@ pub fn run_frames<D: Descriptor>(
         stamps,
         poses,
         frames,
-        disparity_offset_px: offset,
+        disparity_correction: offset,
+        disparity_offset_px: offset.offset_px,
         method: estimator.name().to_owned(),
         detector: detector.to_owned(),
     })
@@ -385,7 +400,7 @@ pub fn run_frames<D: Descriptor>(
 fn refined(
     p: &PairData,
     start: &Isometry3<f64>,
-    offset: f64,
+    offset: DisparityCorrection,
     config: &OdometryConfig,
     estimator: &dyn Estimator,
     k: usize,
@@ -393,11 +408,11 @@ fn refined(
     let Some(m) = &p.matches else {
         return Err("no matches".into());
     };
-    let m = if offset == 0.0 {
+    let m = if offset == DisparityCorrection::default() {
         m.clone()
     } else {
-        m.with_disparity_offset(offset)
-            .map_err(|e| format!("disparity offset {offset:.3} px: {e}"))?
+        m.with_disparity_correction(offset)
+            .map_err(|e| format!("disparity correction {offset}: {e}"))?
     };
     if !config.refine {
         // The estimator alone, again on the corrected points.

@@ -6,12 +6,14 @@
 //! points ([`Frontend::match_frames`]), optionally confirmed by the right images.
 
 mod calibrate;
+mod correction;
 mod refine;
 
 pub use calibrate::{
-    CALIBRATION_PAIRS, MIN_CALIBRATION_TRANSLATION_M, OFFSET_RANGE_PX, calibrate_offset,
-    self_calibrate_offset,
+    CALIBRATION_PAIRS, MIN_CALIBRATION_TRANSLATION_M, OFFSET_RANGE_PX, QUADRATIC_LIMIT_PX,
+    calibrate_correction, calibrate_offset, self_calibrate_correction, self_calibrate_offset,
 };
+pub use correction::DisparityCorrection;
 pub use refine::{CHI2_3_99, refine_stereo, refine_weighted};
 
 use nalgebra::{Matrix3, Point3};
@@ -145,53 +147,7 @@ impl FrameMatches {
     /// # Errors
     /// [`PoseError::NonFinite`] if an offset makes a disparity non-positive.
     pub fn with_disparity_offset(&self, offset_px: f64) -> Result<Self, PoseError> {
-        let scale = |d: f64| d / (d + offset_px);
-        let c = &self.correspondences;
-        let src = c
-            .src()
-            .iter()
-            .zip(&self.src_disparities_px)
-            .map(|(p, &d)| Point3::from(p.coords * scale(d)))
-            .collect();
-        let dst = c
-            .dst()
-            .iter()
-            .zip(&self.dst_disparities_px)
-            .map(|(p, &d)| Point3::from(p.coords * scale(d)))
-            .collect();
-        let data = Correspondences::new(src, dst)?;
-        let noise_sigma_m = self
-            .noise_sigma_m
-            .iter()
-            .zip(self.src_disparities_px.iter().zip(&self.dst_disparities_px))
-            .map(|(&s, (&a, &b))| s * scale(a).max(scale(b)).powi(2))
-            .collect();
-        let move_cov = |m: &[Matrix3<f64>], p: &[Point3<f64>], d: &[f64]| -> Vec<Matrix3<f64>> {
-            m.iter()
-                .zip(p.iter().zip(d))
-                .map(|(m, (p, &d))| {
-                    let t = offset_jacobian(p, scale(d));
-                    t * m * t.transpose()
-                })
-                .collect()
-        };
-        Ok(Self {
-            correspondences: data,
-            noise_sigma_m,
-            src_covariances: move_cov(&self.src_covariances, c.src(), &self.src_disparities_px),
-            dst_covariances: move_cov(&self.dst_covariances, c.dst(), &self.dst_disparities_px),
-            src_disparities_px: self
-                .src_disparities_px
-                .iter()
-                .map(|d| d + offset_px)
-                .collect(),
-            dst_disparities_px: self
-                .dst_disparities_px
-                .iter()
-                .map(|d| d + offset_px)
-                .collect(),
-            ..self.clone()
-        })
+        self.with_disparity_correction(DisparityCorrection::constant(offset_px))
     }
 }
 
