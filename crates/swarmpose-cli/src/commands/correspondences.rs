@@ -14,7 +14,6 @@ use swarmpose_datasets::{DatasetError, StereoPair, StereoSequence, open};
 use swarmpose_vision::draw::draw_matches;
 use swarmpose_vision::features::FeatureExtractor;
 use swarmpose_vision::frontend::{FrameMatches, Frontend, self_calibrate_offset};
-use swarmpose_vision::surf::Surf;
 
 use crate::error::CliError;
 
@@ -213,13 +212,7 @@ pub fn run(args: &CorrespondencesArgs) -> Result<(), CliError> {
     let rig = seq.calibration();
     let m = match args.detector {
         Detector::Orb => matches(&mut Frontend::orb(rig), seq.as_ref(), args, &a, &b)?,
-        Detector::Surf => matches(
-            &mut Frontend::float_descriptor(Surf::upright(), rig),
-            seq.as_ref(),
-            args,
-            &a,
-            &b,
-        )?,
+        Detector::Surf => matches(&mut Frontend::surf(rig), seq.as_ref(), args, &a, &b)?,
     };
     let data = if args.no_covariance {
         m.correspondences.clone()

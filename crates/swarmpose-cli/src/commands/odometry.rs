@@ -15,7 +15,6 @@ use swarmpose_odometry::plots::write_plots;
 use swarmpose_odometry::synthetic::SyntheticSequence;
 use swarmpose_odometry::{DisparityOffset, OdometryConfig, OdometryError, OdometryRun, run};
 use swarmpose_vision::frontend::Frontend;
-use swarmpose_vision::surf::Surf;
 
 use crate::commands::correspondences::Detector;
 use crate::error::CliError;
@@ -129,7 +128,7 @@ fn run_sequence(
         ),
         Detector::Surf => run(
             seq,
-            &Frontend::float_descriptor(Surf::upright(), rig),
+            &Frontend::surf(rig),
             estimator.as_ref(),
             config,
             &mut progress,

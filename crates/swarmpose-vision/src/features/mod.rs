@@ -121,6 +121,30 @@ pub trait FeatureExtractor: Send + Sync {
 
     /// Detects and describes features. Deterministic: one image, one answer.
     fn extract(&self, image: GrayView<'_>) -> Features<Self::Descriptor>;
+
+    /// Detects features and keeps those that `select` chooses: it receives the detected
+    /// keypoints and returns the indices to keep (out-of-range indices are ignored). The
+    /// result is that of [`FeatureExtractor::extract`] restricted to those indices, in
+    /// their order; extractors that can detect without describing override it to
+    /// describe only the features kept (as SURF does, for bucketing).
+    fn extract_selected(
+        &self,
+        image: GrayView<'_>,
+        select: &dyn Fn(&[Keypoint]) -> Vec<usize>,
+    ) -> Features<Self::Descriptor> {
+        let all = self.extract(image);
+        let mut out = Features {
+            keypoints: Vec::new(),
+            descriptors: Vec::new(),
+        };
+        for i in select(&all.keypoints) {
+            if let (Some(k), Some(d)) = (all.keypoints.get(i), all.descriptors.get(i)) {
+                out.keypoints.push(*k);
+                out.descriptors.push(d.clone());
+            }
+        }
+        out
+    }
 }
 
 #[cfg(test)]

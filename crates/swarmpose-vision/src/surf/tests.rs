@@ -152,3 +152,30 @@ fn upright_descriptor_is_not_rotation_invariant() {
     }
     assert!(checked > 0 && far * 2 > checked, "{far} of {checked}");
 }
+
+#[test]
+fn extract_selected_describes_the_same_features_as_extract() {
+    let (w, h) = (129, 97);
+    let img = texture(w, h, 3);
+    for surf in [Surf::default(), Surf::new(SurfConfig::odometry())] {
+        let all = surf.extract(view(w, h, &img));
+        assert!(all.len() > 5, "{}", all.len());
+        // Every other feature, plus an index out of range (ignored).
+        let select = |k: &[Keypoint]| (0..k.len()).step_by(2).chain([k.len() + 3]).collect();
+        let kept = surf.extract_selected(view(w, h, &img), &select);
+        assert_eq!(kept.len(), all.len().div_ceil(2));
+        for (i, j) in (0..all.len()).step_by(2).enumerate() {
+            assert_eq!(kept.keypoints[i], all.keypoints[j]);
+            assert_eq!(kept.descriptors[i], all.descriptors[j]);
+        }
+    }
+}
+
+#[test]
+fn the_odometry_configuration_is_upright_with_a_lower_threshold() {
+    let c = SurfConfig::odometry();
+    assert!(c.upright && c.finest_layer_maxima);
+    assert_eq!(c.smoothing, 0.0);
+    assert!(c.hessian_threshold < SurfConfig::default().hessian_threshold);
+    assert_eq!(Surf::new(c).name(), "upright-surf");
+}
