@@ -4,13 +4,12 @@
 //! `swarmpose register` on each CSV recovers the ground-truth relative motion within
 //! 0.2 degrees and 5 cm for at least 90 % of the pairs.
 //!
-//! The disparity offset is self-calibrated once from the images of the whole sequence
-//! (`--self-calibrate 50`, no ground truth) and passed to the other pairs with
-//! `--disparity-offset`: this copy of the sequence has disparities about 1.2 px short of
-//! its `calib.txt` (docs/kitti-disparity-offset.md). From the first 8 pairs only, the
-//! self-calibration finds 0.62 px and 38 pairs pass: the shortfall varies over the image
-//! (about 0.6 px in the centre, 2 px at the edges), so a constant offset depends on where
-//! the features are.
+//! The disparity correction (offset plus a yaw term quadratic in the image column) is
+//! self-calibrated once from the images of the whole sequence (`--self-calibrate 50`, no
+//! ground truth) and passed to the other pairs with `--disparity-offset` and
+//! `--disparity-quadratic`: this copy of the sequence has disparities short of its
+//! `calib.txt` by about 0.7 px at the centre and 2.7 px at the edges
+//! (docs/kitti-disparity-offset.md). As calibrated, 21 pairs pass.
 //! Skipped with a message when the data is absent, failing under `CI=true`.
 
 mod common;
@@ -71,34 +70,38 @@ fn correspondences_then_register_recover_kitti_motions() {
     );
     let stderr = String::from_utf8_lossy(&out.stderr).to_string();
     assert!(out.status.success(), "{stderr}");
-    let offset: f64 = stderr
-        .split("self-calibrated disparity offset ")
+    // "... (--disparity-offset A --disparity-quadratic C)": the flags to pass on.
+    let flags: Vec<String> = stderr
+        .split("(--disparity-offset ")
         .nth(1)
-        .and_then(|rest| rest.split_whitespace().next())
-        .and_then(|v| v.parse().ok())
-        .unwrap_or_else(|| panic!("no offset in {stderr:?}"));
-    assert!((0.5..3.0).contains(&offset), "offset {offset} px");
-    let offset_arg = format!("{offset}");
+        .and_then(|rest| rest.split(')').next())
+        .map(|v| format!("--disparity-offset {v}"))
+        .unwrap_or_else(|| panic!("no correction in {stderr:?}"))
+        .split_whitespace()
+        .map(str::to_owned)
+        .collect();
+    assert_eq!(flags.len(), 4, "{flags:?}");
+    let value = |k: usize| flags[k].parse::<f64>().expect("a number");
+    let (offset, quadratic) = (value(1), value(3));
+    assert!((0.0..3.0).contains(&offset), "offset {offset} px");
+    assert!((0.0..5.0).contains(&quadratic), "quadratic {quadratic} px");
 
     let (mut good, mut fewest) = (0, usize::MAX);
     for k in 0..seq.len() - 1 {
         let path = csv(k);
         if k > 0 {
             let (i, j) = (k.to_string(), (k + 1).to_string());
-            let out = swarmpose(
-                &[
-                    "correspondences",
-                    &seq_path,
-                    "--frames",
-                    &i,
-                    &j,
-                    "--disparity-offset",
-                    &offset_arg,
-                    "--out",
-                    &path,
-                ],
-                None,
-            );
+            let mut args = vec![
+                "correspondences",
+                &seq_path,
+                "--frames",
+                &i,
+                &j,
+                "--out",
+                &path,
+            ];
+            args.extend(flags.iter().map(String::as_str));
+            let out = swarmpose(&args, None);
             assert!(
                 out.status.success(),
                 "{}",
@@ -125,8 +128,8 @@ fn correspondences_then_register_recover_kitti_motions() {
         );
     }
     eprintln!(
-        "disparity offset {offset:.3} px; fewest correspondences {fewest}; within 0.2 deg and \
-         5 cm: {good}/{}",
+        "disparity correction {offset:.3} px + {quadratic:.3} px x²; fewest correspondences \
+         {fewest}; within 0.2 deg and 5 cm: {good}/{}",
         seq.len() - 1
     );
     assert!(fewest >= 300, "a pair has only {fewest} correspondences");

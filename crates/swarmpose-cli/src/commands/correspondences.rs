@@ -13,8 +13,11 @@ use swarmpose_data::correspondence_csv;
 use swarmpose_datasets::{DatasetError, StereoPair, StereoSequence, open};
 use swarmpose_vision::draw::draw_matches;
 use swarmpose_vision::features::FeatureExtractor;
-use swarmpose_vision::frontend::{FrameMatches, Frontend, self_calibrate_offset};
+use swarmpose_vision::frontend::{
+    DisparityCorrection, FrameMatches, Frontend, self_calibrate_correction, self_calibrate_offset,
+};
 
+use super::odometry::DisparityModel;
 use crate::error::CliError;
 
 /// The detector/descriptor of the front end.
@@ -72,24 +75,41 @@ pub struct CorrespondencesArgs {
     #[arg(long)]
     pub circular_check: bool,
 
-    /// Added to every measured disparity, pixels: corrects a right principal point that
-    /// is off in the calibration (kitti_vo_seq2 needs about 1.36, self-calibrated over
-    /// its 50 pairs with --self-calibrate 50).
+    /// Added to every measured disparity, pixels (at the image centre when
+    /// --disparity-quadratic is given): corrects a right principal point that is off in
+    /// the calibration. kitti_vo_seq2 self-calibrates 0.708 with --disparity-quadratic
+    /// 2.020 (--self-calibrate 50), or 1.202 alone (--disparity-model constant).
     #[arg(
         long,
         value_name = "PX",
         default_value_t = 0.0,
         allow_negative_numbers = true
     )]
-    pub disparity_offset: f32,
+    pub disparity_offset: f64,
+
+    /// Quadratic term of the disparity correction, pixels per unit x² with
+    /// x = (u - cx) / f: a yaw of the right camera.
+    #[arg(
+        long,
+        value_name = "PX",
+        default_value_t = 0.0,
+        allow_negative_numbers = true
+    )]
+    pub disparity_quadratic: f64,
+
+    /// The correction --self-calibrate fits: `quadratic` (offset + quadratic x²) or
+    /// `constant` (offset only).
+    #[arg(long, value_enum, default_value_t = DisparityModel::Quadratic)]
+    pub disparity_model: DisparityModel,
 
     /// Write only the six coordinate columns, without the stereo noise covariances.
     #[arg(long)]
     pub no_covariance: bool,
 
-    /// Self-calibrate the disparity offset from the first N consecutive pairs of the
-    /// sequence (image data only: the offset that makes up to 8 of the moving pairs,
-    /// spread over the N, most rigid), print it and use it; overrides --disparity-offset.
+    /// Self-calibrate the disparity correction from the first N consecutive pairs of the
+    /// sequence (image data only: the correction that makes up to 8 of the moving pairs,
+    /// spread over the N, most rigid), print it and use it; overrides --disparity-offset
+    /// and --disparity-quadratic.
     #[arg(long, value_name = "N")]
     pub self_calibrate: Option<usize>,
 }
@@ -98,12 +118,13 @@ fn dataset_error(e: DatasetError) -> CliError {
     CliError::usage(e.to_string())
 }
 
-/// The disparity offset self-calibrated on the first `pairs` consecutive pairs.
+/// The disparity correction self-calibrated on the first `pairs` consecutive pairs.
 fn self_calibrate<E: FeatureExtractor>(
     frontend: &Frontend<E>,
     seq: &dyn StereoSequence,
     pairs: usize,
-) -> Result<f32, CliError> {
+    model: DisparityModel,
+) -> Result<DisparityCorrection, CliError> {
     if pairs == 0 || pairs >= seq.len() {
         return Err(CliError::usage(format!(
             "--self-calibrate needs 1 to {} pairs, got {pairs}",
@@ -125,14 +146,24 @@ fn self_calibrate<E: FeatureExtractor>(
         prev = Some(f);
     }
     let estimator = PsoEstimator::new(PsoEstimatorConfig::default());
-    let offset = self_calibrate_offset(&all, &estimator, 0).ok_or_else(|| {
+    let correction = match model {
+        DisparityModel::Quadratic => self_calibrate_correction(&all, &estimator, 0),
+        DisparityModel::Constant => {
+            self_calibrate_offset(&all, &estimator, 0).map(DisparityCorrection::constant)
+        }
+    }
+    .ok_or_else(|| {
         CliError::failure(
             "self-calibration failed: fewer than 3 of the pairs could be registered with a \
              translation of at least 0.2 m",
         )
     })?;
-    eprintln!("swarmpose: self-calibrated disparity offset {offset:.3} px over {pairs} pairs");
-    Ok(offset as f32)
+    eprintln!(
+        "swarmpose: self-calibrated disparity correction {correction} over {pairs} pairs \
+         (--disparity-offset {} --disparity-quadratic {})",
+        correction.offset_px, correction.quadratic_px
+    );
+    Ok(correction)
 }
 
 /// Runs the front end on frames `i` and `j`.
@@ -144,15 +175,26 @@ fn matches<E: FeatureExtractor>(
     b: &StereoPair,
 ) -> Result<FrameMatches, CliError> {
     frontend.temporal.circular_check = args.circular_check;
-    frontend.stereo.disparity_offset_px = args.disparity_offset;
-    if let Some(n) = args.self_calibrate {
-        frontend.stereo.disparity_offset_px = self_calibrate(frontend, seq, n)?;
-    }
+    let correction = match args.self_calibrate {
+        Some(n) => self_calibrate(frontend, seq, n, args.disparity_model)?,
+        None => DisparityCorrection {
+            offset_px: args.disparity_offset,
+            quadratic_px: args.disparity_quadratic,
+        },
+    };
     let fa = frontend.stereo_frame(a.left.view(), a.right.view());
     let fb = frontend.stereo_frame(b.left.view(), b.right.view());
-    frontend
+    let m = frontend
         .match_frames(&fa, &fb)
-        .map_err(|e| CliError::failure(format!("matching failed: {e}")))
+        .map_err(|e| CliError::failure(format!("matching failed: {e}")))?;
+    if correction == DisparityCorrection::default() {
+        return Ok(m);
+    }
+    m.with_disparity_correction(correction).map_err(|e| {
+        CliError::usage(format!(
+            "the disparity correction {correction} makes a disparity non-positive ({e})"
+        ))
+    })
 }
 
 /// Inlier flags from a `register` JSON report of `n` correspondences.
@@ -187,7 +229,7 @@ fn read_inliers(path: &Path, n: usize) -> Result<Vec<bool>, CliError> {
 /// # Errors
 /// A bad sequence or frame index (exit 2), an unwritable output (exit 1).
 pub fn run(args: &CorrespondencesArgs) -> Result<(), CliError> {
-    if !args.disparity_offset.is_finite() {
+    if !(args.disparity_offset.is_finite() && args.disparity_quadratic.is_finite()) {
         return Err(CliError::usage(
             "--disparity-offset must be a finite number of pixels",
         ));
@@ -277,6 +319,8 @@ mod tests {
             detector: Detector::Orb,
             circular_check: false,
             disparity_offset: 0.0,
+            disparity_quadratic: 0.0,
+            disparity_model: DisparityModel::Quadratic,
             no_covariance: false,
             self_calibrate: None,
         }
@@ -318,7 +362,7 @@ mod tests {
         let e = run(&args(dir.join("nope"), [0, 1], dir.join("x.csv"))).expect_err("missing");
         assert!(e.code == 2 && e.message.contains("nope"), "{e}");
         let mut b = args(root.clone(), [0, 1], dir.join("x.csv"));
-        b.disparity_offset = f32::NAN;
+        b.disparity_offset = f64::NAN;
         assert_eq!(run(&b).expect_err("nan").code, 2);
         let mut c = args(root, [0, 1], dir.join("y.csv"));
         c.self_calibrate = Some(4);

@@ -6,7 +6,7 @@
 
 use std::path::PathBuf;
 
-use clap::Args;
+use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use nalgebra::Isometry3;
 use swarmpose_datasets::{StereoSequence, open};
@@ -14,7 +14,16 @@ use swarmpose_odometry::output::{evaluate_run, write_text_outputs};
 use swarmpose_odometry::plots::write_plots;
 use swarmpose_odometry::synthetic::SyntheticSequence;
 use swarmpose_odometry::{DisparityOffset, OdometryConfig, OdometryError, OdometryRun, run};
-use swarmpose_vision::frontend::Frontend;
+use swarmpose_vision::frontend::{DisparityCorrection, Frontend};
+
+/// The disparity correction self-calibrated from the images.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum DisparityModel {
+    /// Offset plus a term quadratic in the image column (a yaw of the right camera).
+    Quadratic,
+    /// A constant offset.
+    Constant,
+}
 
 use crate::commands::correspondences::Detector;
 use crate::error::CliError;
@@ -59,9 +68,20 @@ pub struct OdometryArgs {
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub seed: u64,
 
-    /// Fixed disparity offset, pixels, instead of self-calibrating it from the images.
+    /// Fixed disparity offset, pixels, instead of self-calibrating the correction from the
+    /// images (with --disparity-quadratic: the offset at the image centre).
     #[arg(long, value_name = "PX", allow_negative_numbers = true)]
     pub disparity_offset: Option<f64>,
+
+    /// Fixed quadratic term of the disparity correction, pixels per unit x² with
+    /// x = (u - cx) / f (a yaw of the right camera); with --disparity-offset (default 0).
+    #[arg(long, value_name = "PX", allow_negative_numbers = true)]
+    pub disparity_quadratic: Option<f64>,
+
+    /// Disparity correction to self-calibrate when none is fixed: `quadratic`
+    /// (offset + quadratic x², a yaw of the right camera) or `constant` (offset only).
+    #[arg(long, value_enum, default_value_t = DisparityModel::Quadratic)]
+    pub disparity_model: DisparityModel,
 
     /// Keep the estimator's motion: no Mahalanobis refinement on the stereo covariances.
     #[arg(long)]
@@ -148,18 +168,29 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
             "--frame-period must be a positive number of seconds",
         ));
     }
-    if let Some(d) = args.disparity_offset
-        && !d.is_finite()
-    {
-        return Err(CliError::usage(
-            "--disparity-offset must be a finite number of pixels",
-        ));
+    for (flag, v) in [
+        ("--disparity-offset", args.disparity_offset),
+        ("--disparity-quadratic", args.disparity_quadratic),
+    ] {
+        if v.is_some_and(|d| !d.is_finite()) {
+            return Err(CliError::usage(format!(
+                "{flag} must be a finite number of pixels"
+            )));
+        }
     }
+    let disparity_offset = match (args.disparity_offset, args.disparity_quadratic) {
+        (None, None) => match args.disparity_model {
+            DisparityModel::Quadratic => DisparityOffset::SelfCalibrate,
+            DisparityModel::Constant => DisparityOffset::SelfCalibrateConstant,
+        },
+        (offset, quadratic) => DisparityOffset::Correction(DisparityCorrection {
+            offset_px: offset.unwrap_or(0.0),
+            quadratic_px: quadratic.unwrap_or(0.0),
+        }),
+    };
     let config = OdometryConfig {
         refine: !args.no_refine,
-        disparity_offset: args
-            .disparity_offset
-            .map_or(DisparityOffset::SelfCalibrate, DisparityOffset::Fixed),
+        disparity_offset,
         min_inliers: args.min_inliers.max(3),
         seed: args.seed,
         frame_period_s: args.frame_period,
@@ -209,9 +240,9 @@ fn run_rgbd_command(
             "--detector surf is not available for RGB-D input (use orb)",
         ));
     }
-    if args.disparity_offset.is_some() {
+    if args.disparity_offset.is_some() || args.disparity_quadratic.is_some() {
         return Err(CliError::usage(
-            "--disparity-offset does not apply to RGB-D input",
+            "--disparity-offset and --disparity-quadratic do not apply to RGB-D input",
         ));
     }
     let seq = RgbdSequence::open(dir).map_err(odometry_error)?;
@@ -311,11 +342,11 @@ fn finish(
     };
     let total = mean(&|t| t.total_ms());
     println!(
-        "{title}: {n} frames, method {}, detector {}, disparity offset {:.3} px, {} \
+        "{title}: {n} frames, method {}, detector {}, disparity correction {}, {} \
          constant-velocity frame(s)",
         r.method,
         r.detector,
-        r.disparity_offset_px,
+        r.disparity_correction,
         r.n_fallbacks()
     );
     for f in r
