@@ -204,7 +204,7 @@ pub fn match_stereo<D: Descriptor>(
                     } else {
                         d
                     };
-                    d + (lk.x - lk.x.round())
+                    d
                 }
                 None => continue,
             }
