@@ -12,7 +12,6 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use swarmpose_datasets::open;
 use swarmpose_vision::features::{FeatureExtractor, Features};
 use swarmpose_vision::frontend::Frontend;
-use swarmpose_vision::surf::Surf;
 
 fn bench_frontend(c: &mut Criterion) {
     let dir = swarmpose_datasets::data_root().join("kitti_vo_seq2");
@@ -80,8 +79,9 @@ fn bench_frontend(c: &mut Criterion) {
         })
     });
 
-    // SURF (upright): detection alone, and detection + description.
-    let surf = Frontend::float_descriptor(Surf::upright(), rig);
+    // SURF (upright, the odometry configuration of `Frontend::surf`): detection alone,
+    // and detection + description.
+    let surf = Frontend::surf(rig);
     g.bench_function("surf/detect", |bench| {
         bench.iter(|| {
             (
