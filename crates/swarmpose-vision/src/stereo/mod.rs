@@ -188,7 +188,9 @@ pub fn match_stereo<D: Descriptor>(
                 Some(d) => {
                     let xl = lk.x.round().max(0.0) as usize;
                     let y = lk.y.round().max(0.0) as usize;
-                    let d = if config.gauss_newton {
+                    // The disparity of the window at (xl, y) is that of the keypoint:
+                    // a shift within a constant-disparity window does not change it.
+                    if config.gauss_newton {
                         match refine_disparity_lk(
                             left_img,
                             right_img,
@@ -203,8 +205,7 @@ pub fn match_stereo<D: Descriptor>(
                         }
                     } else {
                         d
-                    };
-                    d
+                    }
                 }
                 None => continue,
             }
