@@ -133,7 +133,10 @@ impl FrameMatches {
             dst_covariances: moved(&self.dst_covariances, c.dst(), &kd),
             src_disparities_px: shifted(&self.src_disparities_px, c.src()),
             dst_disparities_px: shifted(&self.dst_disparities_px, c.dst()),
-            ..self.clone()
+            src_pixels: self.src_pixels.clone(),
+            dst_pixels: self.dst_pixels.clone(),
+            src_index: self.src_index.clone(),
+            dst_index: self.dst_index.clone(),
         })
     }
 }
