@@ -11,7 +11,7 @@ use crate::error::DatasetError;
 use crate::text::{is_png, list_sorted, numbers, parse_error, read_text};
 use crate::{
     RectifiedStereo, StereoPair, StereoSequence, check_counts, check_partners, first_size,
-    load_indexed_pair, pose_from_3x4,
+    load_listed_pair, pose_from_3x4,
 };
 
 /// True when `dir` looks like a KITTI sequence.
@@ -222,11 +222,7 @@ impl StereoSequence for KittiSequence {
     }
 
     fn frame(&self, i: usize) -> Result<StereoPair, DatasetError> {
-        let first = self
-            .left
-            .first()
-            .map_or(self.root.as_path(), PathBuf::as_path);
-        load_indexed_pair(&self.root, &self.left, &self.right, i, (self.size, first))
+        load_listed_pair(&self.root, &self.left, &self.right, i, self.size)
     }
 
     fn ground_truth(&self) -> Option<&[Isometry3<f64>]> {

@@ -267,6 +267,22 @@ pub(crate) fn load_indexed_pair(
     load_pair(l, r, Some(expected))
 }
 
+/// [`load_indexed_pair`] with the first left image as the reference of the expected size
+/// (the KITTI and Karlsruhe layouts, whose sizes are read from that image).
+///
+/// # Errors
+/// As [`load_indexed_pair`].
+pub(crate) fn load_listed_pair(
+    root: &Path,
+    left: &[PathBuf],
+    right: &[PathBuf],
+    i: usize,
+    size: (usize, usize),
+) -> Result<StereoPair, DatasetError> {
+    let first = left.first().map_or(root, PathBuf::as_path);
+    load_indexed_pair(root, left, right, i, (size, first))
+}
+
 /// Rows of 12 numbers as row-major 3x4 `[R | t]` poses.
 pub(crate) fn pose_from_3x4(m: &[f64]) -> Isometry3<f64> {
     use nalgebra::{Matrix3, Translation3};
