@@ -10,6 +10,10 @@ pub const EXIT_FAILURE: u8 = 1;
 /// Exit status of bad usage or bad input: options, files, CSV content, too few or
 /// degenerate points.
 pub const EXIT_USAGE: u8 = 2;
+/// Exit status of a run that finished but whose result is not usable (for example an
+/// odometry run in which fewer than half of the motions were tracked); its outputs are
+/// written.
+pub const EXIT_NOT_USABLE: u8 = 3;
 
 /// A failure of a subcommand: what to tell the user and the exit status.
 #[derive(Debug, Clone, PartialEq, Eq)]

@@ -79,43 +79,140 @@ fn bad_sequences_give_one_clear_line() {
 }
 
 #[test]
-fn blank_frames_fall_back_visibly() {
-    // No texture, no features: every pair falls back, marked in frames.csv, and the
-    // run still succeeds with an identity (first pair) that is marked too.
+fn blank_frames_are_not_usable_but_written() {
+    // No texture, no features: no motion can be tracked. Every frame is written, marked
+    // lost, and the run exits with the "not usable" status.
     let tmp = TempDir::new("odo-blank");
-    let dir = kitti_dir(&tmp, "blank", 3, None);
+    let dir = kitti_dir(&tmp, "blank", 12, None);
     let out_dir = tmp.0.join("out");
     let out = swarmpose(
         &["odometry", s(&dir), "--out", s(&out_dir), "--quiet"],
         None,
     );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(3), "{stderr}");
+    assert!(
+        stderr.starts_with("swarmpose: error: not usable: 0 motions of 11 were tracked"),
+        "{stderr}"
+    );
+    let text = String::from_utf8(out.stdout).expect("utf-8");
+    assert!(
+        text.contains("12 frames: 0 of 11 motions tracked, 0 at constant velocity, 12 lost"),
+        "{text}"
+    );
+    let traj = std::fs::read_to_string(out_dir.join("trajectory.kitti.txt")).expect("trajectory");
+    assert_eq!(traj.lines().count(), 12);
+    let csv = std::fs::read_to_string(out_dir.join("frames.csv")).expect("frames.csv");
+    let rows: Vec<&str> = csv.lines().collect();
+    assert_eq!(rows.len(), 13);
+    // rows[0] is the header, rows[1] frame 0.
+    assert!(rows[1].contains("lost (0 stereo points"), "{}", rows[1]);
+    assert!(rows[2].contains("lost ("), "{}", rows[2]);
+    for f in [
+        "trajectory.kitti.txt",
+        "trajectory.tum.txt",
+        "trajectory.png",
+        "trajectory.svg",
+        "calibration.json",
+    ] {
+        assert!(out_dir.join(f).is_file(), "{f}");
+    }
+}
+
+/// A KITTI-layout sequence of `n` copies of one rendered synthetic stereo pair (a camera
+/// standing still), with the calibration of the synthetic rig.
+fn still_sequence(tmp: &TempDir, n: usize) -> PathBuf {
+    use swarmpose_datasets::StereoSequence;
+    use swarmpose_odometry::synthetic::{RIG, SyntheticSequence};
+    let dir = tmp.0.join("still");
+    let pair = SyntheticSequence::new(1, 0.0, 0.0)
+        .frame(0)
+        .expect("render");
+    for (sub, img) in [("image_0", &pair.left), ("image_1", &pair.right)] {
+        std::fs::create_dir_all(dir.join(sub)).expect("mkdir");
+        for i in 0..n {
+            img.save_png(&dir.join(sub).join(format!("{i:06}.png")))
+                .expect("png");
+        }
+    }
+    let p = |tx: f64| {
+        format!(
+            "{} 0 {} {tx} 0 {} {} 0 0 0 1 0",
+            RIG.fx, RIG.cx, RIG.fy, RIG.cy
+        )
+    };
+    std::fs::write(
+        dir.join("calib.txt"),
+        format!("P0: {}\nP1: {}\n", p(0.0), p(-RIG.fx * RIG.baseline_m)),
+    )
+    .expect("calib");
+    dir
+}
+
+#[test]
+fn a_corrupt_frame_stops_the_run_and_keeps_what_came_before() {
+    let tmp = TempDir::new("odo-corrupt");
+    let dir = still_sequence(&tmp, 36);
+    let bad = dir.join("image_0").join("000030.png");
+    std::fs::write(&bad, b"\x89PNG\r\n\x1a\nnot really a png").expect("corrupt");
+    let out_dir = tmp.0.join("out");
+    let out = swarmpose(
+        &["odometry", s(&dir), "--out", s(&out_dir), "--quiet"],
+        None,
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.starts_with("swarmpose: error: frame 30: ") && stderr.contains("000030.png"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("stopped after 30 frame(s)"), "{stderr}");
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    let traj = std::fs::read_to_string(out_dir.join("trajectory.kitti.txt")).expect("trajectory");
+    assert_eq!(traj.lines().count(), 30);
+    let tum = std::fs::read_to_string(out_dir.join("trajectory.tum.txt")).expect("tum");
+    assert_eq!(tum.lines().count(), 30);
+    let csv = std::fs::read_to_string(out_dir.join("frames.csv")).expect("frames.csv");
+    assert_eq!(csv.lines().count(), 31);
+    // The camera stands still: every pose is the origin to a millimetre.
+    for line in traj.lines() {
+        let v: Vec<f64> = line
+            .split_whitespace()
+            .map(|x| x.parse().expect("number"))
+            .collect();
+        assert!(
+            v[3].abs() < 1e-3 && v[7].abs() < 1e-3 && v[11].abs() < 1e-3,
+            "{line}"
+        );
+    }
+}
+
+/// The command line is a loop over the library's engine: the same trajectory, line for
+/// line, as the engine driven directly.
+#[test]
+fn the_cli_gives_the_engine_s_trajectory() {
+    use swarmpose_odometry::batch::{camera_of, collect};
+    use swarmpose_odometry::output::kitti_line;
+    use swarmpose_odometry::synthetic::SyntheticSequence;
+    use swarmpose_odometry::{Odometry, OdometryConfig};
+    let tmp = TempDir::new("odo-same");
+    let out_dir = tmp.0.join("out");
+    let out = swarmpose(&["odometry", "--out", s(&out_dir), "--quiet"], None);
     assert_eq!(
         out.status.code(),
         Some(0),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let text = String::from_utf8(out.stdout).expect("utf-8");
-    assert!(text.contains("2 constant-velocity frame(s)"), "{text}");
-    let csv = std::fs::read_to_string(out_dir.join("frames.csv")).expect("frames.csv");
-    let rows: Vec<&str> = csv.lines().collect();
-    assert_eq!(rows.len(), 4);
-    // rows[0] is the header, rows[1] frame 0.
-    assert!(rows[1].contains("first"), "{}", rows[1]);
-    assert!(
-        rows[2].contains("constant-velocity") && rows[2].contains("identity"),
-        "{}",
-        rows[2]
-    );
-    assert!(rows[3].contains("constant-velocity"), "{}", rows[3]);
-    for f in [
-        "trajectory.kitti.txt",
-        "trajectory.tum.txt",
-        "trajectory.png",
-        "trajectory.svg",
-    ] {
-        assert!(out_dir.join(f).is_file(), "{f}");
-    }
+    let cli = std::fs::read_to_string(out_dir.join("trajectory.kitti.txt")).expect("trajectory");
+    let seq = SyntheticSequence::default();
+    let mut odo = Odometry::new(camera_of(&seq), OdometryConfig::default()).expect("engine");
+    let results = collect(&seq, &mut odo, 0.1).expect("run");
+    let engine: String = results
+        .iter()
+        .map(|r| format!("{}\n", kitti_line(&r.pose)))
+        .collect();
+    assert_eq!(cli, engine);
 }
 
 #[test]

@@ -1,20 +1,24 @@
-//! Throughput of the whole odometry pipeline (load, ORB front end, robust PSO with
-//! stereo noise, offset self-calibration, refinement, chaining) on the 51 frames of
-//! kitti_vo_seq2, one thread (nothing in the pipeline spawns threads). One iteration is
-//! the whole sequence; frames per second = 51 / time. The per-stage split is printed
-//! once. Needs `kitti_vo_seq2` under the data root (`SWARMPOSE_DATA`); skipped with a
-//! message otherwise.
+//! Throughput of the streaming engine on the 51 frames of kitti_vo_seq2 (loading, ORB
+//! front end, robust PSO, reprojection refinement, online self-calibration), one thread
+//! (nothing in the engine spawns threads). One iteration is the whole sequence through a
+//! new engine; frames per second = 51 / time. A first pass prints the per-stage split and
+//! the per-frame latency (p50, p99). Needs `kitti_vo_seq2` under the data root
+//! (`SWARMPOSE_DATA`); skipped with a message otherwise.
 //!
 //! `cargo bench -p swarmpose-odometry --bench pipeline`
 
 use std::hint::black_box;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use swarmpose_core::{PsoEstimator, PsoEstimatorConfig};
 use swarmpose_datasets::open;
-use swarmpose_odometry::{OdometryConfig, run};
-use swarmpose_vision::frontend::Frontend;
+use swarmpose_odometry::batch::{camera_of, collect};
+use swarmpose_odometry::{Odometry, OdometryConfig, StageTimes, StereoInput};
+
+fn percentile(sorted: &[f64], p: f64) -> f64 {
+    let i = ((sorted.len() as f64 - 1.0) * p).round() as usize;
+    sorted[i.min(sorted.len() - 1)]
+}
 
 fn bench_pipeline(c: &mut Criterion) {
     let dir = swarmpose_datasets::data_root().join("kitti_vo_seq2");
@@ -22,41 +26,59 @@ fn bench_pipeline(c: &mut Criterion) {
         eprintln!("SKIPPED: {} not found (set SWARMPOSE_DATA)", dir.display());
         return;
     };
-    let frontend = Frontend::orb(seq.calibration());
-    let estimator = PsoEstimator::new(PsoEstimatorConfig::default());
+    let camera = camera_of(seq.as_ref());
     let config = OdometryConfig::default();
-    let once = run(seq.as_ref(), &frontend, &estimator, &config, &mut |_, _| {});
-    if let Ok(r) = &once {
-        let n = r.frames.len() as f64;
-        let mean = |f: &dyn Fn(&swarmpose_odometry::StageTimes) -> f64| {
-            r.frames.iter().map(|x| f(&x.times)).sum::<f64>() / n
-        };
-        let total = mean(&|t| t.total_ms());
-        eprintln!(
-            "kitti_vo_seq2, orb + pso, per frame: total {total:.2} ms ({:.1} frames/s); load {:.2}, \
-             features {:.2}, stereo {:.2}, match {:.2}, estimate {:.2}, refine {:.2} ms",
-            1000.0 / total,
-            mean(&|t| t.load_ms),
-            mean(&|t| t.features_ms),
-            mean(&|t| t.stereo_ms),
-            mean(&|t| t.match_ms),
-            mean(&|t| t.estimate_ms),
-            mean(&|t| t.refine_ms),
-        );
+    // Per-frame latency of the engine alone (images already in memory), and the split.
+    let frames: Vec<_> = (0..seq.len()).filter_map(|i| seq.frame(i).ok()).collect();
+    let mut odo = Odometry::new(camera, config.clone()).expect("engine");
+    let mut latency = Vec::new();
+    let mut sum = StageTimes::default();
+    for (i, f) in frames.iter().enumerate() {
+        let t = Instant::now();
+        let r = odo.track(StereoInput {
+            left: f.left.view(),
+            right: f.right.view(),
+            timestamp_s: i as f64 * 0.1,
+        });
+        latency.push(t.elapsed().as_secs_f64() * 1e3);
+        if let Ok(r) = r {
+            sum += &r.times;
+        }
     }
+    let n = latency.len() as f64;
+    latency.sort_by(f64::total_cmp);
+    eprintln!(
+        "kitti_vo_seq2, orb + pso, engine per frame (images in memory): p50 {:.1} ms, p99 {:.1} ms; \
+         mean features {:.2}, stereo {:.2}, match {:.2}, estimate {:.2}, refine {:.2}, calibrate {:.2} ms",
+        percentile(&latency, 0.5),
+        percentile(&latency, 0.99),
+        sum.features_ms / n,
+        sum.stereo_ms / n,
+        sum.match_ms / n,
+        sum.estimate_ms / n,
+        sum.refine_ms / n,
+        sum.calibrate_ms / n,
+    );
     let mut g = c.benchmark_group("odometry");
     g.sample_size(10);
     g.measurement_time(Duration::from_secs(20));
     g.throughput(Throughput::Elements(seq.len() as u64));
-    g.bench_function("kitti_vo_seq2/orb+pso", |b| {
+    g.bench_function("kitti_vo_seq2/load+engine", |b| {
         b.iter(|| {
-            black_box(run(
-                seq.as_ref(),
-                &frontend,
-                &estimator,
-                &config,
-                &mut |_, _| {},
-            ))
+            let mut odo = Odometry::new(camera, config.clone()).expect("engine");
+            black_box(collect(seq.as_ref(), &mut odo, 0.1))
+        });
+    });
+    g.bench_function("kitti_vo_seq2/engine", |b| {
+        b.iter(|| {
+            let mut odo = Odometry::new(camera, config.clone()).expect("engine");
+            for (i, f) in frames.iter().enumerate() {
+                let _ = black_box(odo.track(StereoInput {
+                    left: f.left.view(),
+                    right: f.right.view(),
+                    timestamp_s: i as f64 * 0.1,
+                }));
+            }
         });
     });
     g.finish();

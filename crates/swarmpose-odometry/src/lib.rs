@@ -1,23 +1,46 @@
 //! # swarmpose-odometry
 //!
-//! Stereo visual odometry after the paper's section 7: for every consecutive pair of
-//! frames of a [`StereoSequence`](swarmpose_datasets::StereoSequence), the stereo front
-//! end, an estimator and the chaining of eq. (2) ([`pipeline`]); the per-frame log and
-//! trajectory files ([`output`]) and the plots of figure 17 ([`plots`]); RGB-D input in
-//! the TUM layout ([`rgbd`]); a built-in synthetic stereo sequence rendered along a
-//! known path, for runs without data ([`synthetic`]). Measured results: `RESULTS.md`
-//! beside this crate's manifest.
+//! Online stereo (and RGB-D) visual odometry: a streaming engine ([`Odometry`]) that
+//! takes one frame at a time and returns its pose at once, with its status, inliers,
+//! stage timings, the covariance of its motion and the disparity correction in use.
+//! Memory does not grow with the sequence. One module per stage:
+//!
+//! | stage | module |
+//! |---|---|
+//! | frame intake (the camera, frames, checks) | [`intake`] |
+//! | front end (features, stereo matching, RGB-D depth) | [`frontend`] |
+//! | estimate (matching, robust estimator) | [`estimate`] |
+//! | reprojection refinement and covariance | [`refine`] |
+//! | self-calibration of the disparity correction | [`selfcal`] |
+//! | the state machine from frames to poses | [`tracker`] |
+//! | the engine | [`engine`] |
+//! | output (trajectory, per-frame log, covariances) | [`output`] |
+//!
+//! Around it: runs over recorded sequences ([`batch`]), TUM RGB-D input ([`rgbd`]), the
+//! plots of figure 17 ([`plots`]) and synthetic sequences ([`synthetic`]). Measured
+//! results: `RESULTS.md` beside this crate's manifest.
 #![deny(missing_docs)]
 #![warn(clippy::unwrap_used)]
 
+pub mod batch;
+pub mod config;
+pub mod engine;
 pub mod error;
+mod estimate;
+pub mod frontend;
+pub mod intake;
 pub mod output;
-pub mod pipeline;
 pub mod plots;
+pub mod record;
+pub mod refine;
 pub mod rgbd;
+pub mod selfcal;
 pub mod synthetic;
+pub mod tracker;
 
+pub use config::{Calibration, OdometryConfig};
+pub use engine::{Odometry, OdometryBuilder};
 pub use error::OdometryError;
-pub use pipeline::{
-    DisparityOffset, FrameRecord, OdometryConfig, OdometryRun, StageTimes, Status, run,
-};
+pub use intake::{DepthView, RgbdInput, StereoCamera, StereoInput};
+pub use record::{Counts, FrameResult, StageTimes, Status};
+pub use selfcal::{CorrectionModel, Decision};

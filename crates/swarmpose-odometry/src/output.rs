@@ -1,136 +1,198 @@
-//! The files of a run: `trajectory.kitti.txt`, `trajectory.tum.txt`, `frames.csv`, and
-//! with ground truth `groundtruth.kitti.txt` and `evaluation.json`.
+//! The text of a run's outputs, one line per frame as soon as the frame is done (the
+//! caller appends each line to its file and flushes it, so that a run stopped at any
+//! point leaves whole lines for every finished frame):
+//!
+//! * `trajectory.kitti.txt` and `trajectory.tum.txt`: the poses
+//!   ([`swarmpose_eval::trajectory`]'s formats);
+//! * `frames.csv` ([`FRAMES_HEADER`]): status, counts, stage times, the motion, the
+//!   position and the disparity correction of every frame;
+//! * `motion_covariance.csv` ([`COVARIANCE_HEADER`]): the 6x6 covariance of every
+//!   tracked motion.
+//!
+//! And at the end, the summary ([`Summary`]).
 
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
 
 use nalgebra::Isometry3;
 use swarmpose_core::geometry::quaternion_wxyz;
-use swarmpose_eval::trajectory::{kitti_text, tum_text, write_text};
-use swarmpose_eval::{Evaluation, Trajectory, associate, evaluate};
+use swarmpose_eval::trajectory::{kitti_text, tum_text};
 
-use crate::error::OdometryError;
-use crate::pipeline::OdometryRun;
+use crate::record::{FrameResult, Status};
+use crate::selfcal::Decision;
 
 /// The header of `frames.csv`.
-pub const FRAMES_HEADER: &str = "frame,status,left_features,right_features,stereo_points,\
-matches,inliers,load_ms,features_ms,stereo_ms,match_ms,estimate_ms,refine_ms,total_ms,\
-tx,ty,tz,qw,qx,qy,qz,x,y,z";
+pub const FRAMES_HEADER: &str = "frame,timestamp_s,status,reference,left_features,\
+right_features,stereo_points,matches,inliers,load_ms,features_ms,stereo_ms,match_ms,\
+estimate_ms,refine_ms,calibrate_ms,total_ms,tx,ty,tz,qw,qx,qy,qz,x,y,z,correction_model,\
+correction_offset_px,correction_quadratic_px";
 
-/// `frames.csv`: one row per frame: status (`first`, `ok`, `constant-velocity (why)`),
-/// counts, time per stage (ms), the motion from the previous frame (`dst = R src + t`,
-/// translation metres and quaternion) and the position of the camera.
+/// One row of `frames.csv` (no line end): the frame, its timestamp, status
+/// (`first`, `tracked`, `constant-velocity (why)`, `lost (why)`), the frame its motion
+/// was measured from, counts, time per stage (ms), the motion from the previous frame
+/// (`T_{k-1,k}`: translation metres and quaternion), the position of the camera, and the
+/// disparity correction applied.
 #[must_use]
-pub fn frames_csv(run: &OdometryRun) -> String {
-    let mut s = String::from(FRAMES_HEADER);
-    s.push('\n');
-    for (f, pose) in run.frames.iter().zip(&run.poses) {
-        let t = f.motion.translation.vector;
-        let [qw, qx, qy, qz] = quaternion_wxyz(&f.motion.rotation);
-        let p = pose.translation.vector;
-        let tm = &f.times;
-        let status = f.status.text().replace('"', "'");
-        let _ = writeln!(
-            s,
-            "{},\"{status}\",{},{},{},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.6},{:.6},{:.6},{:.9},{:.9},{:.9},{:.9},{:.6},{:.6},{:.6}",
-            f.frame,
-            f.n_left_features,
-            f.n_right_features,
-            f.n_stereo,
-            f.n_matches,
-            f.n_inliers,
-            tm.load_ms,
-            tm.features_ms,
-            tm.stereo_ms,
-            tm.match_ms,
-            tm.estimate_ms,
-            tm.refine_ms,
-            tm.total_ms(),
-            t.x,
-            t.y,
-            t.z,
-            qw,
-            qx,
-            qy,
-            qz,
-            p.x,
-            p.y,
-            p.z
-        );
+pub fn frames_row(r: &FrameResult) -> String {
+    let t = r.motion.translation.vector;
+    let [qw, qx, qy, qz] = quaternion_wxyz(&r.motion.rotation);
+    let p = r.pose.translation.vector;
+    let tm = &r.times;
+    let c = &r.counts;
+    let status = r.status.text().replace('"', "'");
+    let reference = r.reference.map_or_else(String::new, |i| i.to_string());
+    format!(
+        "{},{:.6},\"{status}\",{reference},{},{},{},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},\
+         {:.6},{:.6},{:.6},{:.9},{:.9},{:.9},{:.9},{:.6},{:.6},{:.6},{},{:.4},{:.4}",
+        r.index,
+        r.timestamp_s,
+        c.left_features,
+        c.right_features,
+        c.stereo_points,
+        c.matches,
+        c.inliers,
+        tm.load_ms,
+        tm.features_ms,
+        tm.stereo_ms,
+        tm.match_ms,
+        tm.estimate_ms,
+        tm.refine_ms,
+        tm.calibrate_ms,
+        tm.total_ms(),
+        t.x,
+        t.y,
+        t.z,
+        qw,
+        qx,
+        qy,
+        qz,
+        p.x,
+        p.y,
+        p.z,
+        r.correction_model.name(),
+        r.correction.offset_px,
+        r.correction.quadratic_px,
+    )
+}
+
+/// The header of `motion_covariance.csv`.
+pub const COVARIANCE_HEADER: &str = "# Covariance of each tracked motion T (pose of camera k \
+in its reference camera): of xi = (nu_x, nu_y, nu_z, omega_x, omega_y, omega_z), metres and \
+radians in the frame of camera k, with T_true = T o E(xi), E(xi): P -> Exp(omega) P + nu. \
+Upper triangle, row by row (c_ij for i <= j, 0-based).\n\
+frame,reference,c00,c01,c02,c03,c04,c05,c11,c12,c13,c14,c15,c22,c23,c24,c25,c33,c34,c35,c44,c45,c55";
+
+/// One row of `motion_covariance.csv` (no line end), for a frame with a covariance.
+#[must_use]
+pub fn covariance_row(r: &FrameResult) -> Option<String> {
+    let c = r.covariance?;
+    let mut s = format!("{},{}", r.index, r.reference?);
+    for i in 0..6 {
+        for j in i..6 {
+            let _ = write!(s, ",{:e}", c[(i, j)]);
+        }
     }
-    s
+    Some(s)
 }
 
-/// The evaluation of a run against ground truth of the same frames.
-///
-/// # Errors
-/// [`OdometryError::Eval`] when the lengths differ or there are too few poses.
-pub fn evaluate_run(
-    run: &OdometryRun,
-    ground_truth: &[Isometry3<f64>],
-) -> Result<Evaluation, OdometryError> {
-    let pairs = associate::by_index(
-        &Trajectory::indexed("the estimated trajectory", run.poses.clone()),
-        &Trajectory::indexed("the ground truth", ground_truth.to_vec()),
-    )?;
-    Ok(evaluate(&pairs)?)
+/// The KITTI line of a pose (no line end).
+#[must_use]
+pub fn kitti_line(pose: &Isometry3<f64>) -> String {
+    kitti_text(std::slice::from_ref(pose)).trim_end().to_owned()
 }
 
-fn write(path: PathBuf, text: &str, written: &mut Vec<PathBuf>) -> Result<(), OdometryError> {
-    write_text(&path, text).map_err(|e| OdometryError::Write {
-        path: path.clone(),
-        message: e.to_string(),
-    })?;
-    written.push(path);
-    Ok(())
+/// The TUM line of a pose at `timestamp_s` (no line end).
+#[must_use]
+pub fn tum_line(timestamp_s: f64, pose: &Isometry3<f64>) -> String {
+    tum_text(&[timestamp_s], std::slice::from_ref(pose))
+        .trim_end()
+        .to_owned()
 }
 
-/// Writes the text outputs of `run` into `dir` (created if needed); returns the paths.
-///
-/// # Errors
-/// [`OdometryError::Write`] naming the file.
-pub fn write_text_outputs(
-    run: &OdometryRun,
-    dir: &Path,
-    ground_truth: Option<&[Isometry3<f64>]>,
-    evaluation: Option<&Evaluation>,
-) -> Result<Vec<PathBuf>, OdometryError> {
-    std::fs::create_dir_all(dir).map_err(|e| OdometryError::Write {
-        path: dir.to_owned(),
-        message: e.to_string(),
-    })?;
-    let mut written = Vec::new();
-    write(
-        dir.join("trajectory.kitti.txt"),
-        &kitti_text(&run.poses),
-        &mut written,
-    )?;
-    write(
-        dir.join("trajectory.tum.txt"),
-        &tum_text(&run.stamps, &run.poses),
-        &mut written,
-    )?;
-    write(dir.join("frames.csv"), &frames_csv(run), &mut written)?;
-    if let Some(gt) = ground_truth {
-        write(
-            dir.join("groundtruth.kitti.txt"),
-            &kitti_text(gt),
-            &mut written,
-        )?;
-        write(
-            dir.join("groundtruth.tum.txt"),
-            &tum_text(&run.stamps, gt),
-            &mut written,
-        )?;
+/// Counts of a run's frames by status, updated frame by frame.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Summary {
+    /// Frames taken.
+    pub frames: usize,
+    /// Frames whose motion was tracked.
+    pub tracked: usize,
+    /// Frames predicted at constant velocity.
+    pub constant_velocity: usize,
+    /// Frames lost (a first frame without enough points included).
+    pub lost: usize,
+}
+
+impl Summary {
+    /// Counts one more frame.
+    pub fn add(&mut self, r: &FrameResult) {
+        self.frames += 1;
+        match r.status {
+            Status::First => {}
+            Status::Tracked => self.tracked += 1,
+            Status::ConstantVelocity(_) => self.constant_velocity += 1,
+            Status::Lost(_) => self.lost += 1,
+        }
     }
-    if let Some(e) = evaluation {
-        let text = serde_json_like(e);
-        write(dir.join("evaluation.json"), &text, &mut written)?;
+
+    /// The motions: one per frame after the first.
+    #[must_use]
+    pub fn motions(&self) -> usize {
+        self.frames.saturating_sub(1)
     }
-    Ok(written)
+
+    /// Share of the motions that were tracked, in `[0, 1]` (0 for fewer than 2 frames).
+    #[must_use]
+    pub fn tracked_share(&self) -> f64 {
+        if self.frames < 2 {
+            0.0
+        } else {
+            self.tracked as f64 / self.motions() as f64
+        }
+    }
+
+    /// `N frames: T of M motions tracked, C at constant velocity, L lost`.
+    #[must_use]
+    pub fn text(&self) -> String {
+        format!(
+            "{} frames: {} of {} motions tracked, {} at constant velocity, {} lost",
+            self.frames,
+            self.tracked,
+            self.motions(),
+            self.constant_velocity,
+            self.lost
+        )
+    }
 }
 
-/// The evaluation as JSON.
-fn serde_json_like(e: &Evaluation) -> String {
-    serde_json::to_string_pretty(e).unwrap_or_else(|err| format!("{{\"error\": \"{err}\"}}"))
+/// The self-calibration's decision as JSON: the causes chosen, the correction's
+/// coefficients, and the evidence of the rows (rotation) and of rigidity (held-out
+/// scores, the margin the next term missed, counts).
+#[must_use]
+pub fn calibration_json(d: &Decision) -> serde_json::Value {
+    let terms: serde_json::Map<String, serde_json::Value> =
+        swarmpose_vision::frontend::DisparityCorrection::TERM_NAMES
+            .iter()
+            .zip(d.correction.coefficients())
+            .map(|(n, c)| (format!("{n}_px"), serde_json::json!(c)))
+            .collect();
+    let r = &d.rows;
+    serde_json::json!({
+        "model": d.model.name(),
+        "coefficients": terms,
+        "rows": {
+            "measurements": r.measurements,
+            "yaw": r.yaw,
+            "roll": r.roll,
+            "pitch": r.pitch,
+            "f_yaw_px": r.rotation_px[0],
+            "f_roll_px": r.rotation_px[1],
+            "f_pitch_px": r.rotation_px[2],
+            "held_out_score_chi2": r.score,
+        },
+        "rigidity": {
+            "pairs": d.pairs,
+            "held_out_score_chi2": d.rigidity_score,
+            "next_term_held_out_score_chi2": d.rigidity_next_score,
+        },
+        "frames": d.frames,
+    })
 }

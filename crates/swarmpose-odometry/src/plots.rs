@@ -1,9 +1,9 @@
-//! The plots of a run: `trajectory.png`/`.svg`, the top view (x right, z forward) of
-//! the estimated trajectory against the ground truth as in the paper's figure 17, and
-//! `errors.png`, the per-frame rotation error (eq. 20 of the relative rotations) and
-//! translation error (RPE, 1 frame).
+//! The plots of a run, rendered in memory (the caller writes them): `trajectory.png`/
+//! `.svg`, the top view (x right, z forward) of the estimated trajectory against the
+//! ground truth as in the paper's figure 17, and `errors.png`, the per-frame rotation
+//! error (eq. 20 of the relative rotations) and translation error (RPE, 1 frame).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::Once;
 
 use image::codecs::png::{CompressionType, FilterType, PngEncoder};
@@ -14,7 +14,6 @@ use plotters::prelude::*;
 use swarmpose_eval::Evaluation;
 
 use crate::error::OdometryError;
-use crate::pipeline::{OdometryRun, Status};
 
 /// DejaVu Sans, the copy `swarmpose-sim` ships (Bitstream Vera license, see
 /// `crates/swarmpose-sim/assets/DejaVuSans-LICENSE.txt`).
@@ -31,6 +30,17 @@ fn register_font() {
             let _ = plotters::style::register_font(FAMILY, style, FONT);
         }
     });
+}
+
+/// The estimated trajectory to draw.
+#[derive(Debug, Clone, Copy)]
+pub struct PlotTrack<'a> {
+    /// Camera poses.
+    pub poses: &'a [Isometry3<f64>],
+    /// For each pose, true when its motion was not tracked (drawn as a cross).
+    pub predicted: &'a [bool],
+    /// Legend label (method and detector).
+    pub label: &'a str,
 }
 
 fn err(path: &Path, e: impl std::fmt::Display) -> OdometryError {
@@ -70,13 +80,13 @@ fn square_ranges(points: &[(f64, f64)], w: u32, h: u32) -> ((f64, f64), (f64, f6
 
 fn draw_trajectory<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
-    run: &OdometryRun,
+    run: &PlotTrack<'_>,
     gt: Option<&[Isometry3<f64>]>,
     title: &str,
     path: &Path,
 ) -> Result<(), OdometryError> {
     root.fill(&WHITE).map_err(|e| err(path, e))?;
-    let est = top_view(&run.poses);
+    let est = top_view(run.poses);
     let truth = gt.map(top_view).unwrap_or_default();
     let all: Vec<(f64, f64)> = est.iter().chain(&truth).copied().collect();
     let (w, h) = root.dim_in_pixel();
@@ -107,16 +117,18 @@ fn draw_trajectory<DB: DrawingBackend>(
             .draw_series(truth.iter().map(|&p| Circle::new(p, 3, GT.filled())))
             .map_err(|e| err(path, e))?;
     }
-    let label = format!("{} + {}", run.method, run.detector);
     chart
         .draw_series(LineSeries::new(est.clone(), EST.stroke_width(2)))
         .map_err(|e| err(path, e))?
-        .label(label)
+        .label(run.label)
         .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], EST.stroke_width(2)));
     chart
-        .draw_series(est.iter().zip(&run.frames).map(|(&p, f)| match f.status {
-            Status::ConstantVelocity(_) => Cross::new(p, 7, BLACK.stroke_width(2)).into_dyn(),
-            _ => Circle::new(p, 3, EST.filled()).into_dyn(),
+        .draw_series(est.iter().zip(run.predicted).map(|(&p, &predicted)| {
+            if predicted {
+                Cross::new(p, 7, BLACK.stroke_width(2)).into_dyn()
+            } else {
+                Circle::new(p, 3, EST.filled()).into_dyn()
+            }
         }))
         .map_err(|e| err(path, e))?;
     chart
@@ -191,58 +203,51 @@ fn draw_errors<DB: DrawingBackend>(
     root.present().map_err(|x| err(path, x))
 }
 
-fn save_png(path: &Path, buf: &[u8], size: (u32, u32)) -> Result<(), OdometryError> {
-    let file = std::fs::File::create(path).map_err(|e| err(path, e))?;
-    PngEncoder::new_with_quality(
-        std::io::BufWriter::new(file),
-        CompressionType::Default,
-        FilterType::Adaptive,
-    )
-    .write_image(buf, size.0, size.1, ExtendedColorType::Rgb8)
-    .map_err(|e| err(path, e))
+fn encode_png(path: &Path, buf: &[u8], size: (u32, u32)) -> Result<Vec<u8>, OdometryError> {
+    let mut out = Vec::new();
+    PngEncoder::new_with_quality(&mut out, CompressionType::Default, FilterType::Adaptive)
+        .write_image(buf, size.0, size.1, ExtendedColorType::Rgb8)
+        .map_err(|e| err(path, e))?;
+    Ok(out)
 }
 
-/// Writes `trajectory.png`, `trajectory.svg` and, with an evaluation, `errors.png` into
-/// `dir`; returns the paths.
+/// The plots of a run: `(file name, bytes)` of `trajectory.png`, `trajectory.svg` and,
+/// with an evaluation, `errors.png`.
 ///
 /// # Errors
-/// [`OdometryError::Write`] naming the file.
-pub fn write_plots(
-    run: &OdometryRun,
-    dir: &Path,
+/// [`OdometryError::Write`] naming the plot that could not be drawn.
+pub fn render_plots(
+    run: &PlotTrack<'_>,
     title: &str,
     gt: Option<&[Isometry3<f64>]>,
     evaluation: Option<&Evaluation>,
-) -> Result<Vec<PathBuf>, OdometryError> {
+) -> Result<Vec<(&'static str, Vec<u8>)>, OdometryError> {
     register_font();
-    let mut written = Vec::new();
+    let mut out = Vec::new();
     let size = (1000u32, 1000u32);
-    let png = dir.join("trajectory.png");
+    let png = Path::new("trajectory.png");
     let mut buf = vec![0u8; size.0 as usize * size.1 as usize * 3];
     {
         let root = BitMapBackend::with_buffer(&mut buf, size).into_drawing_area();
-        draw_trajectory(&root, run, gt, title, &png)?;
+        draw_trajectory(&root, run, gt, title, png)?;
     }
-    save_png(&png, &buf, size)?;
-    written.push(png);
-    let svg = dir.join("trajectory.svg");
+    out.push(("trajectory.png", encode_png(png, &buf, size)?));
+    let svg = Path::new("trajectory.svg");
     let mut text = String::new();
     {
         let root = SVGBackend::with_string(&mut text, size).into_drawing_area();
-        draw_trajectory(&root, run, gt, title, &svg)?;
+        draw_trajectory(&root, run, gt, title, svg)?;
     }
-    std::fs::write(&svg, text).map_err(|e| err(&svg, e))?;
-    written.push(svg);
+    out.push(("trajectory.svg", text.into_bytes()));
     if let Some(e) = evaluation {
         let size = (1200u32, 800u32);
-        let path = dir.join("errors.png");
+        let path = Path::new("errors.png");
         let mut buf = vec![0u8; size.0 as usize * size.1 as usize * 3];
         {
             let root = BitMapBackend::with_buffer(&mut buf, size).into_drawing_area();
-            draw_errors(&root, e, &path)?;
+            draw_errors(&root, e, path)?;
         }
-        save_png(&path, &buf, size)?;
-        written.push(path);
+        out.push(("errors.png", encode_png(path, &buf, size)?));
     }
-    Ok(written)
+    Ok(out)
 }

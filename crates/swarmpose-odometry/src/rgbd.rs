@@ -11,17 +11,13 @@
 //! Kinect-like noise model (depth σ = 1.425e-3 z² m, 0.5 px in the image).
 
 use std::path::{Path, PathBuf};
-use std::time::Instant;
 
-use nalgebra::{Isometry3, Matrix3, Point3};
-use swarmpose_core::Estimator;
+use nalgebra::Isometry3;
 use swarmpose_eval::{Format, Trajectory};
-use swarmpose_vision::features::FeatureExtractor;
-use swarmpose_vision::frontend::{Frontend, StereoFrame};
 use swarmpose_vision::image::GrayImage;
 
 use crate::error::OdometryError;
-use crate::pipeline::{DisparityOffset, OdometryConfig, OdometryRun, StageTimes, run_frames};
+use crate::intake::StereoCamera;
 
 /// Depth PNG units per metre.
 pub const DEPTH_SCALE: f64 = 5000.0;
@@ -205,6 +201,31 @@ impl RgbdSequence {
         self.intrinsics
     }
 
+    /// The camera of the sequence (its intrinsics, the size of its first image; the
+    /// baseline is the RGB-D engine's virtual one).
+    ///
+    /// # Errors
+    /// [`OdometryError::Rgbd`] when the first image cannot be read.
+    pub fn camera(&self) -> Result<StereoCamera, OdometryError> {
+        let Some((_, rgb, _)) = self.frames.first() else {
+            return Err(rgbd_err(&self.root, 0, "no frame"));
+        };
+        let (w, h) = image::image_dimensions(rgb)
+            .map_err(|e| rgbd_err(rgb, 0, format!("cannot read: {e}")))?;
+        let k = self.intrinsics;
+        Ok(StereoCamera {
+            rig: swarmpose_vision::stereo::RectifiedStereo {
+                fx: k.fx,
+                fy: k.fy,
+                cx: k.cx,
+                cy: k.cy,
+                baseline_m: crate::frontend::RgbdNoise::default().virtual_baseline_m,
+            },
+            width: w as usize,
+            height: h as usize,
+        })
+    }
+
     /// Loads frame `i`: the gray image and the depth in metres (0 = none).
     ///
     /// # Errors
@@ -260,104 +281,4 @@ fn read_intrinsics(path: &Path) -> Result<Intrinsics, OdometryError> {
         }),
         _ => Err(rgbd_err(path, 1, "expected four numbers: fx fy cx cy")),
     }
-}
-
-/// Depth noise (σ, metres) at depth `z`: Khoshelham and Elberink's Kinect model.
-fn depth_sigma(z: f64) -> f64 {
-    1.425e-3 * z * z
-}
-
-/// The frame's features with a valid depth, as a [`StereoFrame`] (no right image).
-fn rgbd_frame<E: FeatureExtractor>(
-    frontend: &Frontend<E>,
-    k: &Intrinsics,
-    gray: &GrayImage,
-    depth: &[f32],
-) -> StereoFrame<E::Descriptor> {
-    let f = frontend.extract(gray.view());
-    let mut out = StereoFrame {
-        n_left_features: f.keypoints.len(),
-        ..StereoFrame::default()
-    };
-    let px_sigma = 0.5;
-    for (kp, d) in f.keypoints.iter().zip(&f.descriptors) {
-        let (u, v) = (kp.x.round() as isize, kp.y.round() as isize);
-        if u < 0 || v < 0 || u as usize >= gray.width || v as usize >= gray.height {
-            continue;
-        }
-        let z = f64::from(depth[v as usize * gray.width + u as usize]);
-        if z.is_nan() || z <= 0.1 {
-            continue;
-        }
-        let (x, y) = (
-            (f64::from(kp.x) - k.cx) * z / k.fx,
-            (f64::from(kp.y) - k.cy) * z / k.fy,
-        );
-        // Covariance: Jacobian of (u, v, z) -> (x, y, z).
-        let j = Matrix3::new(z / k.fx, 0.0, x / z, 0.0, z / k.fy, y / z, 0.0, 0.0, 1.0);
-        let sz = depth_sigma(z);
-        let cov =
-            j * Matrix3::from_diagonal(&nalgebra::Vector3::new(
-                px_sigma * px_sigma,
-                px_sigma * px_sigma,
-                sz * sz,
-            )) * j.transpose();
-        out.left_keypoints.push(*kp);
-        out.left_descriptors.push(d.clone());
-        out.right_keypoints.push(*kp);
-        out.right_descriptors.push(d.clone());
-        out.points.push(Point3::new(x, y, z));
-        // A virtual disparity (Kinect-like 7.5 cm baseline); only used by a disparity
-        // offset, which RGB-D runs never apply.
-        out.disparities_px.push((k.fx * 0.075 / z) as f32);
-        out.sigmas_m.push(sz.hypot(px_sigma * z / k.fx));
-        out.covariances.push(cov);
-    }
-    out
-}
-
-/// Runs the odometry on a TUM RGB-D sequence with `frontend`'s left-image extractor and
-/// temporal matching. The disparity offset is never applied.
-///
-/// # Errors
-/// [`OdometryError::TooFewFrames`], or an unreadable frame.
-pub fn run_rgbd<E: FeatureExtractor>(
-    seq: &RgbdSequence,
-    frontend: &Frontend<E>,
-    estimator: &dyn Estimator,
-    config: &OdometryConfig,
-    progress: &mut dyn FnMut(usize, usize),
-) -> Result<OdometryRun, OdometryError> {
-    let n = seq.len();
-    if n < 2 {
-        return Err(OdometryError::TooFewFrames {
-            dir: seq.root().to_owned(),
-            n,
-        });
-    }
-    let k = seq.intrinsics();
-    let mut make_frame = |i: usize| {
-        let mut times = StageTimes::default();
-        let t = Instant::now();
-        let (gray, depth) = seq.frame(i)?;
-        times.load_ms = t.elapsed().as_secs_f64() * 1e3;
-        let t = Instant::now();
-        let frame = rgbd_frame(frontend, &k, &gray, &depth);
-        times.features_ms = t.elapsed().as_secs_f64() * 1e3;
-        Ok((frame, times))
-    };
-    let config = OdometryConfig {
-        disparity_offset: DisparityOffset::Fixed(0.0),
-        ..config.clone()
-    };
-    run_frames(
-        n,
-        &mut make_frame,
-        &frontend.temporal,
-        estimator,
-        &config,
-        progress,
-        seq.stamps(),
-        frontend.extractor.name(),
-    )
 }

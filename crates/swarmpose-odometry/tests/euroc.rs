@@ -1,5 +1,5 @@
 //! The default run on the EuRoC clip where the MAV sits still (ground-truth motion at
-//! most 2.6 mm): every estimated position stays within 3 cm of the start.
+//! most 2.6 mm): every estimated position stays within 3 mm of the start.
 
 mod common;
 
@@ -9,23 +9,25 @@ fn euroc_still_clip_stays_at_its_start() {
         return;
     };
     let far = r
-        .poses
+        .poses()
         .iter()
         .map(|p| p.translation.vector.norm())
         .fold(0.0f64, f64::max);
     let angle = r
-        .poses
+        .poses()
         .iter()
         .map(|p| p.rotation.angle().to_degrees())
         .fold(0.0f64, f64::max);
     eprintln!(
         "euroc still clip: {} frames, farthest from the start {:.2} mm, largest rotation \
-         {angle:.3} deg, {} constant-velocity frames",
-        r.poses.len(),
+         {angle:.3} deg, {} untracked frames, correction {} ({})",
+        r.results.len(),
         far * 1e3,
-        r.n_fallbacks()
+        r.untracked(),
+        r.calibration.correction,
+        r.calibration.model
     );
-    assert_eq!(r.poses.len(), 30);
-    assert_eq!(r.n_fallbacks(), 0);
-    assert!(far <= 0.03, "{:.1} mm from the start", far * 1e3);
+    assert_eq!(r.results.len(), 30);
+    assert_eq!(r.untracked(), 0);
+    assert!(far <= 0.003, "{:.2} mm from the start", far * 1e3);
 }

@@ -1,13 +1,15 @@
 //! TUM RGB-D input on frames of the synthetic street rendered with exact depth: the
 //! trajectory follows the known path, and malformed directories give clear errors.
 
-use swarmpose_core::{PsoEstimator, PsoEstimatorConfig};
+use std::ops::ControlFlow;
+
 use swarmpose_eval::associate::by_index;
 use swarmpose_eval::{Trajectory, evaluate};
-use swarmpose_odometry::OdometryConfig;
-use swarmpose_odometry::rgbd::{RgbdSequence, run_rgbd};
-use swarmpose_odometry::synthetic::{RIG, SyntheticSequence};
-use swarmpose_vision::frontend::Frontend;
+use swarmpose_odometry::batch::run_rgbd_sequence;
+use swarmpose_odometry::frontend::RgbdNoise;
+use swarmpose_odometry::rgbd::RgbdSequence;
+use swarmpose_odometry::synthetic::SyntheticSequence;
+use swarmpose_odometry::{Odometry, OdometryConfig, Status};
 
 fn tmp(tag: &str) -> std::path::PathBuf {
     let d = std::env::temp_dir().join(format!("swarmpose-rgbd-{tag}-{}", std::process::id()));
@@ -25,34 +27,36 @@ fn synthetic_tum_rgbd_is_followed() {
         .expect("write");
     let seq = RgbdSequence::open(&dir).expect("open");
     assert_eq!(seq.len(), 12);
-    let frontend = Frontend::orb(RIG);
-    let estimator = PsoEstimator::new(PsoEstimatorConfig::default());
-    let r = run_rgbd(
-        &seq,
-        &frontend,
-        &estimator,
-        &OdometryConfig::default(),
-        &mut |_, _| {},
-    )
+    let mut odo = Odometry::builder(seq.camera().expect("camera"))
+        .config(OdometryConfig::default())
+        .rgbd(RgbdNoise::default())
+        .build()
+        .expect("engine");
+    let mut results = Vec::new();
+    run_rgbd_sequence(&seq, &mut odo, &mut |r| {
+        results.push(r.clone());
+        ControlFlow::Continue(())
+    })
     .expect("run");
     let gt = seq.ground_truth().expect("groundtruth.txt").to_vec();
     // Re-based on the first frame: the first true pose is the identity.
     assert!(gt[0].translation.vector.norm() < 1e-9);
+    let poses: Vec<_> = results.iter().map(|r| r.pose).collect();
     let e = evaluate(
         &by_index(
-            &Trajectory::indexed("estimate", r.poses.clone()),
+            &Trajectory::indexed("estimate", poses),
             &Trajectory::indexed("truth", gt),
         )
         .expect("pairs"),
     )
     .expect("evaluate");
-    for f in &r.frames {
+    for f in &results {
         eprintln!(
             "frame {:2}: {:4} points {:4} matches {:4} inliers {}",
-            f.frame,
-            f.n_stereo,
-            f.n_matches,
-            f.n_inliers,
+            f.index,
+            f.counts.stereo_points,
+            f.counts.matches,
+            f.counts.inliers,
             f.status.text()
         );
     }
@@ -64,8 +68,12 @@ fn synthetic_tum_rgbd_is_followed() {
         e.eq20_rms,
         e.ate_aligned.rmse
     );
-    assert!((r.stamps[1] - r.stamps[0] - 1.0 / 30.0).abs() < 1e-5);
-    assert_eq!(r.n_fallbacks(), 0);
+    assert!((results[1].timestamp_s - results[0].timestamp_s - 1.0 / 30.0).abs() < 1e-5);
+    assert!(
+        results
+            .iter()
+            .all(|r| matches!(r.status, Status::First | Status::Tracked))
+    );
     assert!(e.final_drift_percent.expect("3.3 m") < 2.0);
     assert!(e.eq20_rms < 0.01);
     let _ = std::fs::remove_dir_all(&dir);

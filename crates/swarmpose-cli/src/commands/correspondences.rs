@@ -7,27 +7,18 @@
 
 use std::path::{Path, PathBuf};
 
-use clap::{Args, ValueEnum};
-use swarmpose_core::{PsoEstimator, PsoEstimatorConfig};
+use clap::Args;
 use swarmpose_data::correspondence_csv;
 use swarmpose_datasets::{DatasetError, StereoPair, StereoSequence, open};
+use swarmpose_odometry::batch::{camera_of, run_sequence};
+use swarmpose_odometry::config::Calibration;
+use swarmpose_odometry::{Odometry, OdometryConfig};
 use swarmpose_vision::draw::draw_matches;
 use swarmpose_vision::features::FeatureExtractor;
-use swarmpose_vision::frontend::{
-    DisparityCorrection, FrameMatches, Frontend, self_calibrate_correction, self_calibrate_offset,
-};
+use swarmpose_vision::frontend::{Detector, DisparityCorrection, FrameMatches, Frontend};
 
-use super::odometry::DisparityModel;
+use super::stereo_options::StereoOptions;
 use crate::error::CliError;
-
-/// The detector/descriptor of the front end.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum Detector {
-    /// FAST corners with BRIEF descriptors (fast, real-time).
-    Orb,
-    /// Upright SURF (as in the paper; slower).
-    Surf,
-}
 
 /// Arguments of `swarmpose correspondences`.
 #[derive(Debug, Args)]
@@ -66,51 +57,22 @@ pub struct CorrespondencesArgs {
     #[arg(long, value_name = "REPORT.json", requires = "draw")]
     pub inliers: Option<PathBuf>,
 
-    /// Detector and descriptor.
-    #[arg(long, value_enum, default_value_t = Detector::Orb)]
-    pub detector: Detector,
-
     /// Keep only the matches confirmed by the right images (left t -> right t -> right
     /// t-1 -> left t-1 -> left t closes).
     #[arg(long)]
     pub circular_check: bool,
 
-    /// Added to every measured disparity, pixels (at the image centre when
-    /// --disparity-quadratic is given): corrects a right principal point that is off in
-    /// the calibration. kitti_vo_seq2 self-calibrates 0.708 with --disparity-quadratic
-    /// 2.020 (--self-calibrate 50), or 1.202 alone (--disparity-model constant).
-    #[arg(
-        long,
-        value_name = "PX",
-        default_value_t = 0.0,
-        allow_negative_numbers = true
-    )]
-    pub disparity_offset: f64,
-
-    /// Quadratic term of the disparity correction, pixels per unit x² with
-    /// x = (u - cx) / f: a yaw of the right camera.
-    #[arg(
-        long,
-        value_name = "PX",
-        default_value_t = 0.0,
-        allow_negative_numbers = true
-    )]
-    pub disparity_quadratic: f64,
-
-    /// The correction --self-calibrate fits: `quadratic` (offset + quadratic x²) or
-    /// `constant` (offset only).
-    #[arg(long, value_enum, default_value_t = DisparityModel::Quadratic)]
-    pub disparity_model: DisparityModel,
+    #[command(flatten)]
+    pub stereo: StereoOptions,
 
     /// Write only the six coordinate columns, without the stereo noise covariances.
     #[arg(long)]
     pub no_covariance: bool,
 
-    /// Self-calibrate the disparity correction from the first N consecutive pairs of the
-    /// sequence (image data only: the correction that makes up to 8 of the moving pairs,
-    /// spread over the N, most rigid), print it and use it; overrides --disparity-offset
-    /// and --disparity-quadratic.
-    #[arg(long, value_name = "N")]
+    /// Self-calibrate the disparity correction on the first N consecutive pairs of the
+    /// sequence, as `odometry` does online (image data only: the causes of --calibrate
+    /// that the rows and the rigidity of the pairs support), print it and use it.
+    #[arg(long, value_name = "N", conflicts_with_all = ["disparity_offset", "disparity_quadratic"])]
     pub self_calibrate: Option<usize>,
 }
 
@@ -118,12 +80,12 @@ fn dataset_error(e: DatasetError) -> CliError {
     CliError::usage(e.to_string())
 }
 
-/// The disparity correction self-calibrated on the first `pairs` consecutive pairs.
-fn self_calibrate<E: FeatureExtractor>(
-    frontend: &Frontend<E>,
+/// The disparity correction self-calibrated on the first `pairs` consecutive pairs: the
+/// odometry engine's decision after those frames.
+fn self_calibrate(
     seq: &dyn StereoSequence,
+    args: &CorrespondencesArgs,
     pairs: usize,
-    model: DisparityModel,
 ) -> Result<DisparityCorrection, CliError> {
     if pairs == 0 || pairs >= seq.len() {
         return Err(CliError::usage(format!(
@@ -131,57 +93,52 @@ fn self_calibrate<E: FeatureExtractor>(
             seq.len().saturating_sub(1)
         )));
     }
-    let mut prev = None;
-    let mut all = Vec::new();
-    for k in 0..=pairs {
-        let p = seq.frame(k).map_err(dataset_error)?;
-        let f = frontend.stereo_frame(p.left.view(), p.right.view());
-        if let Some(q) = prev.take() {
-            all.push(
-                frontend
-                    .match_frames(&q, &f)
-                    .map_err(|e| CliError::failure(format!("matching failed: {e}")))?,
-            );
+    let (_, selfcal) = args.stereo.calibration()?;
+    let config = OdometryConfig {
+        detector: args.stereo.detector,
+        calibration: Calibration::Auto,
+        selfcal,
+        ..OdometryConfig::default()
+    };
+    let mut odometry =
+        Odometry::new(camera_of(seq), config).map_err(|e| CliError::usage(e.to_string()))?;
+    let mut done = 0;
+    run_sequence(seq, &mut odometry, 0.1, &mut |_| {
+        done += 1;
+        if done > pairs {
+            std::ops::ControlFlow::Break(())
+        } else {
+            std::ops::ControlFlow::Continue(())
         }
-        prev = Some(f);
-    }
-    let estimator = PsoEstimator::new(PsoEstimatorConfig::default());
-    let correction = match model {
-        DisparityModel::Quadratic => self_calibrate_correction(&all, &estimator, 0),
-        DisparityModel::Constant => {
-            self_calibrate_offset(&all, &estimator, 0).map(DisparityCorrection::constant)
-        }
-    }
-    .ok_or_else(|| {
-        CliError::failure(
-            "self-calibration failed: fewer than 3 of the pairs could be registered with a \
-             translation of at least 0.2 m",
+    })
+    .map_err(|e| CliError::usage(e.to_string()))?;
+    let d = *odometry.calibration();
+    let c = d.correction;
+    let reuse = if c.linear_x_px == 0.0 && c.linear_y_px == 0.0 && c.cross_xy_px == 0.0 {
+        format!(
+            "--disparity-offset {} --disparity-quadratic {}",
+            c.offset_px, c.quadratic_px
         )
-    })?;
+    } else {
+        "terms beyond --disparity-offset and --disparity-quadratic: use --self-calibrate again"
+            .to_owned()
+    };
     eprintln!(
-        "swarmpose: self-calibrated disparity correction {correction} over {pairs} pairs \
-         (--disparity-offset {} --disparity-quadratic {})",
-        correction.offset_px, correction.quadratic_px
+        "swarmpose: self-calibrated disparity correction {c} ({}) over {pairs} pairs ({reuse})",
+        d.model
     );
-    Ok(correction)
+    Ok(c)
 }
 
 /// Runs the front end on frames `i` and `j`.
 fn matches<E: FeatureExtractor>(
     frontend: &mut Frontend<E>,
-    seq: &dyn StereoSequence,
+    correction: DisparityCorrection,
     args: &CorrespondencesArgs,
     a: &StereoPair,
     b: &StereoPair,
 ) -> Result<FrameMatches, CliError> {
     frontend.temporal.circular_check = args.circular_check;
-    let correction = match args.self_calibrate {
-        Some(n) => self_calibrate(frontend, seq, n, args.disparity_model)?,
-        None => DisparityCorrection {
-            offset_px: args.disparity_offset,
-            quadratic_px: args.disparity_quadratic,
-        },
-    };
     let fa = frontend.stereo_frame(a.left.view(), a.right.view());
     let fb = frontend.stereo_frame(b.left.view(), b.right.view());
     let m = frontend
@@ -190,11 +147,12 @@ fn matches<E: FeatureExtractor>(
     if correction == DisparityCorrection::default() {
         return Ok(m);
     }
-    m.with_disparity_correction(correction).map_err(|e| {
-        CliError::usage(format!(
-            "the disparity correction {correction} makes a disparity non-positive ({e})"
-        ))
-    })
+    m.with_disparity_correction(correction, frontend.rig.baseline_m)
+        .map_err(|e| {
+            CliError::usage(format!(
+                "the disparity correction {correction} makes a disparity non-positive ({e})"
+            ))
+        })
 }
 
 /// Inlier flags from a `register` JSON report of `n` correspondences.
@@ -229,11 +187,7 @@ fn read_inliers(path: &Path, n: usize) -> Result<Vec<bool>, CliError> {
 /// # Errors
 /// A bad sequence or frame index (exit 2), an unwritable output (exit 1).
 pub fn run(args: &CorrespondencesArgs) -> Result<(), CliError> {
-    if !(args.disparity_offset.is_finite() && args.disparity_quadratic.is_finite()) {
-        return Err(CliError::usage(
-            "--disparity-offset must be a finite number of pixels",
-        ));
-    }
+    let fixed = args.stereo.fixed_correction()?;
     let (i, j) = match args.frames.as_slice() {
         [i, j] => (*i, *j),
         _ => return Err(CliError::usage("--frames takes two frame indices, I and J")),
@@ -249,12 +203,16 @@ pub fn run(args: &CorrespondencesArgs) -> Result<(), CliError> {
             )));
         }
     }
+    let correction = match args.self_calibrate {
+        Some(n) => self_calibrate(seq.as_ref(), args, n)?,
+        None => fixed.unwrap_or_default(),
+    };
     let a = seq.frame(i).map_err(dataset_error)?;
     let b = seq.frame(j).map_err(dataset_error)?;
     let rig = seq.calibration();
-    let m = match args.detector {
-        Detector::Orb => matches(&mut Frontend::orb(rig), seq.as_ref(), args, &a, &b)?,
-        Detector::Surf => matches(&mut Frontend::surf(rig), seq.as_ref(), args, &a, &b)?,
+    let m = match args.stereo.detector {
+        Detector::Orb => matches(&mut Frontend::orb(rig), correction, args, &a, &b)?,
+        Detector::Surf => matches(&mut Frontend::surf(rig), correction, args, &a, &b)?,
     };
     let data = if args.no_covariance {
         m.correspondences.clone()
@@ -316,11 +274,13 @@ mod tests {
             out,
             draw: None,
             inliers: None,
-            detector: Detector::Orb,
             circular_check: false,
-            disparity_offset: 0.0,
-            disparity_quadratic: 0.0,
-            disparity_model: DisparityModel::Quadratic,
+            stereo: StereoOptions {
+                detector: Detector::Orb,
+                disparity_offset: None,
+                disparity_quadratic: None,
+                calibrate: swarmpose_odometry::CorrectionModel::DEFAULT_CANDIDATES,
+            },
             no_covariance: false,
             self_calibrate: None,
         }
@@ -362,7 +322,7 @@ mod tests {
         let e = run(&args(dir.join("nope"), [0, 1], dir.join("x.csv"))).expect_err("missing");
         assert!(e.code == 2 && e.message.contains("nope"), "{e}");
         let mut b = args(root.clone(), [0, 1], dir.join("x.csv"));
-        b.disparity_offset = f64::NAN;
+        b.stereo.disparity_offset = Some(f64::NAN);
         assert_eq!(run(&b).expect_err("nan").code, 2);
         let mut c = args(root, [0, 1], dir.join("y.csv"));
         c.self_calibrate = Some(4);

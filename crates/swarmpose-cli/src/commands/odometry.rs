@@ -1,52 +1,58 @@
-//! `swarmpose odometry [SEQUENCE_DIR] [--method ...] [--detector ...] [--out DIR]`:
-//! stereo visual odometry over a sequence: for every consecutive pair the front end,
-//! the estimator and the chaining of eq. (2); writes the trajectory (KITTI and TUM),
-//! a per-frame log and the plots of figure 17, and evaluates against the ground truth
-//! when the sequence has one.
+//! `swarmpose odometry [SEQUENCE_DIR] [--out DIR] ...`: stereo (or RGB-D) visual odometry
+//! over a recorded sequence, a thin loop over the streaming engine
+//! ([`swarmpose_odometry::Odometry`]): each frame is given to the engine as it is read and
+//! its pose is written at once (trajectory, per-frame log, covariance), so a run that
+//! stops early keeps every finished frame. At the end: the summary, the self-calibration's
+//! decision, the plots and, with ground truth, the evaluation.
 
-use std::path::PathBuf;
+use std::ops::ControlFlow;
+use std::path::{Path, PathBuf};
 
-use clap::{Args, ValueEnum};
+use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use nalgebra::Isometry3;
 use swarmpose_datasets::{StereoSequence, open};
-use swarmpose_odometry::output::{evaluate_run, write_text_outputs};
-use swarmpose_odometry::plots::write_plots;
+use swarmpose_odometry::batch::{RunEnd, camera_of, run_rgbd_sequence, run_sequence};
+use swarmpose_odometry::frontend::RgbdNoise;
+use swarmpose_odometry::output::{
+    COVARIANCE_HEADER, FRAMES_HEADER, Summary, calibration_json, covariance_row, frames_row,
+    kitti_line, tum_line,
+};
+use swarmpose_odometry::plots::{PlotTrack, render_plots};
+use swarmpose_odometry::rgbd::RgbdSequence;
 use swarmpose_odometry::synthetic::SyntheticSequence;
-use swarmpose_odometry::{DisparityOffset, OdometryConfig, OdometryError, OdometryRun, run};
-use swarmpose_vision::frontend::{DisparityCorrection, Frontend};
+use swarmpose_odometry::{FrameResult, Odometry, OdometryConfig, OdometryError};
 
-/// The disparity correction self-calibrated from the images.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum DisparityModel {
-    /// Offset plus a term quadratic in the image column (a yaw of the right camera).
-    Quadratic,
-    /// A constant offset.
-    Constant,
-}
-
-use crate::commands::correspondences::Detector;
-use crate::error::CliError;
+use super::odometry_output::{OutputDir, StreamFile};
+use super::stereo_options::StereoOptions;
+use crate::error::{CliError, EXIT_NOT_USABLE};
 use crate::methods::{EstimatorOptions, Method, build};
+
+/// Smallest share of the frames after the first whose motion must be tracked for a run
+/// to be usable.
+pub const MIN_TRACKED_SHARE: f64 = 0.5;
 
 /// Arguments of `swarmpose odometry`.
 #[derive(Debug, Args)]
 #[command(after_help = "\
-SEQUENCE_DIR is a KITTI odometry sequence, a Karlsruhe sequence or a EuRoC MAV sequence \
-(see `swarmpose correspondences --help`). Outputs in --out: trajectory.kitti.txt (KITTI \
-poses), trajectory.tum.txt (timestamp tx ty tz qx qy qz qw; timestamps = frame index x \
---frame-period), frames.csv (per frame: status, features, stereo points, matches, \
-inliers, time per stage in ms, the motion from the previous frame and the position), \
-trajectory.png/.svg (top view, x right, z forward, against the ground truth: figure 17) \
-and, with ground truth, errors.png (per-frame eq. (20) and RPE), groundtruth.kitti.txt, \
-groundtruth.tum.txt and evaluation.json (as `swarmpose evaluate --json`).
+SEQUENCE_DIR is a KITTI odometry sequence, a Karlsruhe sequence, a EuRoC MAV sequence or \
+a TUM RGB-D directory (see `swarmpose correspondences --help`). Outputs in --out, written \
+frame by frame as the run goes: trajectory.kitti.txt (KITTI poses), trajectory.tum.txt \
+(timestamp tx ty tz qx qy qz qw), frames.csv (per frame: status, reference frame, counts, \
+time per stage in ms, the motion from the previous frame, the position, the disparity \
+correction), motion_covariance.csv (the 6x6 covariance of every tracked motion, see its \
+header). At the end: calibration.json (the self-calibration's decision and evidence), \
+trajectory.png/.svg (top view against the ground truth: figure 17) and, with ground truth, \
+errors.png, groundtruth.kitti.txt, groundtruth.tum.txt and evaluation.json.
 
-A pair the estimator cannot solve (matching fails, too few inliers) repeats the previous \
-motion (constant velocity); frames.csv marks it `constant-velocity (REASON)` and the \
-summary counts it; never a silent identity.
+A frame the engine cannot track is predicted at constant velocity (at most 1 s), then \
+marked lost; frames.csv says which and why.
 
 Exit status: 0 on success; 2 for bad options or an unreadable, malformed or too short \
-sequence; 1 when an output cannot be written.")]
+sequence (a frame that cannot be read stops the run: the frames before it are kept and the \
+message names the frame); 1 when an output cannot be written; 3 when the run finished but \
+fewer than half of the motions were tracked (the result is not usable; the outputs are \
+still written).")]
 pub struct OdometryArgs {
     /// Sequence directory; without it, the built-in synthetic stereo sequence.
     #[arg(value_name = "SEQUENCE_DIR")]
@@ -56,34 +62,15 @@ pub struct OdometryArgs {
     #[arg(long, value_enum, default_value_t = Method::Pso)]
     pub method: Method,
 
-    /// Detector and descriptor.
-    #[arg(long, value_enum, default_value_t = Detector::Orb)]
-    pub detector: Detector,
-
     /// Output directory (created if needed).
     #[arg(long, value_name = "DIR", default_value = "out/odometry")]
     pub out: PathBuf,
 
-    /// Seed of the estimator (pair k uses seed + k).
+    /// Seed of the estimator (frame k uses seed + k).
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub seed: u64,
 
-    /// Fixed disparity offset, pixels, instead of self-calibrating the correction from the
-    /// images (with --disparity-quadratic: the offset at the image centre).
-    #[arg(long, value_name = "PX", allow_negative_numbers = true)]
-    pub disparity_offset: Option<f64>,
-
-    /// Fixed quadratic term of the disparity correction, pixels per unit x² with
-    /// x = (u - cx) / f (a yaw of the right camera); with --disparity-offset (default 0).
-    #[arg(long, value_name = "PX", allow_negative_numbers = true)]
-    pub disparity_quadratic: Option<f64>,
-
-    /// Disparity correction to self-calibrate when none is fixed: `quadratic`
-    /// (offset + quadratic x², a yaw of the right camera) or `constant` (offset only).
-    #[arg(long, value_enum, default_value_t = DisparityModel::Quadratic)]
-    pub disparity_model: DisparityModel,
-
-    /// Keep the estimator's motion: no Mahalanobis refinement on the stereo covariances.
+    /// Keep the estimator's motion: no reprojection refinement (and no covariance).
     #[arg(long)]
     pub no_refine: bool,
 
@@ -91,13 +78,16 @@ pub struct OdometryArgs {
     #[arg(long, value_name = "N", default_value_t = OdometryConfig::default().min_inliers)]
     pub min_inliers: usize,
 
-    /// Seconds between frames (timestamps of the TUM output).
-    #[arg(long, value_name = "S", default_value_t = OdometryConfig::default().frame_period_s)]
+    /// Seconds between frames of a sequence without timestamps.
+    #[arg(long, value_name = "S", default_value_t = 0.1)]
     pub frame_period: f64,
 
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
+
+    #[command(flatten)]
+    pub stereo: StereoOptions,
 
     #[command(flatten)]
     pub options: EstimatorOptions,
@@ -111,8 +101,8 @@ fn odometry_error(e: OdometryError) -> CliError {
     }
 }
 
-fn progress_bar(quiet: bool) -> ProgressBar {
-    let pb = ProgressBar::new(0);
+fn progress_bar(quiet: bool, total: usize) -> ProgressBar {
+    let pb = ProgressBar::new(total as u64);
     if quiet {
         pb.set_draw_target(ProgressDrawTarget::hidden());
     }
@@ -124,248 +114,278 @@ fn progress_bar(quiet: bool) -> ProgressBar {
     pb
 }
 
-/// Runs the pipeline on `seq` with the chosen detector.
-fn run_sequence(
-    seq: &dyn StereoSequence,
-    args: &OdometryArgs,
-    config: &OdometryConfig,
-) -> Result<OdometryRun, CliError> {
-    let estimator = build(args.method, &args.options)?;
-    let pb = progress_bar(args.quiet);
-    pb.set_prefix("odometry");
-    let mut progress = |done: usize, total: usize| {
-        pb.set_length(total as u64);
-        pb.set_position(done as u64);
-    };
-    let rig = seq.calibration();
-    let r = match args.detector {
-        Detector::Orb => run(
-            seq,
-            &Frontend::orb(rig),
-            estimator.as_ref(),
-            config,
-            &mut progress,
-        ),
-        Detector::Surf => run(
-            seq,
-            &Frontend::surf(rig),
-            estimator.as_ref(),
-            config,
-            &mut progress,
-        ),
-    };
-    pb.finish_and_clear();
-    r.map_err(odometry_error)
+/// The input of a run.
+enum Source {
+    Stereo(Box<dyn StereoSequence>, String, Option<Vec<Isometry3<f64>>>),
+    Rgbd(RgbdSequence, String),
 }
 
-/// Runs `odometry`.
-///
-/// # Errors
-/// Bad options or sequence (exit 2), unwritable outputs (exit 1).
-pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
+/// What a run keeps in memory for the end: the poses and whether each was tracked (a
+/// few bytes a frame; everything else is on disk).
+struct Track {
+    poses: Vec<Isometry3<f64>>,
+    stamps: Vec<f64>,
+    predicted: Vec<bool>,
+    summary: Summary,
+    times: swarmpose_odometry::StageTimes,
+}
+
+/// The engine's configuration from the arguments.
+fn config(args: &OdometryArgs) -> Result<OdometryConfig, CliError> {
     if !(args.frame_period.is_finite() && args.frame_period > 0.0) {
         return Err(CliError::usage(
             "--frame-period must be a positive number of seconds",
         ));
     }
-    for (flag, v) in [
-        ("--disparity-offset", args.disparity_offset),
-        ("--disparity-quadratic", args.disparity_quadratic),
-    ] {
-        if v.is_some_and(|d| !d.is_finite()) {
-            return Err(CliError::usage(format!(
-                "{flag} must be a finite number of pixels"
-            )));
-        }
-    }
-    let disparity_offset = match (args.disparity_offset, args.disparity_quadratic) {
-        (None, None) => match args.disparity_model {
-            DisparityModel::Quadratic => DisparityOffset::SelfCalibrate,
-            DisparityModel::Constant => DisparityOffset::SelfCalibrateConstant,
-        },
-        (offset, quadratic) => DisparityOffset::Correction(DisparityCorrection {
-            offset_px: offset.unwrap_or(0.0),
-            quadratic_px: quadratic.unwrap_or(0.0),
-        }),
-    };
-    let config = OdometryConfig {
+    let (calibration, selfcal) = args.stereo.calibration()?;
+    Ok(OdometryConfig {
+        detector: args.stereo.detector,
         refine: !args.no_refine,
-        disparity_offset,
+        calibration,
         min_inliers: args.min_inliers.max(3),
         seed: args.seed,
-        frame_period_s: args.frame_period,
+        selfcal,
+        ..OdometryConfig::default()
+    })
+}
+
+/// Runs `odometry`.
+///
+/// # Errors
+/// Bad options or sequence (exit 2), unwritable outputs (exit 1), a result that is not
+/// usable (exit 3).
+pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
+    let config = config(args)?;
+    let estimator = build(args.method, &args.options)?;
+    let source = match &args.sequence {
+        None => {
+            let seq = SyntheticSequence::default();
+            eprintln!(
+                "swarmpose: no SEQUENCE_DIR: running on the built-in synthetic stereo sequence \
+                 ({} frames rendered from a textured street along a known path)",
+                seq.len()
+            );
+            let gt = seq.ground_truth().map(<[_]>::to_vec);
+            Source::Stereo(Box::new(seq), "built-in synthetic sequence".into(), gt)
+        }
+        Some(dir) if swarmpose_odometry::rgbd::detect(dir) => {
+            let seq = RgbdSequence::open(dir).map_err(odometry_error)?;
+            Source::Rgbd(seq, format!("{} (TUM RGB-D)", dir.display()))
+        }
+        Some(dir) => {
+            let seq = open(dir).map_err(|e| CliError::usage(e.to_string()))?;
+            let title = format!("{} ({})", dir.display(), seq.layout());
+            let gt = seq.ground_truth().map(<[_]>::to_vec);
+            Source::Stereo(seq, title, gt)
+        }
     };
-    let Some(dir) = &args.sequence else {
-        // No data: the built-in synthetic street, rendered along a known path.
-        let seq = SyntheticSequence::default();
-        eprintln!(
-            "swarmpose: no SEQUENCE_DIR: running on the built-in synthetic stereo sequence \
-             ({} frames rendered from a textured street along a known path)",
-            seq.len()
-        );
-        let r = run_sequence(&seq, args, &config)?;
-        return finish(&r, "built-in synthetic sequence", seq.ground_truth(), args);
+    let (n, root) = match &source {
+        Source::Stereo(s, ..) => (s.len(), s.root().to_owned()),
+        Source::Rgbd(s, _) => (s.len(), s.root().to_owned()),
     };
-    if swarmpose_odometry::rgbd::detect(dir) {
-        return run_rgbd_command(dir, args, &config);
-    }
-    let seq = open(dir).map_err(|e| CliError::usage(e.to_string()))?;
-    if seq.len() < 2 {
+    if n < 2 {
         return Err(CliError::usage(format!(
-            "{}: {} frame(s): odometry needs at least 2",
-            dir.display(),
-            seq.len()
+            "{}: {n} frame(s): odometry needs at least 2",
+            root.display()
         )));
     }
-    let title = format!("{} ({})", dir.display(), seq.layout());
-    let r = run_sequence(seq.as_ref(), args, &config)?;
-    let gt: Option<Vec<Isometry3<f64>>> = seq.ground_truth().map(<[_]>::to_vec);
-    finish(&r, &title, gt.as_deref(), args)?;
-    if seq.layout() == "karlsruhe" {
-        ins_summary(dir, &r);
+    let mut odometry = match &source {
+        Source::Stereo(seq, ..) => Odometry::builder(camera_of(seq.as_ref()))
+            .config(config)
+            .estimator(estimator)
+            .build(),
+        Source::Rgbd(seq, _) => Odometry::builder(seq.camera().map_err(odometry_error)?)
+            .config(config)
+            .estimator(estimator)
+            .rgbd(RgbdNoise::default())
+            .build(),
+    }
+    .map_err(odometry_error)?;
+    let out = OutputDir::prepare(&args.out)?;
+    let mut kitti = StreamFile::create(&out, "trajectory.kitti.txt", None)?;
+    let mut tum = StreamFile::create(&out, "trajectory.tum.txt", None)?;
+    let mut frames = StreamFile::create(&out, "frames.csv", Some(FRAMES_HEADER))?;
+    let mut cov = StreamFile::create(&out, "motion_covariance.csv", Some(COVARIANCE_HEADER))?;
+    let mut track = Track {
+        poses: Vec::with_capacity(n),
+        stamps: Vec::with_capacity(n),
+        predicted: Vec::with_capacity(n),
+        summary: Summary::default(),
+        times: swarmpose_odometry::StageTimes::default(),
+    };
+    let pb = progress_bar(args.quiet, n);
+    pb.set_prefix("odometry");
+    let mut write_error: Option<CliError> = None;
+    let mut on_frame = |r: &FrameResult| -> ControlFlow<()> {
+        let written = kitti
+            .line(&kitti_line(&r.pose))
+            .and_then(|()| tum.line(&tum_line(r.timestamp_s, &r.pose)))
+            .and_then(|()| frames.line(&frames_row(r)))
+            .and_then(|()| covariance_row(r).map_or(Ok(()), |row| cov.line(&row)));
+        if let Err(e) = written {
+            write_error = Some(e);
+            return ControlFlow::Break(());
+        }
+        track.poses.push(r.pose);
+        track.stamps.push(r.timestamp_s);
+        track.predicted.push(!matches!(
+            r.status,
+            swarmpose_odometry::Status::First | swarmpose_odometry::Status::Tracked
+        ));
+        track.summary.add(r);
+        track.times += &r.times;
+        pb.inc(1);
+        ControlFlow::Continue(())
+    };
+    let ended = match &source {
+        Source::Stereo(seq, ..) => run_sequence(
+            seq.as_ref(),
+            &mut odometry,
+            args.frame_period,
+            &mut on_frame,
+        ),
+        Source::Rgbd(seq, _) => run_rgbd_sequence(seq, &mut odometry, &mut on_frame),
+    };
+    pb.finish_and_clear();
+    if let Some(e) = write_error {
+        return Err(e);
+    }
+    let ended = ended.map_err(|e| {
+        let done = track.summary.frames;
+        let mut err = odometry_error(e);
+        err.message = format!(
+            "{}; stopped after {done} frame(s): their poses are in {}",
+            err.message,
+            out.path().display()
+        );
+        err
+    })?;
+    if let RunEnd::Stopped(done) = ended {
+        return Err(CliError::failure(format!(
+            "stopped after {done} frame(s): their poses are in {}",
+            out.path().display()
+        )));
+    }
+    let (title, gt) = match &source {
+        Source::Stereo(_, t, gt) => (t.clone(), gt.clone()),
+        Source::Rgbd(s, t) => (t.clone(), s.ground_truth().map(<[_]>::to_vec)),
+    };
+    finish(&out, &track, &odometry, &title, gt.as_deref())?;
+    if let (Source::Stereo(seq, ..), Some(dir)) = (&source, &args.sequence)
+        && seq.layout() == "karlsruhe"
+    {
+        ins_summary(dir, &track.poses);
+    }
+    println!("written: {}", out.path().display());
+    let share = track.summary.tracked_share();
+    if share < MIN_TRACKED_SHARE {
+        return Err(CliError {
+            code: EXIT_NOT_USABLE,
+            message: format!(
+                "not usable: {} motions of {} were tracked ({:.0} %, fewer than {:.0} %); \
+                 the outputs are written",
+                track.summary.tracked,
+                track.summary.motions(),
+                100.0 * share,
+                100.0 * MIN_TRACKED_SHARE
+            ),
+        });
     }
     Ok(())
 }
 
-/// A TUM RGB-D directory (`rgb.txt`, `depth.txt`).
-fn run_rgbd_command(
-    dir: &std::path::Path,
-    args: &OdometryArgs,
-    config: &OdometryConfig,
-) -> Result<(), CliError> {
-    use swarmpose_odometry::rgbd::{RgbdSequence, run_rgbd};
-    use swarmpose_vision::stereo::RectifiedStereo;
-    if args.detector != Detector::Orb {
-        return Err(CliError::usage(
-            "--detector surf is not available for RGB-D input (use orb)",
-        ));
-    }
-    if args.disparity_offset.is_some() || args.disparity_quadratic.is_some() {
-        return Err(CliError::usage(
-            "--disparity-offset and --disparity-quadratic do not apply to RGB-D input",
-        ));
-    }
-    let seq = RgbdSequence::open(dir).map_err(odometry_error)?;
-    if seq.len() < 2 {
-        return Err(CliError::usage(format!(
-            "{}: {} frame(s): odometry needs at least 2",
-            dir.display(),
-            seq.len()
-        )));
-    }
-    let k = seq.intrinsics();
-    let rig = RectifiedStereo {
-        fx: k.fx,
-        fy: k.fy,
-        cx: k.cx,
-        cy: k.cy,
-        baseline_m: 0.075,
-    };
-    let estimator = build(args.method, &args.options)?;
-    let pb = progress_bar(args.quiet);
-    pb.set_prefix("odometry (RGB-D)");
-    let r = run_rgbd(
-        &seq,
-        &Frontend::orb(rig),
-        estimator.as_ref(),
-        config,
-        &mut |done, total| {
-            pb.set_length(total as u64);
-            pb.set_position(done as u64);
-        },
-    );
-    pb.finish_and_clear();
-    let r = r.map_err(odometry_error)?;
-    let title = format!("{} (TUM RGB-D)", dir.display());
-    finish(&r, &title, seq.ground_truth(), args)
-}
-
-/// Karlsruhe has no camera ground truth, only rough INS positions of the vehicle in
-/// another frame: the ATE of our positions after their SE(3) Umeyama alignment.
-fn ins_summary(dir: &std::path::Path, r: &OdometryRun) {
-    use nalgebra::Point3;
-    let ins =
-        swarmpose_datasets::karlsruhe::KarlsruheSequence::open(dir).and_then(|k| k.ins_positions());
-    let Ok(Some(ins)) = ins else {
-        return;
-    };
-    if ins.len() != r.poses.len() {
-        return;
-    }
-    let x: Vec<Point3<f64>> = r
-        .poses
-        .iter()
-        .map(|p| Point3::from(p.translation.vector))
-        .collect();
-    let y: Vec<Point3<f64>> = ins.iter().map(|p| Point3::new(p[0], p[1], p[2])).collect();
-    let Ok(t) = swarmpose_eval::metrics::umeyama(&x, &y) else {
-        return;
-    };
-    let ate: Vec<f64> = x.iter().zip(&y).map(|(a, b)| (b - t * a).norm()).collect();
-    let stats = swarmpose_eval::Stats::of(&ate);
-    let length: f64 = y.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
-    let last = ate.last().copied().unwrap_or(0.0);
-    println!(
-        "vs INS positions (insdata.txt, after SE(3) alignment): path {length:.2} m, ATE {:.3} m ({:.2} % of the path), final position error {last:.3} m ({:.2} %)",
-        stats.rmse,
-        100.0 * stats.rmse / length.max(1e-9),
-        100.0 * last / length.max(1e-9)
-    );
-}
-
-/// Writes the outputs and prints the summary.
+/// The end of a run: evaluation, plots, calibration, summary.
 fn finish(
-    r: &OdometryRun,
+    out: &OutputDir,
+    track: &Track,
+    odometry: &Odometry,
     title: &str,
     gt: Option<&[Isometry3<f64>]>,
-    args: &OdometryArgs,
 ) -> Result<(), CliError> {
     let evaluation = match gt {
-        Some(g) if g.len() == r.poses.len() => Some(evaluate_run(r, g).map_err(odometry_error)?),
+        Some(g) if g.len() == track.poses.len() => {
+            let pairs = swarmpose_eval::associate::by_index(
+                &swarmpose_eval::Trajectory::indexed(
+                    "the estimated trajectory",
+                    track.poses.clone(),
+                ),
+                &swarmpose_eval::Trajectory::indexed("the ground truth", g.to_vec()),
+            )
+            .map_err(|e| CliError::failure(e.to_string()))?;
+            Some(swarmpose_eval::evaluate(&pairs).map_err(|e| CliError::failure(e.to_string()))?)
+        }
         Some(g) => {
             eprintln!(
                 "swarmpose: warning: {} ground-truth poses for {} frames: not evaluated",
                 g.len(),
-                r.poses.len()
+                track.poses.len()
             );
             None
         }
         None => None,
     };
-    let mut written =
-        write_text_outputs(r, &args.out, gt, evaluation.as_ref()).map_err(odometry_error)?;
-    written
-        .extend(write_plots(r, &args.out, title, gt, evaluation.as_ref()).map_err(odometry_error)?);
-    let n = r.frames.len();
-    let mean = |f: &dyn Fn(&swarmpose_odometry::StageTimes) -> f64| {
-        r.frames.iter().map(|x| f(&x.times)).sum::<f64>() / n as f64
-    };
-    let total = mean(&|t| t.total_ms());
-    println!(
-        "{title}: {n} frames, method {}, detector {}, disparity correction {}, {} \
-         constant-velocity frame(s)",
-        r.method,
-        r.detector,
-        r.disparity_correction,
-        r.n_fallbacks()
-    );
-    for f in r
-        .frames
-        .iter()
-        .filter(|f| f.status.text() != "ok" && f.frame > 0)
-    {
-        println!("  frame {}: {}", f.frame, f.status.text());
+    let decision = odometry.calibration();
+    let calibration = serde_json::to_string_pretty(&calibration_json(decision))
+        .map_err(|e| CliError::failure(format!("calibration.json: {e}")))?;
+    out.write("calibration.json", calibration.as_bytes())?;
+    if let Some(g) = gt {
+        out.write(
+            "groundtruth.kitti.txt",
+            swarmpose_eval::trajectory::kitti_text(g).as_bytes(),
+        )?;
+        out.write(
+            "groundtruth.tum.txt",
+            swarmpose_eval::trajectory::tum_text(&track.stamps, g).as_bytes(),
+        )?;
     }
+    if let Some(e) = &evaluation {
+        let text = serde_json::to_string_pretty(e)
+            .map_err(|err| CliError::failure(format!("evaluation.json: {err}")))?;
+        out.write("evaluation.json", text.as_bytes())?;
+    }
+    let label = format!("{} + {}", odometry.estimator(), odometry.detector());
+    let plot = PlotTrack {
+        poses: &track.poses,
+        predicted: &track.predicted,
+        label: &label,
+    };
+    for (name, bytes) in render_plots(&plot, title, gt, evaluation.as_ref())
+        .map_err(|e| CliError::failure(e.to_string()))?
+    {
+        out.write(name, &bytes)?;
+    }
+    let s = &track.summary;
+    let n = s.frames.max(1) as f64;
+    let t = &track.times;
+    let total = t.total_ms() / n;
+    println!(
+        "{title}: {}; method {}, detector {}",
+        s.text(),
+        odometry.estimator(),
+        odometry.detector()
+    );
+    println!(
+        "disparity correction: {} ({}; rows: yaw f*psi {:.3} px, roll f*theta {:.3} px, from {} \
+         row offsets; rigidity: {} pairs, held-out score {:.1})",
+        decision.correction,
+        decision.model,
+        decision.rows.rotation_px[0],
+        decision.rows.rotation_px[1],
+        decision.rows.measurements,
+        decision.pairs,
+        decision.rigidity_score
+    );
     println!(
         "time per frame: {total:.1} ms ({:.1} frames/s): load {:.1}, features {:.1}, stereo {:.1}, \
-         match {:.1}, estimate {:.1}, refine {:.1} ms",
+         match {:.1}, estimate {:.1}, refine {:.1}, calibrate {:.1} ms",
         1000.0 / total.max(1e-9),
-        mean(&|t| t.load_ms),
-        mean(&|t| t.features_ms),
-        mean(&|t| t.stereo_ms),
-        mean(&|t| t.match_ms),
-        mean(&|t| t.estimate_ms),
-        mean(&|t| t.refine_ms),
+        t.load_ms / n,
+        t.features_ms / n,
+        t.stereo_ms / n,
+        t.match_ms / n,
+        t.estimate_ms / n,
+        t.refine_ms / n,
+        t.calibrate_ms / n,
     );
     if let Some(e) = &evaluation {
         let drift = e
@@ -383,7 +403,37 @@ fn finish(
             e.rpe_rotation_deg.rmse
         );
     }
-    println!("written: {}", args.out.display());
-    let _ = written;
     Ok(())
+}
+
+/// Karlsruhe has no camera ground truth, only rough INS positions of the vehicle in
+/// another frame: the ATE of our positions after their SE(3) Umeyama alignment.
+fn ins_summary(dir: &Path, poses: &[Isometry3<f64>]) {
+    use nalgebra::Point3;
+    let ins =
+        swarmpose_datasets::karlsruhe::KarlsruheSequence::open(dir).and_then(|k| k.ins_positions());
+    let Ok(Some(ins)) = ins else {
+        return;
+    };
+    if ins.len() != poses.len() {
+        return;
+    }
+    let x: Vec<Point3<f64>> = poses
+        .iter()
+        .map(|p| Point3::from(p.translation.vector))
+        .collect();
+    let y: Vec<Point3<f64>> = ins.iter().map(|p| Point3::new(p[0], p[1], p[2])).collect();
+    let Ok(t) = swarmpose_eval::metrics::umeyama(&x, &y) else {
+        return;
+    };
+    let ate: Vec<f64> = x.iter().zip(&y).map(|(a, b)| (b - t * a).norm()).collect();
+    let stats = swarmpose_eval::Stats::of(&ate);
+    let length: f64 = y.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
+    let last = ate.last().copied().unwrap_or(0.0);
+    println!(
+        "vs INS positions (insdata.txt, after SE(3) alignment): path {length:.2} m, ATE {:.3} m ({:.2} % of the path), final position error {last:.3} m ({:.2} %)",
+        stats.rmse,
+        100.0 * stats.rmse / length.max(1e-9),
+        100.0 * last / length.max(1e-9)
+    );
 }

@@ -5,15 +5,12 @@
 //! ([`StereoFrame`]). Per pair of frames: match the left features of the triangulated
 //! points ([`Frontend::match_frames`]), optionally confirmed by the right images.
 
-mod calibrate;
 mod correction;
+mod detector;
 mod refine;
 
-pub use calibrate::{
-    CALIBRATION_PAIRS, MIN_CALIBRATION_TRANSLATION_M, OFFSET_RANGE_PX, QUADRATIC_LIMIT_PX,
-    calibrate_correction, calibrate_offset, self_calibrate_correction, self_calibrate_offset,
-};
-pub use correction::DisparityCorrection;
+pub use correction::{CORRECTION_TERMS, DisparityCorrection};
+pub use detector::{Detector, UnknownDetector};
 pub use refine::{CHI2_3_99, refine_stereo, refine_weighted};
 
 use nalgebra::{Matrix3, Point3};
@@ -42,6 +39,9 @@ pub struct StereoFrame<D> {
     pub points: Vec<Point3<f64>>,
     /// Sub-pixel disparities, pixels.
     pub disparities_px: Vec<f32>,
+    /// Row of each right feature minus that of its left feature, pixels (NaN when not
+    /// measured): the evidence of a rectification error.
+    pub row_offsets_px: Vec<f32>,
     /// Noise level of each point, metres.
     pub sigmas_m: Vec<f64>,
     /// Covariance of each point, m².
@@ -61,6 +61,7 @@ impl<D> Default for StereoFrame<D> {
             right_descriptors: Vec::new(),
             points: Vec::new(),
             disparities_px: Vec::new(),
+            row_offsets_px: Vec::new(),
             sigmas_m: Vec::new(),
             covariances: Vec::new(),
             n_left_features: 0,
@@ -141,14 +142,15 @@ impl FrameMatches {
 
     /// The same matches with `offset_px` added to every disparity: each point `p` of
     /// disparity `d` becomes `p d / (d + offset)` (a correction of the stereo
-    /// calibration, e.g. from [`self_calibrate_offset`]). Covariances follow exactly (see
+    /// calibration). Covariances follow exactly (see
     /// `offset_jacobian`): the depth part shrinks with `k²`, the lateral part with `k`, for
     /// `k = d / (d + offset)`.
     ///
     /// # Errors
     /// [`PoseError::NonFinite`] if an offset makes a disparity non-positive.
     pub fn with_disparity_offset(&self, offset_px: f64) -> Result<Self, PoseError> {
-        self.with_disparity_correction(DisparityCorrection::constant(offset_px))
+        // A constant does not depend on the position, so the baseline does not matter.
+        self.with_disparity_correction(DisparityCorrection::constant(offset_px), 0.0)
     }
 }
 
@@ -292,6 +294,7 @@ impl<E: FeatureExtractor> Frontend<E> {
             f.right_descriptors.push(right.descriptors[m.right].clone());
             f.points.push(m.point);
             f.disparities_px.push(m.disparity_px);
+            f.row_offsets_px.push(m.row_offset_px);
             f.sigmas_m.push(m.sigma_m);
             f.covariances.push(m.covariance);
         }

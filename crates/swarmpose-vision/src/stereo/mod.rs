@@ -10,7 +10,7 @@ use nalgebra::Point3;
 pub use rig::RectifiedStereo;
 
 use crate::features::{Descriptor, Features, GrayView, Keypoint};
-use subpixel::{refine_disparity, refine_disparity_lk};
+use subpixel::{refine_disparity, refine_disparity_lk, row_offset};
 
 /// Settings of [`match_stereo`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -45,6 +45,10 @@ pub struct StereoConfig {
     pub disparity_sigma_px: f64,
     /// Assumed standard deviation of a keypoint position, pixels (default 0.5).
     pub position_sigma_px: f64,
+    /// Also measure each match's vertical offset between the images
+    /// ([`StereoMatch::row_offset_px`]), the evidence of a rectification error
+    /// (default true).
+    pub measure_row_offset: bool,
 }
 
 impl Default for StereoConfig {
@@ -62,6 +66,7 @@ impl Default for StereoConfig {
             disparity_offset_px: 0.0,
             disparity_sigma_px: 0.25,
             position_sigma_px: 0.5,
+            measure_row_offset: true,
         }
     }
 }
@@ -82,6 +87,10 @@ pub struct StereoMatch {
     pub sigma_m: f64,
     /// Its covariance, m² ([`RectifiedStereo::point_covariance`]).
     pub covariance: nalgebra::Matrix3<f64>,
+    /// Row of the right feature minus row of the left one, pixels, measured on the
+    /// images ([`subpixel::row_offset`]); 0 on a perfectly rectified pair, NaN when not
+    /// measured.
+    pub row_offset_px: f32,
 }
 
 /// Indices of `kps` sorted by row, with the rows, for range queries.
@@ -223,7 +232,21 @@ pub fn match_stereo<D: Descriptor>(
         if point.z > config.max_depth_m {
             continue;
         }
+        let row_offset_px = if config.measure_row_offset {
+            row_offset(
+                left_img,
+                right_img,
+                lk.x.round().max(0.0) as usize,
+                lk.y.round().max(0.0) as usize,
+                disparity - config.disparity_offset_px,
+                config.subpixel_radius.max(2),
+            )
+            .unwrap_or(f32::NAN)
+        } else {
+            f32::NAN
+        };
         out.push(StereoMatch {
+            row_offset_px,
             left: li,
             right: ri,
             disparity_px: disparity,

@@ -1,6 +1,8 @@
 //! Matching between consecutive frames: mutual nearest neighbours with a ratio test,
 //! optionally inside a pixel window, and the circular check of a stereo quadruple.
 
+pub mod subpixel;
+
 use crate::features::{Descriptor, Keypoint};
 
 /// Settings of [`mutual_matches`].

@@ -5,16 +5,16 @@
 //!
 //! With the calibration as given, the translations from stereo are about 6 % too long
 //! (more for far points): the disparities of this copy of the sequence are short of its
-//! `calib.txt` by about 1.2 px (self-calibrated; see docs/kitti-disparity-offset.md). An independent OpenCV pipeline (SGBM or NCC disparities,
-//! PnP) sees the same (see REPRODUCTION.md). The offset is self-calibrated from the image
-//! data alone, no ground truth ([`swarmpose_vision::frontend::self_calibrate_offset`]);
+//! `calib.txt` (see docs/kitti-disparity-offset.md). The correction is the one the
+//! odometry engine self-calibrates online from the image data alone (no ground truth);
 //! the pairs are then registered with it applied. Both counts are printed.
 
 mod common;
 
 use swarmpose_core::{Estimator, PsoEstimator, PsoEstimatorConfig};
 use swarmpose_datasets::open;
-use swarmpose_vision::frontend::{FrameMatches, Frontend, self_calibrate_offset};
+use swarmpose_odometry::OdometryConfig;
+use swarmpose_vision::frontend::{FrameMatches, Frontend};
 
 #[test]
 fn kitti_pairs_recover_the_ground_truth_motion() {
@@ -43,8 +43,11 @@ fn kitti_pairs_recover_the_ground_truth_motion() {
     assert_eq!(counts.len(), 50);
     assert!(counts[0] >= 300, "fewest correspondences {}", counts[0]);
 
-    // Self-calibration of the disparity offset (image data only).
-    let offset = self_calibrate_offset(&pairs, &estimator, 0).expect("self-calibration");
+    // The engine's self-calibrated correction (image data only).
+    let correction = common::run_sequence(seq.as_ref(), OdometryConfig::default())
+        .calibration
+        .correction;
+    let baseline = seq.calibration().baseline_m;
 
     let (mut good, mut good_uncalibrated) = (0, 0);
     for (k, m0) in pairs.iter().enumerate() {
@@ -62,7 +65,9 @@ fn kitti_pairs_recover_the_ground_truth_motion() {
         };
         let (deg0, cm0, _) = judge(m0);
         good_uncalibrated += usize::from(deg0 < 0.2 && cm0 < 5.0);
-        let m = m0.with_disparity_offset(offset).expect("offset");
+        let m = m0
+            .with_disparity_correction(correction, baseline)
+            .expect("correction");
         let (deg, cm, inliers) = judge(&m);
         let ok = deg < 0.2 && cm < 5.0;
         good += usize::from(ok);
@@ -75,7 +80,7 @@ fn kitti_pairs_recover_the_ground_truth_motion() {
         );
     }
     eprintln!(
-        "correspondences min {} median {}; disparity offset {offset:.3} px; within 0.2 deg \
+        "correspondences min {} median {}; disparity correction {correction}; within 0.2 deg \
          and 5 cm: {good}/50 (as calibrated: {good_uncalibrated}/50)",
         counts[0], counts[25]
     );

@@ -1,6 +1,10 @@
-//! A built-in synthetic stereo sequence, so that odometry runs with no data: a street
-//! of textured planes (ground, two house fronts, a far wall) rendered by the vision
-//! crate's ray caster from a stereo rig driving along a known, gently turning path.
+//! Synthetic sequences with known motion. This module: a built-in synthetic stereo
+//! sequence, so that odometry runs with no data: a street of textured planes (ground,
+//! two house fronts, a far wall) rendered by the vision crate's ray caster from a stereo
+//! rig driving along a known, gently turning path. [`features`]: a stream of triangulated
+//! features without images, of any length.
+
+pub mod features;
 
 use std::path::{Path, PathBuf};
 
@@ -30,6 +34,23 @@ pub struct SyntheticSequence {
     planes: Vec<TexturedPlane>,
     poses: Vec<Isometry3<f64>>,
     samples: usize,
+    right_error: RightCameraError,
+}
+
+/// How the rendered right camera differs from the calibration the sequence reports
+/// (which stays [`RIG`]): to test self-calibration.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct RightCameraError {
+    /// Principal point column of the right camera minus the calibration's, pixels: every
+    /// measured disparity is short by this much.
+    pub principal_point_px: f64,
+    /// Yaw of the right camera about its y axis (down), radians: positive turns it to the
+    /// right, so measured disparities are short by about `−fx ψ (1 + x²)`.
+    pub yaw_rad: f64,
+    /// Pitch of the right camera about its x axis (right), radians.
+    pub pitch_rad: f64,
+    /// Roll of the right camera about its z axis (forward), radians.
+    pub roll_rad: f64,
 }
 
 impl SyntheticSequence {
@@ -69,7 +90,15 @@ impl SyntheticSequence {
             planes,
             poses,
             samples: 2,
+            right_error: RightCameraError::default(),
         }
+    }
+
+    /// The same sequence rendered with a right camera that is not the calibrated one.
+    #[must_use]
+    pub fn with_right_camera_error(mut self, error: RightCameraError) -> Self {
+        self.right_error = error;
+        self
     }
 }
 
@@ -186,10 +215,24 @@ impl StereoSequence for SyntheticSequence {
                 what: "synthetic frame",
             });
         };
-        let right = pose * Isometry3::translation(RIG.baseline_m, 0.0, 0.0);
+        let e = self.right_error;
+        let right = pose
+            * Isometry3::translation(RIG.baseline_m, 0.0, 0.0)
+            * Isometry3::rotation(Vector3::new(e.pitch_rad, e.yaw_rad, e.roll_rad));
+        let right_rig = RectifiedStereo {
+            cx: RIG.cx + e.principal_point_px,
+            ..RIG
+        };
         Ok(StereoPair {
             left: render(&RIG, pose, SIZE.0, SIZE.1, &self.planes, self.samples),
-            right: render(&RIG, &right, SIZE.0, SIZE.1, &self.planes, self.samples),
+            right: render(
+                &right_rig,
+                &right,
+                SIZE.0,
+                SIZE.1,
+                &self.planes,
+                self.samples,
+            ),
         })
     }
 

@@ -1,0 +1,126 @@
+//! The output folder of a run: created and checked writable before any work, files
+//! streamed line by line (each line flushed, so a run stopped at any point leaves whole
+//! lines) or written whole under a temporary name and renamed when complete, and a
+//! manifest of what the run wrote, so that files an earlier run left there are removed.
+
+use std::fs::{File, OpenOptions};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use crate::error::CliError;
+
+/// Name of the manifest in an output folder.
+pub const MANIFEST: &str = ".swarmpose-manifest";
+
+fn write_error(path: &Path, e: &dyn std::fmt::Display) -> CliError {
+    CliError::failure(format!("{}: cannot write: {e}", path.display()))
+}
+
+/// An output folder being written by one run.
+#[derive(Debug)]
+pub struct OutputDir {
+    path: PathBuf,
+}
+
+impl OutputDir {
+    /// Creates `path` (and its parents) if needed, checks that files can be written in
+    /// it, and removes the files an earlier run's manifest lists.
+    ///
+    /// # Errors
+    /// Exit status 1, naming the folder, when it cannot be created or written.
+    pub fn prepare(path: &Path) -> Result<Self, CliError> {
+        std::fs::create_dir_all(path).map_err(|e| write_error(path, &e))?;
+        let probe = path.join(".swarmpose-write-check");
+        std::fs::write(&probe, b"").map_err(|e| write_error(path, &e))?;
+        let _ = std::fs::remove_file(&probe);
+        let manifest = path.join(MANIFEST);
+        if let Ok(text) = std::fs::read_to_string(&manifest) {
+            for name in text.lines().map(str::trim).filter(|n| !n.is_empty()) {
+                // Only plain names inside the folder.
+                if !name.contains('/') && !name.contains('\\') && name != ".." {
+                    let _ = std::fs::remove_file(path.join(name));
+                }
+            }
+        }
+        std::fs::write(&manifest, b"").map_err(|e| write_error(&manifest, &e))?;
+        Ok(Self {
+            path: path.to_owned(),
+        })
+    }
+
+    /// The folder.
+    #[must_use]
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    fn record(&self, name: &str) -> Result<(), CliError> {
+        let manifest = self.path.join(MANIFEST);
+        let mut f = OpenOptions::new()
+            .append(true)
+            .create(true)
+            .open(&manifest)
+            .map_err(|e| write_error(&manifest, &e))?;
+        writeln!(f, "{name}").map_err(|e| write_error(&manifest, &e))
+    }
+
+    /// Writes `name` whole: to a temporary name first, renamed when complete, so that no
+    /// file under its final name is ever truncated.
+    ///
+    /// # Errors
+    /// Exit status 1 naming the file.
+    pub fn write(&self, name: &str, bytes: &[u8]) -> Result<(), CliError> {
+        self.record(name)?;
+        let path = self.path.join(name);
+        let tmp = self.path.join(format!(".{name}.partial"));
+        let result = (|| -> std::io::Result<()> {
+            let mut f = File::create(&tmp)?;
+            f.write_all(bytes)?;
+            f.sync_all()?;
+            std::fs::rename(&tmp, &path)
+        })();
+        if let Err(e) = result {
+            let _ = std::fs::remove_file(&tmp);
+            return Err(write_error(&path, &e));
+        }
+        Ok(())
+    }
+}
+
+/// A file written line by line, each line flushed at once.
+#[derive(Debug)]
+pub struct StreamFile {
+    path: PathBuf,
+    file: File,
+}
+
+impl StreamFile {
+    /// Creates `name` in `dir`, with a first line `header` if given.
+    ///
+    /// # Errors
+    /// Exit status 1 naming the file.
+    pub fn create(dir: &OutputDir, name: &str, header: Option<&str>) -> Result<Self, CliError> {
+        dir.record(name)?;
+        let path = dir.path.join(name);
+        let file = File::create(&path).map_err(|e| write_error(&path, &e))?;
+        let mut s = Self { path, file };
+        if let Some(h) = header {
+            s.line(h)?;
+        }
+        Ok(s)
+    }
+
+    /// Appends one line (a line end is added) and flushes it.
+    ///
+    /// # Errors
+    /// Exit status 1 naming the file.
+    pub fn line(&mut self, text: &str) -> Result<(), CliError> {
+        let mut buf = String::with_capacity(text.len() + 1);
+        buf.push_str(text);
+        buf.push('\n');
+        self.file
+            .write_all(buf.as_bytes())
+            .and_then(|()| self.file.flush())
+            .map_err(|e| write_error(&self.path, &e))
+    }
+}

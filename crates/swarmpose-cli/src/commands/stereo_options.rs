@@ -1,0 +1,97 @@
+//! Options of the stereo front end and its disparity correction, shared by `odometry`
+//! and `correspondences`.
+
+use clap::Args;
+use swarmpose_odometry::CorrectionModel;
+use swarmpose_odometry::config::Calibration;
+use swarmpose_odometry::selfcal::SelfCalConfig;
+use swarmpose_vision::frontend::{Detector, DisparityCorrection};
+
+use crate::error::CliError;
+
+fn parse_detector(s: &str) -> Result<Detector, String> {
+    s.parse::<Detector>().map_err(|e| e.to_string())
+}
+
+fn detector_help() -> String {
+    let names: Vec<String> = Detector::ALL
+        .iter()
+        .map(|d| format!("{} ({})", d.name(), d.description()))
+        .collect();
+    format!("Detector and descriptor: {}", names.join("; "))
+}
+
+fn parse_causes(s: &str) -> Result<CorrectionModel, String> {
+    CorrectionModel::parse(s)
+}
+
+/// The front end's detector and the disparity correction.
+#[derive(Debug, Clone, Args)]
+pub struct StereoOptions {
+    #[arg(long, value_name = "NAME", default_value = "orb", value_parser = parse_detector,
+          help = detector_help())]
+    pub detector: Detector,
+
+    /// A fixed disparity correction instead of self-calibration: its constant term,
+    /// pixels (added to every measured disparity).
+    #[arg(long, value_name = "PX", allow_negative_numbers = true)]
+    pub disparity_offset: Option<f64>,
+
+    /// A fixed disparity correction: its term in x², pixels, with x = (u - d - cx) / f
+    /// the right image column (a yaw of the right camera); with --disparity-offset
+    /// (default 0).
+    #[arg(long, value_name = "PX", allow_negative_numbers = true)]
+    pub disparity_quadratic: Option<f64>,
+
+    /// The causes of a disparity error that self-calibration may correct, when they have
+    /// evidence: `none` (no correction), or some of principal-point (a constant, seen as
+    /// a scene that is not rigid between frames), yaw, roll, pitch (seen in the rows of
+    /// each stereo pair) and focal, joined by '+'.
+    #[arg(long, value_name = "CAUSES", default_value = "principal-point+yaw",
+          value_parser = parse_causes)]
+    pub calibrate: CorrectionModel,
+}
+
+impl StereoOptions {
+    /// The fixed correction given by the flags, if any.
+    ///
+    /// # Errors
+    /// A flag that is not a finite number of pixels.
+    pub fn fixed_correction(&self) -> Result<Option<DisparityCorrection>, CliError> {
+        for (flag, v) in [
+            ("--disparity-offset", self.disparity_offset),
+            ("--disparity-quadratic", self.disparity_quadratic),
+        ] {
+            if v.is_some_and(|d| !d.is_finite()) {
+                return Err(CliError::usage(format!(
+                    "{flag} must be a finite number of pixels"
+                )));
+            }
+        }
+        Ok(match (self.disparity_offset, self.disparity_quadratic) {
+            (None, None) => None,
+            (a, q) => Some(DisparityCorrection {
+                offset_px: a.unwrap_or(0.0),
+                quadratic_px: q.unwrap_or(0.0),
+                ..DisparityCorrection::default()
+            }),
+        })
+    }
+
+    /// The engine's calibration mode and self-calibration settings.
+    ///
+    /// # Errors
+    /// As [`StereoOptions::fixed_correction`].
+    pub fn calibration(&self) -> Result<(Calibration, SelfCalConfig), CliError> {
+        let selfcal = SelfCalConfig {
+            candidates: self.calibrate,
+            ..SelfCalConfig::default()
+        };
+        let mode = match self.fixed_correction()? {
+            Some(c) => Calibration::Fixed(c),
+            None if self.calibrate == CorrectionModel::NONE => Calibration::Off,
+            None => Calibration::Auto,
+        };
+        Ok((mode, selfcal))
+    }
+}

@@ -1,0 +1,121 @@
+//! Runs over recorded sequences: loops that feed the engine one frame at a time, so
+//! that a directory is processed exactly as a live camera would be.
+
+use std::ops::ControlFlow;
+use std::time::Instant;
+
+use swarmpose_datasets::StereoSequence;
+
+use crate::engine::Odometry;
+use crate::error::OdometryError;
+use crate::frontend::ms;
+use crate::intake::{DepthView, RgbdInput, StereoCamera, StereoInput};
+use crate::record::FrameResult;
+use crate::rgbd::RgbdSequence;
+
+/// The camera of a stereo sequence.
+#[must_use]
+pub fn camera_of(seq: &dyn StereoSequence) -> StereoCamera {
+    let (width, height) = seq.image_size();
+    StereoCamera {
+        rig: seq.calibration(),
+        width,
+        height,
+    }
+}
+
+/// How a run ended.
+#[derive(Debug)]
+pub enum RunEnd {
+    /// Every frame was processed.
+    Finished,
+    /// `on_frame` asked to stop after this many frames.
+    Stopped(usize),
+}
+
+/// Feeds the frames of `seq` to `odometry` in order, frame `i` at the time
+/// `i × frame_period_s`, and calls `on_frame` with each result as soon as it exists; it
+/// may stop the run by returning [`ControlFlow::Break`].
+///
+/// # Errors
+/// [`OdometryError::AtFrame`] with the index of the first frame that cannot be loaded or
+/// taken; the frames before it were given to `on_frame`.
+pub fn run_sequence(
+    seq: &dyn StereoSequence,
+    odometry: &mut Odometry,
+    frame_period_s: f64,
+    on_frame: &mut dyn FnMut(&FrameResult) -> ControlFlow<()>,
+) -> Result<RunEnd, OdometryError> {
+    for i in 0..seq.len() {
+        let at = |e: OdometryError| OdometryError::AtFrame {
+            index: i,
+            source: Box::new(e),
+        };
+        let t = Instant::now();
+        let pair = seq.frame(i).map_err(|e| at(e.into()))?;
+        let load_ms = ms(t);
+        let input = StereoInput {
+            left: pair.left.view(),
+            right: pair.right.view(),
+            timestamp_s: i as f64 * frame_period_s,
+        };
+        let r = odometry.track_timed(input, load_ms).map_err(at)?;
+        if on_frame(&r).is_break() {
+            return Ok(RunEnd::Stopped(i + 1));
+        }
+    }
+    Ok(RunEnd::Finished)
+}
+
+/// [`run_sequence`] for a TUM RGB-D sequence (its own timestamps).
+///
+/// # Errors
+/// As [`run_sequence`].
+pub fn run_rgbd_sequence(
+    seq: &RgbdSequence,
+    odometry: &mut Odometry,
+    on_frame: &mut dyn FnMut(&FrameResult) -> ControlFlow<()>,
+) -> Result<RunEnd, OdometryError> {
+    let stamps = seq.stamps();
+    for (i, &stamp) in stamps.iter().enumerate() {
+        let at = |e: OdometryError| OdometryError::AtFrame {
+            index: i,
+            source: Box::new(e),
+        };
+        let t = Instant::now();
+        let (gray, depth) = seq.frame(i).map_err(at)?;
+        let load_ms = ms(t);
+        let input = RgbdInput {
+            gray: gray.view(),
+            depth: DepthView {
+                width: gray.width,
+                height: gray.height,
+                data: &depth,
+            },
+            timestamp_s: stamp,
+        };
+        let r = odometry.track_rgbd_timed(input, load_ms).map_err(at)?;
+        if on_frame(&r).is_break() {
+            return Ok(RunEnd::Stopped(i + 1));
+        }
+    }
+    Ok(RunEnd::Finished)
+}
+
+/// Every result of a whole run, for tests and tools (a run's results grow with its
+/// length; the engine's state does not).
+///
+/// # Errors
+/// As [`run_sequence`].
+pub fn collect(
+    seq: &dyn StereoSequence,
+    odometry: &mut Odometry,
+    frame_period_s: f64,
+) -> Result<Vec<FrameResult>, OdometryError> {
+    let mut out = Vec::with_capacity(seq.len());
+    run_sequence(seq, odometry, frame_period_s, &mut |r| {
+        out.push(r.clone());
+        ControlFlow::Continue(())
+    })?;
+    Ok(out)
+}

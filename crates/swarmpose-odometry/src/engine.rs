@@ -1,0 +1,295 @@
+//! The streaming odometry engine: frames in, poses out.
+//!
+//! ```no_run
+//! use swarmpose_odometry::{Odometry, OdometryConfig, StereoCamera, StereoInput};
+//! # fn frames() -> Vec<(swarmpose_vision::image::GrayImage, swarmpose_vision::image::GrayImage, f64)> { vec![] }
+//! let camera = StereoCamera {
+//!     rig: swarmpose_vision::stereo::RectifiedStereo {
+//!         fx: 718.856, fy: 718.856, cx: 607.19, cy: 185.22, baseline_m: 0.537,
+//!     },
+//!     width: 1241,
+//!     height: 376,
+//! };
+//! let mut odometry = Odometry::new(camera, OdometryConfig::default())?;
+//! for (left, right, t) in frames() {
+//!     let r = odometry.track(StereoInput { left: left.view(), right: right.view(), timestamp_s: t })?;
+//!     println!("{} {:?} {}", r.index, r.pose.translation.vector, r.status.text());
+//! }
+//! # Ok::<(), swarmpose_odometry::OdometryError>(())
+//! ```
+
+use swarmpose_core::{Estimator, PsoEstimator, PsoEstimatorConfig};
+use swarmpose_vision::features::{BinaryDescriptor, FloatDescriptor64};
+use swarmpose_vision::frontend::{Detector, Frontend};
+use swarmpose_vision::orb::OrbExtractor;
+use swarmpose_vision::surf::Surf;
+
+use crate::config::{Calibration, OdometryConfig};
+use crate::error::OdometryError;
+use crate::frontend::{RgbdNoise, rgbd_frame, stereo_frame};
+use crate::intake::{RgbdInput, StereoCamera, StereoInput, check_rgbd, check_stereo};
+use crate::record::{FrameResult, StageTimes};
+use crate::refine::model::PixelNoise;
+use crate::selfcal::Decision;
+use crate::tracker::Tracker;
+
+/// The front end and back end for one detector.
+enum Inner {
+    Orb(Box<Frontend<OrbExtractor>>, Tracker<BinaryDescriptor>),
+    Surf(Box<Frontend<Surf>>, Tracker<FloatDescriptor64>),
+}
+
+/// Calls `$body` with the front end and tracker, whatever the detector.
+macro_rules! with_inner {
+    ($inner:expr, $f:ident, $t:ident => $body:expr) => {
+        match $inner {
+            Inner::Orb($f, $t) => $body,
+            Inner::Surf($f, $t) => $body,
+        }
+    };
+}
+
+/// The sensor the engine takes frames from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Sensor {
+    Stereo,
+    Rgbd(RgbdNoise),
+}
+
+/// A streaming visual odometry: created for one camera, it takes one frame at a time
+/// and returns that frame's pose at once ([`FrameResult`]). Its memory does not grow
+/// with the number of frames. Frames from any source: a directory
+/// ([`crate::batch`]), a camera driver, a Python array.
+pub struct Odometry {
+    camera: StereoCamera,
+    sensor: Sensor,
+    inner: Inner,
+}
+
+/// Builds an [`Odometry`] with a chosen estimator or for an RGB-D camera.
+#[must_use]
+pub struct OdometryBuilder {
+    camera: StereoCamera,
+    config: OdometryConfig,
+    estimator: Option<Box<dyn Estimator>>,
+    rgbd: Option<RgbdNoise>,
+}
+
+impl OdometryBuilder {
+    /// The configuration (default [`OdometryConfig::default`]).
+    pub fn config(mut self, config: OdometryConfig) -> Self {
+        self.config = config;
+        self
+    }
+
+    /// The robust estimator of the motion (default the robust PSO, `pso`).
+    pub fn estimator(mut self, estimator: Box<dyn Estimator>) -> Self {
+        self.estimator = Some(estimator);
+        self
+    }
+
+    /// An RGB-D camera with this depth noise model: frames go to
+    /// [`Odometry::track_rgbd`]; the camera's baseline is not used, and there is no
+    /// disparity correction.
+    pub fn rgbd(mut self, noise: RgbdNoise) -> Self {
+        self.rgbd = Some(noise);
+        self
+    }
+
+    /// The engine.
+    ///
+    /// # Errors
+    /// [`OdometryError::Camera`] for a camera that is not valid, or an RGB-D camera with
+    /// a detector other than ORB.
+    pub fn build(self) -> Result<Odometry, OdometryError> {
+        let mut camera = self.camera;
+        let mut config = self.config;
+        if let Some(noise) = &self.rgbd {
+            noise.validate()?;
+            camera.rig.baseline_m = noise.virtual_baseline_m;
+        }
+        camera.validate()?;
+        let estimator = self
+            .estimator
+            .unwrap_or_else(|| Box::new(PsoEstimator::new(PsoEstimatorConfig::default())));
+        let sensor = match self.rgbd {
+            Some(noise) => {
+                if config.detector != Detector::Orb {
+                    return Err(OdometryError::Camera {
+                        message: format!(
+                            "detector {} is not available for RGB-D input (use orb)",
+                            config.detector
+                        ),
+                    });
+                }
+                config.calibration = Calibration::Off;
+                Sensor::Rgbd(noise)
+            }
+            None => Sensor::Stereo,
+        };
+        let inner = match config.detector {
+            Detector::Orb => {
+                let f = Frontend::orb(camera.rig);
+                let noise = config
+                    .pixel_noise
+                    .unwrap_or_else(|| noise_of(&f.stereo, sensor, &camera));
+                let t = Tracker::new(camera, noise, f.temporal, config, estimator);
+                Inner::Orb(Box::new(f), t)
+            }
+            Detector::Surf => {
+                let f = Frontend::surf(camera.rig);
+                let noise = config
+                    .pixel_noise
+                    .unwrap_or_else(|| noise_of(&f.stereo, sensor, &camera));
+                let t = Tracker::new(camera, noise, f.temporal, config, estimator);
+                Inner::Surf(Box::new(f), t)
+            }
+        };
+        Ok(Odometry {
+            camera,
+            sensor,
+            inner,
+        })
+    }
+}
+
+fn noise_of(
+    stereo: &swarmpose_vision::stereo::StereoConfig,
+    sensor: Sensor,
+    camera: &StereoCamera,
+) -> PixelNoise {
+    match sensor {
+        Sensor::Stereo => PixelNoise {
+            position_px: stereo.position_sigma_px,
+            disparity_px: stereo.disparity_sigma_px,
+        },
+        Sensor::Rgbd(n) => n.pixel_noise(camera.rig.fx),
+    }
+}
+
+impl Odometry {
+    /// A stereo odometry for `camera` with the default robust estimator.
+    ///
+    /// # Errors
+    /// [`OdometryError::Camera`] for a camera that is not valid.
+    pub fn new(camera: StereoCamera, config: OdometryConfig) -> Result<Self, OdometryError> {
+        Self::builder(camera).config(config).build()
+    }
+
+    /// A builder, for another estimator or an RGB-D camera.
+    pub fn builder(camera: StereoCamera) -> OdometryBuilder {
+        OdometryBuilder {
+            camera,
+            config: OdometryConfig::default(),
+            estimator: None,
+            rgbd: None,
+        }
+    }
+
+    /// The camera (for RGB-D, with the virtual baseline).
+    #[must_use]
+    pub fn camera(&self) -> &StereoCamera {
+        &self.camera
+    }
+
+    /// The detector's name.
+    #[must_use]
+    pub fn detector(&self) -> &'static str {
+        match &self.inner {
+            Inner::Orb(..) => swarmpose_vision::frontend::Detector::Orb.name(),
+            Inner::Surf(..) => swarmpose_vision::frontend::Detector::Surf.name(),
+        }
+    }
+
+    /// The estimator's name.
+    #[must_use]
+    pub fn estimator(&self) -> &'static str {
+        with_inner!(&self.inner, _f, t => t.estimator_name())
+    }
+
+    /// The self-calibration's current decision and its evidence.
+    #[must_use]
+    pub fn calibration(&self) -> &Decision {
+        with_inner!(&self.inner, _f, t => t.calibration())
+    }
+
+    /// Heap bytes of the engine's per-frame state (the reference frame's features): it
+    /// does not grow with the number of frames.
+    #[must_use]
+    pub fn state_bytes(&self) -> usize {
+        with_inner!(&self.inner, _f, t => t.state_bytes())
+    }
+
+    /// Takes the next stereo frame and returns its pose. `load_ms` is the caller's time
+    /// to obtain the images (reported in the stage times; 0 if not measured).
+    ///
+    /// # Errors
+    /// [`OdometryError::Frame`] for images that do not fit the camera (size, empty, left
+    /// and right different) or a timestamp that does not increase; the engine's state
+    /// is then unchanged and the next frame can be given. [`OdometryError::Camera`] for
+    /// an RGB-D engine.
+    pub fn track(&mut self, input: StereoInput<'_>) -> Result<FrameResult, OdometryError> {
+        self.track_timed(input, 0.0)
+    }
+
+    /// [`Odometry::track`] with the caller's loading time, milliseconds.
+    ///
+    /// # Errors
+    /// As [`Odometry::track`].
+    pub fn track_timed(
+        &mut self,
+        input: StereoInput<'_>,
+        load_ms: f64,
+    ) -> Result<FrameResult, OdometryError> {
+        if self.sensor != Sensor::Stereo {
+            return Err(OdometryError::Camera {
+                message: "this engine takes RGB-D frames (track_rgbd), not stereo pairs".into(),
+            });
+        }
+        let last = with_inner!(&self.inner, _f, t => t.last_timestamp_s());
+        check_stereo(&self.camera, &input, last)?;
+        let mut times = StageTimes {
+            load_ms,
+            ..StageTimes::default()
+        };
+        with_inner!(&mut self.inner, f, t => {
+            let frame = stereo_frame(f.as_ref(), input.left, input.right, &mut times);
+            t.track(frame, Some(input.left), input.timestamp_s, times)
+        })
+    }
+
+    /// Takes the next RGB-D frame and returns its pose.
+    ///
+    /// # Errors
+    /// As [`Odometry::track`]; [`OdometryError::Camera`] for a stereo engine.
+    pub fn track_rgbd(&mut self, input: RgbdInput<'_>) -> Result<FrameResult, OdometryError> {
+        self.track_rgbd_timed(input, 0.0)
+    }
+
+    /// [`Odometry::track_rgbd`] with the caller's loading time, milliseconds.
+    ///
+    /// # Errors
+    /// As [`Odometry::track_rgbd`].
+    pub fn track_rgbd_timed(
+        &mut self,
+        input: RgbdInput<'_>,
+        load_ms: f64,
+    ) -> Result<FrameResult, OdometryError> {
+        let Sensor::Rgbd(noise) = self.sensor else {
+            return Err(OdometryError::Camera {
+                message: "this engine takes stereo pairs (track), not RGB-D frames".into(),
+            });
+        };
+        let last = with_inner!(&self.inner, _f, t => t.last_timestamp_s());
+        check_rgbd(&self.camera, &input, last)?;
+        let mut times = StageTimes {
+            load_ms,
+            ..StageTimes::default()
+        };
+        let rig = self.camera.rig;
+        with_inner!(&mut self.inner, f, t => {
+            let frame = rgbd_frame(f.as_ref(), &rig, &noise, input.gray, input.depth, &mut times);
+            t.track(frame, Some(input.gray), input.timestamp_s, times)
+        })
+    }
+}

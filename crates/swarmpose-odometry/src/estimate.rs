@@ -1,0 +1,80 @@
+//! The estimate stage: matches with the reference frame, the robust estimator's motion
+//! on their 3D points, and the stereo measurements the refinement takes.
+
+use nalgebra::Isometry3;
+use swarmpose_core::Estimator;
+use swarmpose_vision::frontend::{DisparityCorrection, FrameMatches};
+
+use crate::refine::model::StereoObservation;
+
+/// The measurements of the matches in the reference frame A and the current frame B,
+/// and the fold of each (alternate vertical stripes of B's image).
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Observations {
+    /// In A (the matches' destination points).
+    pub reference: Vec<StereoObservation>,
+    /// In B (the matches' source points).
+    pub current: Vec<StereoObservation>,
+    /// Fold 0 or 1 of each match.
+    pub folds: Vec<u8>,
+    /// Index of each into the matches.
+    pub source: Vec<usize>,
+}
+
+/// The stereo measurements of `m` (matches from the current frame B, `src`, to the
+/// reference A, `dst`); `stripe_px` is the width of the fold stripes.
+pub(crate) fn observations(m: &FrameMatches, stripe_px: f64) -> Observations {
+    let obs = |px: &[(f32, f32)], d: &[f64]| -> Vec<StereoObservation> {
+        px.iter()
+            .zip(d)
+            .map(|(&(u, v), &d)| StereoObservation {
+                u: f64::from(u),
+                v: f64::from(v),
+                d,
+            })
+            .collect()
+    };
+    let current = obs(&m.src_pixels, &m.src_disparities_px);
+    let folds = current
+        .iter()
+        .map(|z| ((z.u / stripe_px).floor().max(0.0) as u64 % 2) as u8)
+        .collect();
+    Observations {
+        reference: obs(&m.dst_pixels, &m.dst_disparities_px),
+        source: (0..current.len()).collect(),
+        current,
+        folds,
+    }
+}
+
+/// The estimator's motion (pose of B in A) on the matches' 3D points with `correction`
+/// applied (a rig of baseline `baseline_m`), and its number of inliers; the reason when
+/// there is none.
+pub(crate) fn initial_motion(
+    m: &FrameMatches,
+    correction: &DisparityCorrection,
+    baseline_m: f64,
+    estimator: &dyn Estimator,
+    seed: u64,
+    min_inliers: usize,
+) -> Result<(Isometry3<f64>, usize), String> {
+    let corrected;
+    let data = if *correction == DisparityCorrection::default() {
+        &m.correspondences
+    } else {
+        corrected = m
+            .with_disparity_correction(*correction, baseline_m)
+            .map_err(|e| format!("disparity correction {correction}: {e}"))?;
+        &corrected.correspondences
+    };
+    let e = estimator
+        .estimate_seeded(data, seed)
+        .map_err(|e| format!("estimator: {e}"))?;
+    if e.inliers.len() < min_inliers {
+        return Err(format!(
+            "estimator: {} inliers, fewer than {min_inliers}",
+            e.inliers.len()
+        ));
+    }
+    Ok((e.transform, e.inliers.len()))
+}

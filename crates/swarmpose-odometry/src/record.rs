@@ -1,0 +1,133 @@
+//! What the engine returns for each frame.
+
+use nalgebra::{Isometry3, Matrix6};
+use swarmpose_vision::frontend::DisparityCorrection;
+
+use crate::selfcal::CorrectionModel;
+
+/// What happened to the motion into one frame.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Status {
+    /// The first frame: the origin.
+    First,
+    /// The motion was estimated from the images.
+    Tracked,
+    /// The motion could not be estimated (the reason): predicted from the last velocity.
+    ConstantVelocity(String),
+    /// No motion could be estimated or predicted (the reason): the pose is held.
+    Lost(String),
+}
+
+impl Status {
+    /// The text of `frames.csv`: `first`, `tracked`, `constant-velocity (REASON)` or
+    /// `lost (REASON)`.
+    #[must_use]
+    pub fn text(&self) -> String {
+        match self {
+            Status::First => "first".into(),
+            Status::Tracked => "tracked".into(),
+            Status::ConstantVelocity(why) => format!("constant-velocity ({why})"),
+            Status::Lost(why) => format!("lost ({why})"),
+        }
+    }
+
+    /// True for [`Status::Tracked`].
+    #[must_use]
+    pub fn is_tracked(&self) -> bool {
+        matches!(self, Status::Tracked)
+    }
+}
+
+/// Wall-clock time of each stage for one frame, milliseconds.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StageTimes {
+    /// Reading the images (by the caller; 0 when the frame came from memory).
+    pub load_ms: f64,
+    /// Feature extraction in both images.
+    pub features_ms: f64,
+    /// Stereo matching and triangulation (or depth lookup).
+    pub stereo_ms: f64,
+    /// Matching to the reference frame.
+    pub match_ms: f64,
+    /// The robust estimator.
+    pub estimate_ms: f64,
+    /// Reprojection refinement.
+    pub refine_ms: f64,
+    /// Self-calibration (its decision and, when the correction moved, the second
+    /// refinement).
+    pub calibrate_ms: f64,
+}
+
+impl std::ops::AddAssign<&StageTimes> for StageTimes {
+    fn add_assign(&mut self, t: &StageTimes) {
+        self.load_ms += t.load_ms;
+        self.features_ms += t.features_ms;
+        self.stereo_ms += t.stereo_ms;
+        self.match_ms += t.match_ms;
+        self.estimate_ms += t.estimate_ms;
+        self.refine_ms += t.refine_ms;
+        self.calibrate_ms += t.calibrate_ms;
+    }
+}
+
+impl StageTimes {
+    /// Sum of the stages.
+    #[must_use]
+    pub fn total_ms(&self) -> f64 {
+        self.load_ms
+            + self.features_ms
+            + self.stereo_ms
+            + self.match_ms
+            + self.estimate_ms
+            + self.refine_ms
+            + self.calibrate_ms
+    }
+}
+
+/// Feature counts of one frame.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Counts {
+    /// Features detected in the left image.
+    pub left_features: usize,
+    /// Features detected in the right image (0 for RGB-D).
+    pub right_features: usize,
+    /// Features with a 3D point (stereo-matched, or with a valid depth).
+    pub stereo_points: usize,
+    /// Matches with the reference frame.
+    pub matches: usize,
+    /// Inliers of the accepted motion (0 when none).
+    pub inliers: usize,
+}
+
+/// The engine's answer for one frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameResult {
+    /// 0-based index of the frame in the stream.
+    pub index: usize,
+    /// Timestamp, seconds, as given.
+    pub timestamp_s: f64,
+    /// Pose of the left camera in the left camera frame of the first frame (x right,
+    /// y down, z forward, metres): `C_k = C_{k-1} T_{k-1,k}`.
+    pub pose: Isometry3<f64>,
+    /// The motion from the previous frame, `T_{k-1,k}` (the pose of this camera in the
+    /// previous one); identity for the first frame.
+    pub motion: Isometry3<f64>,
+    /// The frame the motion was measured from: the previous one, or an earlier one when
+    /// the frames in between had too few points; `None` unless tracked.
+    pub reference: Option<usize>,
+    /// Covariance of the measured motion from [`FrameResult::reference`] (equal to
+    /// `motion` when the reference is the previous frame), when it was refined: of
+    /// `ξ = (ν, ω)` (metres, radians, in this camera's frame) in `T_true = T ∘ E(ξ)`,
+    /// `E(ξ): P ↦ Exp(ω) P + ν`; see [`crate::refine`].
+    pub covariance: Option<Matrix6<f64>>,
+    /// What happened.
+    pub status: Status,
+    /// Feature counts.
+    pub counts: Counts,
+    /// Time per stage.
+    pub times: StageTimes,
+    /// The disparity correction applied to this frame.
+    pub correction: DisparityCorrection,
+    /// The model of that correction.
+    pub correction_model: CorrectionModel,
+}

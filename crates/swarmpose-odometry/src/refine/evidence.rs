@@ -1,0 +1,150 @@
+//! What one pair of frames says about the disparity correction: the normal equations of
+//! the pose and the correction after the points are eliminated (Schur complement), and
+//! then the pose too, so that each pair contributes a quadratic model of its cost as a
+//! function of the correction alone, the pose re-optimised for every correction
+//! (the *profile* cost).
+
+use nalgebra::{Matrix3, Matrix6, SMatrix, SVector, Vector3, Vector6};
+use swarmpose_vision::frontend::CORRECTION_TERMS;
+
+use super::model::{Matrix3x6, Matrix3xK};
+
+/// K, the number of correction terms.
+const K: usize = CORRECTION_TERMS;
+/// 6xK matrix.
+pub type Matrix6xK = SMatrix<f64, 6, K>;
+/// KxK matrix.
+pub type MatrixK = SMatrix<f64, K, K>;
+/// K-vector.
+pub type VectorK = SVector<f64, K>;
+
+/// Normal equations of (pose, correction) with the points eliminated: for the cost
+/// `F = ½ Σ w |e|²`, `H = Jᵀ W J` and `g = Jᵀ W e` reduced by each point's Schur
+/// complement `H_xy − H_xp H_pp⁻¹ H_py`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Reduced {
+    /// Pose block, 6x6.
+    pub pose_pose: Matrix6<f64>,
+    /// Pose-correction block, 6xK.
+    pub pose_correction: Matrix6xK,
+    /// Correction block, KxK.
+    pub correction_correction: MatrixK,
+    /// Pose gradient.
+    pub pose_gradient: Vector6<f64>,
+    /// Correction gradient.
+    pub correction_gradient: VectorK,
+}
+
+impl Default for Reduced {
+    fn default() -> Self {
+        Self {
+            pose_pose: Matrix6::zeros(),
+            pose_correction: Matrix6xK::zeros(),
+            correction_correction: MatrixK::zeros(),
+            pose_gradient: Vector6::zeros(),
+            correction_gradient: VectorK::zeros(),
+        }
+    }
+}
+
+impl std::ops::AddAssign<&Reduced> for Reduced {
+    fn add_assign(&mut self, other: &Reduced) {
+        self.pose_pose += other.pose_pose;
+        self.pose_correction += other.pose_correction;
+        self.correction_correction += other.correction_correction;
+        self.pose_gradient += other.pose_gradient;
+        self.correction_gradient += other.correction_gradient;
+    }
+}
+
+/// One point's weighted Jacobian products, accumulated over its measurements.
+#[derive(Debug, Clone, Copy)]
+pub struct PointBlocks {
+    /// `H_pp⁻¹`.
+    pub pp_inv: Matrix3<f64>,
+    /// `H_pT`.
+    pub pose: Matrix3x6,
+    /// `H_pc`.
+    pub correction: Matrix3xK,
+    /// `g_p`.
+    pub gradient: Vector3<f64>,
+}
+
+impl Reduced {
+    /// Adds the direct (pose, correction) terms of one measurement, `J_xᵀ w J_y` and
+    /// `J_xᵀ w e`.
+    pub fn add_direct(&mut self, w: f64, pose: &Matrix3x6, corr: &Matrix3xK, e: &Vector3<f64>) {
+        self.pose_pose += pose.transpose() * pose * w;
+        self.pose_correction += pose.transpose() * corr * w;
+        self.correction_correction += corr.transpose() * corr * w;
+        self.pose_gradient += pose.transpose() * e * w;
+        self.correction_gradient += corr.transpose() * e * w;
+    }
+
+    /// Eliminates one point: subtracts `H_xp H_pp⁻¹ H_py` and `H_xp H_pp⁻¹ g_p`.
+    pub fn eliminate(&mut self, b: &PointBlocks) {
+        let tp = b.pose.transpose() * b.pp_inv;
+        let cp = b.correction.transpose() * b.pp_inv;
+        self.pose_pose -= tp * b.pose;
+        self.pose_correction -= tp * b.correction;
+        self.correction_correction -= cp * b.correction;
+        self.pose_gradient -= tp * b.gradient;
+        self.correction_gradient -= cp * b.gradient;
+    }
+
+    /// Eliminates the pose too: the Hessian `I = H_cc − H_cT H_TT⁻¹ H_Tc` and gradient
+    /// `γ = g_c − H_cT H_TT⁻¹ g_T` of the profile cost in the correction. `None` when
+    /// the pose block is singular.
+    #[must_use]
+    pub fn profile(&self) -> Option<(MatrixK, VectorK)> {
+        let inv = self.pose_pose.try_inverse()?;
+        let ct = self.pose_correction.transpose() * inv;
+        let info = self.correction_correction - ct * self.pose_correction;
+        let grad = self.correction_gradient - ct * self.pose_gradient;
+        Some((info, grad))
+    }
+}
+
+/// A quadratic cost in the correction's coefficients `c` in canonical form,
+/// `Q(c) = ½ cᵀ A c − bᵀ c` (constant dropped): the sum of pair profile costs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct QuadraticCost {
+    /// `A`, KxK, symmetric positive semi-definite.
+    pub a: MatrixK,
+    /// `b`.
+    pub b: VectorK,
+}
+
+impl Default for QuadraticCost {
+    fn default() -> Self {
+        Self {
+            a: MatrixK::zeros(),
+            b: VectorK::zeros(),
+        }
+    }
+}
+
+impl QuadraticCost {
+    /// Adds the profile cost `γᵀ(c − c₀) + ½ (c − c₀)ᵀ I (c − c₀)` linearised at `c₀`,
+    /// divided by `scale2` (the residuals' variance factor, so that costs are in χ²
+    /// units whatever the true pixel noise).
+    pub fn add(&mut self, info: &MatrixK, grad: &VectorK, at: &VectorK, scale2: f64) {
+        self.a += info / scale2;
+        self.b += (info * at - grad) / scale2;
+    }
+
+    /// `Q(c)`.
+    #[must_use]
+    pub fn value(&self, c: &VectorK) -> f64 {
+        0.5 * (c.transpose() * self.a * c)[0] - self.b.dot(c)
+    }
+
+    /// The sum of two quadratics.
+    #[must_use]
+    pub fn plus(&self, other: &Self) -> Self {
+        Self {
+            a: self.a + other.a,
+            b: self.b + other.b,
+        }
+    }
+}

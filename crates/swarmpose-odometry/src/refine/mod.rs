@@ -1,0 +1,422 @@
+//! Reprojection refinement: the motion between two stereo frames that best explains the
+//! measured pixels, a two-frame bundle adjustment.
+//!
+//! Unknowns: the pose of the reference frame A in the current frame B (6 parameters) and
+//! every matched point, anchored in A by inverse depth ([`model`]). Each point is
+//! measured in both frames as `(u, v, d)`, so it contributes 6 whitened residuals for 3
+//! parameters of its own. Levenberg-Marquardt on the pose, with the points eliminated by
+//! their 3x3 Schur complements at every step (`O(N)` per iteration), and a Huber loss on
+//! each measurement's whitened residual norm. Rounds of gating (a point whose χ² over
+//! its 3 degrees of freedom exceeds [`RefineConfig::gate_chi2`] is dropped) and refit
+//! follow until the inliers settle.
+//!
+//! The covariance of the motion is `s² S⁻¹`, where `S` is the pose block of the
+//! information matrix after the points are eliminated and `s²` the residuals' variance
+//! factor `Σ w |e|² / (3 N − 6)` (1 when the pixel noise is as modelled). It is the
+//! covariance of `ξ = (ν, ω)` (metres, radians) in `T_true = T_est ∘ E(ξ)`, where `E(ξ)`
+//! maps `P ↦ Exp(ω) P + ν`: `R_true = R_est Exp(ω)`, `t_true = t_est + R_est ν`, both
+//! vectors in the frame of the current camera B.
+
+pub mod evidence;
+pub mod model;
+
+use nalgebra::{Isometry3, Matrix3, Matrix6, Translation3, UnitQuaternion, Vector3, Vector6};
+
+use evidence::{PointBlocks, Reduced};
+use model::{Linearized, StereoModel, StereoObservation};
+
+/// Settings of the refinement.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RefineConfig {
+    /// Most Levenberg-Marquardt iterations per round (default 10).
+    pub max_iterations: usize,
+    /// Rounds of gating and refitting (default 3).
+    pub rounds: usize,
+    /// Huber threshold on a measurement's whitened residual norm (default 2.5; about the
+    /// 85th percentile of the norm of a 3-vector of standard normals).
+    pub huber_k: f64,
+    /// Largest χ² of an inlier over its 6 residuals less 3 point parameters (default
+    /// 16.27, the χ²(3) 99.9 % quantile).
+    pub gate_chi2: f64,
+    /// Gate of the first round, at the estimator's motion (default 100: the estimator's
+    /// motion is only approximately right); the first round also keeps every match up to
+    /// the median χ², so that a rough start keeps the better half.
+    pub initial_gate_chi2: f64,
+}
+
+impl Default for RefineConfig {
+    fn default() -> Self {
+        Self {
+            max_iterations: 10,
+            rounds: 3,
+            huber_k: 2.5,
+            gate_chi2: 16.27,
+            initial_gate_chi2: 100.0,
+        }
+    }
+}
+
+/// Why a refinement failed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RefineError {
+    /// Fewer inliers than the minimum.
+    #[error("{got} points consistent with the motion, fewer than {needed}")]
+    TooFewInliers {
+        /// Inliers found.
+        got: usize,
+        /// Minimum.
+        needed: usize,
+    },
+    /// The information matrix of the pose is singular (degenerate geometry).
+    #[error("the pose is not determined by the points (singular information matrix)")]
+    Singular,
+    /// The two slices of measurements differ in length.
+    #[error("{reference} reference measurements for {current} current ones")]
+    LengthMismatch {
+        /// Reference measurements.
+        reference: usize,
+        /// Current measurements.
+        current: usize,
+    },
+}
+
+/// A refined motion.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Refined {
+    /// The pose of the current camera B in the reference camera A, `T_AB`
+    /// (`P_A = R P_B + t`, metres).
+    pub motion: Isometry3<f64>,
+    /// Covariance of the motion's perturbation `ξ = (ν, ω)` (module documentation).
+    pub covariance: Matrix6<f64>,
+    /// Indices of the inlier matches, ascending.
+    pub inliers: Vec<usize>,
+    /// The refined point of each inlier, anchored in A by inverse depth `(x, y, ρ)`
+    /// ([`model`]).
+    pub points: Vec<Vector3<f64>>,
+    /// Residuals' variance factor `s²` (1 when the pixel noise is as modelled).
+    pub scale2: f64,
+    /// Levenberg-Marquardt iterations over all rounds.
+    pub iterations: usize,
+    /// The normal equations of (pose, correction) with the points eliminated, at the
+    /// solution, per fold of the matches (see [`refine`]).
+    pub reduced: [Reduced; 2],
+}
+
+/// Huber weight of a squared whitened norm `s2`.
+fn huber_weight(s2: f64, k: f64) -> f64 {
+    if s2 <= k * k { 1.0 } else { k / s2.sqrt() }
+}
+
+/// Huber cost `ρ(s²)` (equal to `s²` inside the threshold).
+fn huber_cost(s2: f64, k: f64) -> f64 {
+    if s2 <= k * k {
+        s2
+    } else {
+        2.0 * k * s2.sqrt() - k * k
+    }
+}
+
+/// The pose `T_BA` as a rotation matrix and translation.
+#[derive(Debug, Clone, Copy)]
+struct Pose {
+    rot: Matrix3<f64>,
+    trans: Vector3<f64>,
+}
+
+impl Pose {
+    fn from_motion(t_ab: &Isometry3<f64>) -> Self {
+        let inv = t_ab.inverse();
+        Self {
+            rot: *inv.rotation.to_rotation_matrix().matrix(),
+            trans: inv.translation.vector,
+        }
+    }
+
+    /// `P_B ← Exp(ω) P_B + ν`.
+    fn moved(&self, xi: &Vector6<f64>) -> Self {
+        let e = UnitQuaternion::from_scaled_axis(Vector3::new(xi[3], xi[4], xi[5]));
+        let e = *e.to_rotation_matrix().matrix();
+        Self {
+            rot: e * self.rot,
+            trans: e * self.trans + Vector3::new(xi[0], xi[1], xi[2]),
+        }
+    }
+
+    fn motion(&self) -> Isometry3<f64> {
+        let r = UnitQuaternion::from_matrix(&self.rot);
+        Isometry3::from_parts(Translation3::from(self.trans), r).inverse()
+    }
+}
+
+/// The two measurements of one point, linearised, or `None` if B cannot see it.
+fn linearize(
+    model: &StereoModel,
+    pose: &Pose,
+    p: &Vector3<f64>,
+    a: &StereoObservation,
+    b: &StereoObservation,
+) -> Option<(Linearized, Linearized)> {
+    Some((
+        model.in_reference(p, a),
+        model.in_current(&pose.rot, &pose.trans, p, b)?,
+    ))
+}
+
+/// Best point for a fixed pose: Gauss-Newton on its 6 residuals from `p`.
+fn fit_point(
+    model: &StereoModel,
+    pose: &Pose,
+    mut p: Vector3<f64>,
+    a: &StereoObservation,
+    b: &StereoObservation,
+) -> Option<(Vector3<f64>, f64)> {
+    for _ in 0..3 {
+        let (la, lb) = linearize(model, pose, &p, a, b)?;
+        let h = la.d_point.transpose() * la.d_point + lb.d_point.transpose() * lb.d_point;
+        let g = la.d_point.transpose() * la.residual + lb.d_point.transpose() * lb.residual;
+        p -= h.try_inverse()? * g;
+    }
+    let (la, lb) = linearize(model, pose, &p, a, b)?;
+    Some((p, la.residual.norm_squared() + lb.residual.norm_squared()))
+}
+
+/// Working state of one round.
+struct Problem<'a> {
+    model: &'a StereoModel,
+    config: &'a RefineConfig,
+    reference: &'a [StereoObservation],
+    current: &'a [StereoObservation],
+    active: Vec<usize>,
+}
+
+impl Problem<'_> {
+    /// Robust cost `½ Σ ρ` of the active points at `pose` with `points`.
+    fn cost(&self, pose: &Pose, points: &[Vector3<f64>]) -> f64 {
+        let k = self.config.huber_k;
+        let mut total = 0.0;
+        for (&i, p) in self.active.iter().zip(points) {
+            match linearize(self.model, pose, p, &self.reference[i], &self.current[i]) {
+                Some((la, lb)) => {
+                    total += huber_cost(la.residual.norm_squared(), k)
+                        + huber_cost(lb.residual.norm_squared(), k);
+                }
+                None => return f64::INFINITY,
+            }
+        }
+        0.5 * total
+    }
+
+    /// The reduced system at `pose`, with each point's blocks for back-substitution;
+    /// `None` if a point left B's view or a block is singular.
+    fn build(
+        &self,
+        pose: &Pose,
+        points: &[Vector3<f64>],
+        folds: Option<&[u8]>,
+        blocks: &mut Vec<PointBlocks>,
+    ) -> Option<[Reduced; 2]> {
+        let k = self.config.huber_k;
+        let mut reduced = [Reduced::default(); 2];
+        blocks.clear();
+        for (&i, p) in self.active.iter().zip(points) {
+            let (la, lb) = linearize(self.model, pose, p, &self.reference[i], &self.current[i])?;
+            let wa = huber_weight(la.residual.norm_squared(), k);
+            let wb = huber_weight(lb.residual.norm_squared(), k);
+            let hpp =
+                la.d_point.transpose() * la.d_point * wa + lb.d_point.transpose() * lb.d_point * wb;
+            let b = PointBlocks {
+                pp_inv: hpp.try_inverse()?,
+                pose: lb.d_point.transpose() * lb.d_pose * wb,
+                correction: la.d_point.transpose() * la.d_correction * wa
+                    + lb.d_point.transpose() * lb.d_correction * wb,
+                gradient: la.d_point.transpose() * la.residual * wa
+                    + lb.d_point.transpose() * lb.residual * wb,
+            };
+            let fold = folds.map_or(0, |f| usize::from(f[i] & 1));
+            let r = &mut reduced[fold];
+            r.add_direct(wa, &la.d_pose, &la.d_correction, &la.residual);
+            r.add_direct(wb, &lb.d_pose, &lb.d_correction, &lb.residual);
+            r.eliminate(&b);
+            blocks.push(b);
+        }
+        Some(reduced)
+    }
+
+    /// Levenberg-Marquardt from `pose` and `points`; returns the iterations done.
+    fn solve(&self, pose: &mut Pose, points: &mut [Vector3<f64>]) -> Result<usize, RefineError> {
+        let mut blocks = Vec::with_capacity(points.len());
+        let mut cost = self.cost(pose, points);
+        let mut lambda = 1e-4;
+        let mut trial = points.to_vec();
+        for it in 0..self.config.max_iterations {
+            let [r, _] = self
+                .build(pose, points, None, &mut blocks)
+                .ok_or(RefineError::Singular)?;
+            let (s, g) = (r.pose_pose, r.pose_gradient);
+            let mut improved = false;
+            while lambda < 1e8 {
+                let mut damped = s;
+                for d in 0..6 {
+                    damped[(d, d)] *= 1.0 + lambda;
+                }
+                let Some(chol) = damped.cholesky() else {
+                    lambda *= 10.0;
+                    continue;
+                };
+                let dxi = -chol.solve(&g);
+                let next = pose.moved(&dxi);
+                for ((t, p), b) in trial.iter_mut().zip(points.iter()).zip(&blocks) {
+                    *t = p - b.pp_inv * (b.gradient + b.pose * dxi);
+                }
+                let c = self.cost(&next, &trial);
+                if c < cost {
+                    let done = (cost - c) < 1e-10 * cost.max(1e-300) || dxi.norm() < 1e-12;
+                    *pose = next;
+                    points.copy_from_slice(&trial);
+                    cost = c;
+                    lambda = (lambda * 0.1).max(1e-9);
+                    improved = true;
+                    if done {
+                        return Ok(it + 1);
+                    }
+                    break;
+                }
+                lambda *= 10.0;
+            }
+            if !improved {
+                return Ok(it + 1);
+            }
+        }
+        Ok(self.config.max_iterations)
+    }
+}
+
+/// Refines the motion `start` (`T_AB`, the pose of the current camera B in the reference
+/// camera A) on the matched measurements `reference[i]` (in A) and `current[i]` (in B);
+/// `folds[i]` (0 or 1) splits the matches into two halves whose normal equations are
+/// returned separately (for held-out scoring of the disparity correction), all in fold 0
+/// when `None`.
+///
+/// # Errors
+/// [`RefineError::TooFewInliers`] when fewer than `min_inliers` matches are consistent;
+/// [`RefineError::Singular`] for a degenerate configuration;
+/// [`RefineError::LengthMismatch`] for slices of different lengths.
+pub fn refine(
+    model: &StereoModel,
+    config: &RefineConfig,
+    reference: &[StereoObservation],
+    current: &[StereoObservation],
+    folds: Option<&[u8]>,
+    start: &Isometry3<f64>,
+    min_inliers: usize,
+) -> Result<Refined, RefineError> {
+    if reference.len() != current.len() || folds.is_some_and(|f| f.len() != reference.len()) {
+        return Err(RefineError::LengthMismatch {
+            reference: reference.len(),
+            current: current.len(),
+        });
+    }
+    let needed = min_inliers.max(3);
+    let mut pose = Pose::from_motion(start);
+    // Points fitted to the starting pose, then gated.
+    let mut fitted: Vec<Option<(Vector3<f64>, f64)>> = reference
+        .iter()
+        .zip(current)
+        .map(|(a, b)| {
+            let p = model.anchor(a);
+            if p.z <= 0.0 || !p.iter().all(|v| v.is_finite()) {
+                return None;
+            }
+            fit_point(model, &pose, p, a, b)
+        })
+        .collect();
+    // The first gate also keeps the better half, in case the start is rough.
+    let mut chi2s: Vec<f64> = fitted.iter().filter_map(|f| f.map(|(_, c)| c)).collect();
+    let median = if chi2s.is_empty() {
+        0.0
+    } else {
+        let mid = chi2s.len() / 2;
+        *chi2s.select_nth_unstable_by(mid, f64::total_cmp).1
+    };
+    let mut gate = config.initial_gate_chi2.max(median);
+    let mut problem = Problem {
+        model,
+        config,
+        reference,
+        current,
+        active: Vec::new(),
+    };
+    let mut iterations = 0;
+    let mut points: Vec<Vector3<f64>> = Vec::new();
+    for round in 0..config.rounds.max(1) {
+        let active: Vec<usize> = fitted
+            .iter()
+            .enumerate()
+            .filter_map(|(i, f)| f.and_then(|(_, c2)| (c2 <= gate).then_some(i)))
+            .collect();
+        if active.len() < needed {
+            return Err(RefineError::TooFewInliers {
+                got: active.len(),
+                needed,
+            });
+        }
+        let settled = round > 0 && active == problem.active;
+        problem.active = active;
+        if settled {
+            break;
+        }
+        points = problem
+            .active
+            .iter()
+            .filter_map(|&i| fitted[i].map(|(p, _)| p))
+            .collect();
+        iterations += problem.solve(&mut pose, &mut points)?;
+        // Every match re-fitted to the new pose, for the next gate.
+        for (i, f) in fitted.iter_mut().enumerate() {
+            let start = match f {
+                Some((p, _)) => *p,
+                None => model.anchor(&reference[i]),
+            };
+            *f = if start.z > 0.0 {
+                fit_point(model, &pose, start, &reference[i], &current[i])
+            } else {
+                None
+            };
+        }
+        gate = config.gate_chi2;
+    }
+    let mut blocks = Vec::with_capacity(points.len());
+    let reduced = problem
+        .build(&pose, &points, folds, &mut blocks)
+        .ok_or(RefineError::Singular)?;
+    let mut both = reduced[0];
+    both += &reduced[1];
+    let info = both.pose_pose;
+    let inv = info.try_inverse().ok_or(RefineError::Singular)?;
+    let n = problem.active.len();
+    let chi2: f64 = problem
+        .active
+        .iter()
+        .zip(&points)
+        .filter_map(|(&i, p)| {
+            let (la, lb) = linearize(model, &pose, p, &reference[i], &current[i])?;
+            let k = config.huber_k;
+            let (sa, sb) = (la.residual.norm_squared(), lb.residual.norm_squared());
+            Some(huber_weight(sa, k) * sa + huber_weight(sb, k) * sb)
+        })
+        .sum();
+    let dof = (3 * n).saturating_sub(6).max(1) as f64;
+    let scale2 = chi2 / dof;
+    Ok(Refined {
+        motion: pose.motion(),
+        covariance: inv * scale2,
+        inliers: problem.active,
+        points,
+        scale2,
+        iterations,
+        reduced,
+    })
+}
+
+#[cfg(test)]
+mod tests;

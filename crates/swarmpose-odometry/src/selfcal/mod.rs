@@ -1,0 +1,396 @@
+//! Self-calibration of the disparity correction by evidence, online.
+//!
+//! A stereo rig whose right principal point, focal length or orientation is slightly off
+//! in its calibration measures every disparity short by `δ(x, y)` pixels
+//! ([`DisparityCorrection`]: a constant for a principal point, `f ψ (1 + x²)` for a yaw
+//! `ψ` of the right camera, and terms in `x`, `y`, `x y`). Such an error bends the
+//! triangulated scene, so the same points seen from two places no longer fit one rigid
+//! motion: the reprojection cost of a moving pair depends on `δ`. A pair without
+//! translation says nothing about it, and needs no special case: its information is 0.
+//!
+//! **Two kinds of evidence.** A rotation of the right camera also moves its image points
+//! vertically, which every stereo match measures directly, frame by frame and without
+//! any motion ([`rows`]): the yaw, roll and pitch terms come from there. A principal
+//! point (or focal length) error of the right camera moves points only horizontally and
+//! is seen only as a scene that is not rigid between two places, below.
+//!
+//! **Rigidity.** The refinement of every tracked pair returns its normal equations with
+//! the points eliminated ([`crate::refine::evidence`]). Eliminating the pose as well gives
+//! a quadratic model of the pair's *profile* cost in the coefficients `c` (the pose re-optimised
+//! for each `c`), in χ² units (divided by the pair's residual variance factor). Summed
+//! over the pairs so far, it is a fixed-size state: memory does not grow with the
+//! sequence. The matches are split into two folds by alternate vertical stripes of the
+//! image (16 stripes, so invariant to the image size), each with its own profile.
+//!
+//! **Decision.** A model is a set of causes ([`CorrectionModel`]). The rows choose the
+//! rotation terms ([`rows::RowEvidence::decide`]); on top of them, the rigidity evidence
+//! chooses the horizontal terms: each candidate is fitted on one fold and scored on the
+//! other (both ways), the held-out score `S_M = Q₀(ĉ_M¹) + Q₁(ĉ_M⁰)` in χ² units relative
+//! to the rotation terms alone. In both, forward selection adds one term at a time while
+//! it lowers the held-out score by more than [`SelfCalConfig::margin`]. With an exact
+//! calibration the fitted corrections only fit noise and score worse on the other fold,
+//! so none is chosen (the false-alarm rate of the margin is measured in the tests). The
+//! correction applied is the chosen model fitted on all the evidence so far; it is
+//! re-decided after every frame, so it uses the frames that have arrived and never later
+//! ones.
+
+pub mod rows;
+
+use nalgebra::SMatrix;
+use swarmpose_vision::frontend::{CORRECTION_TERMS, DisparityCorrection};
+use swarmpose_vision::stereo::RectifiedStereo;
+
+use crate::refine::evidence::{MatrixK, QuadraticCost, Reduced, VectorK};
+use rows::{RowDecision, RowEvidence};
+
+const K: usize = CORRECTION_TERMS;
+
+/// Settings of the self-calibration.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SelfCalConfig {
+    /// How much lower, in χ² units, the held-out score must become for a term to be
+    /// added to the correction (default 10; the false-alarm rate on exact rigs is
+    /// measured in the tests).
+    pub margin: f64,
+    /// Number of vertical image stripes that alternate between the two folds
+    /// (default 16).
+    pub stripes: usize,
+    /// The causes the selection may use (default [`CorrectionModel::DEFAULT_CANDIDATES`]).
+    pub candidates: CorrectionModel,
+}
+
+impl Default for SelfCalConfig {
+    fn default() -> Self {
+        Self {
+            margin: 10.0,
+            stripes: 16,
+            candidates: CorrectionModel::DEFAULT_CANDIDATES,
+        }
+    }
+}
+
+/// A set of causes of a disparity error, each a term of the correction (bit flags).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash)]
+pub struct CorrectionModel(pub u8);
+
+impl CorrectionModel {
+    /// No correction.
+    pub const NONE: Self = Self(0);
+    /// A horizontal principal point of the right camera: a constant offset (rigidity).
+    pub const PRINCIPAL_POINT: Self = Self(1);
+    /// A yaw of the right camera: `−f ψ (1 + x²)` (rows).
+    pub const YAW: Self = Self(1 << 1);
+    /// A roll of the right camera: `f θ y` (rows).
+    pub const ROLL: Self = Self(1 << 2);
+    /// A pitch of the right camera: `f φ x y` (rows).
+    pub const PITCH: Self = Self(1 << 3);
+    /// A focal length of the right camera: `f ε x` (rigidity).
+    pub const FOCAL: Self = Self(1 << 4);
+    /// The causes the default configuration may choose: principal point and yaw (a
+    /// constant, and a constant plus a quadratic term).
+    pub const DEFAULT_CANDIDATES: Self = Self(Self::PRINCIPAL_POINT.0 | Self::YAW.0);
+    /// Every cause.
+    pub const ALL: Self = Self(0b1_1111);
+    /// A correction given by the user, not chosen by evidence.
+    pub const GIVEN: Self = Self(1 << 7);
+    /// The causes, in order, with their names.
+    pub const CAUSES: [(Self, &'static str); 5] = [
+        (Self::PRINCIPAL_POINT, "principal-point"),
+        (Self::YAW, "yaw"),
+        (Self::ROLL, "roll"),
+        (Self::PITCH, "pitch"),
+        (Self::FOCAL, "focal"),
+    ];
+
+    /// True when every cause of `other` is in `self`.
+    #[must_use]
+    pub fn has(self, other: Self) -> bool {
+        self.0 & other.0 == other.0 && other.0 != 0
+    }
+
+    /// The union.
+    #[must_use]
+    pub fn with(self, other: Self) -> Self {
+        Self(self.0 | other.0)
+    }
+
+    /// `none`, or the causes joined by `+` (`principal-point+yaw`).
+    #[must_use]
+    pub fn name(self) -> String {
+        if self.0 == 0 {
+            return "none".into();
+        }
+        if self == Self::GIVEN {
+            return "given".into();
+        }
+        Self::CAUSES
+            .iter()
+            .filter(|(c, _)| self.has(*c))
+            .map(|(_, n)| *n)
+            .collect::<Vec<_>>()
+            .join("+")
+    }
+
+    /// The model named by [`CorrectionModel::name`].
+    ///
+    /// # Errors
+    /// The unknown cause.
+    pub fn parse(text: &str) -> Result<Self, String> {
+        if text == "none" {
+            return Ok(Self::NONE);
+        }
+        text.split('+').try_fold(Self::NONE, |m, part| {
+            Self::CAUSES
+                .iter()
+                .find(|(_, n)| *n == part)
+                .map(|(c, _)| m.with(*c))
+                .ok_or_else(|| {
+                    format!(
+                        "unknown cause '{part}': use none or causes joined by '+' among \
+                         principal-point, yaw, roll, pitch, focal"
+                    )
+                })
+        })
+    }
+}
+
+impl std::fmt::Display for CorrectionModel {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.name())
+    }
+}
+
+/// The horizontal causes, seen by rigidity, and their coefficient index.
+const RIGID_CAUSES: [(CorrectionModel, usize); 2] = [
+    (CorrectionModel::PRINCIPAL_POINT, 0),
+    (CorrectionModel::FOCAL, 2),
+];
+
+/// The minimiser of `q` over `base + Σ z_k e_k` for the coefficients `free`.
+fn fit_on_base(q: &QuadraticCost, base: &VectorK, free: &[usize]) -> VectorK {
+    let n = free.len();
+    let mut out = *base;
+    if n == 0 {
+        return out;
+    }
+    let rhs = q.b - q.a * base;
+    let mut a = SMatrix::<f64, K, K>::identity();
+    let mut b = VectorK::zeros();
+    for (i, &ki) in free.iter().enumerate() {
+        b[i] = rhs[ki];
+        for (j, &kj) in free.iter().enumerate() {
+            a[(i, j)] = q.a[(ki, kj)];
+        }
+    }
+    let scale = (0..n).map(|i| a[(i, i)].abs()).fold(0.0, f64::max);
+    if scale <= 0.0 {
+        return out;
+    }
+    for i in 0..n {
+        a[(i, i)] += 1e-12 * scale;
+    }
+    if let Some(chol) = a.cholesky() {
+        let z = chol.solve(&b);
+        for (i, &ki) in free.iter().enumerate() {
+            out[ki] += z[i];
+        }
+    }
+    out
+}
+
+/// The current decision and its evidence.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Decision {
+    /// The causes chosen.
+    pub model: CorrectionModel,
+    /// The correction applied: the chosen causes fitted on all the evidence so far.
+    pub correction: DisparityCorrection,
+    /// What the rows say about the right camera's rotation.
+    pub rows: RowDecision,
+    /// Held-out rigidity score of the horizontal terms chosen, χ² units relative to the
+    /// rotation terms alone (lower is better; 0 when none is chosen).
+    pub rigidity_score: f64,
+    /// Held-out rigidity score of the best horizontal term not chosen (the margin it
+    /// missed), or `None` when none is left.
+    pub rigidity_next_score: Option<f64>,
+    /// Pairs that contributed rigidity evidence.
+    pub pairs: usize,
+    /// Frames whose confirmed matches gave row evidence.
+    pub frames: usize,
+}
+
+fn correction_of(c: &VectorK) -> DisparityCorrection {
+    let mut a = [0.0; K];
+    a.copy_from_slice(c.as_slice());
+    DisparityCorrection::from_coefficients(a)
+}
+
+/// The online self-calibration: evidence accumulated over frames and pairs (fixed size),
+/// and the decision.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SelfCalibration {
+    config: SelfCalConfig,
+    rows: RowEvidence,
+    joint: QuadraticCost,
+    folds: [QuadraticCost; 2],
+    decision: Decision,
+}
+
+impl SelfCalibration {
+    /// No evidence yet: no correction.
+    #[must_use]
+    pub fn new(config: SelfCalConfig) -> Self {
+        Self {
+            config,
+            ..Self::default()
+        }
+    }
+
+    /// The current decision.
+    #[must_use]
+    pub fn decision(&self) -> &Decision {
+        &self.decision
+    }
+
+    /// Adds the row offsets `(u, v, d, dy)` (pixels) of the stereo matches of one frame
+    /// that a tracked motion confirmed; the decision is updated by the next
+    /// [`SelfCalibration::add_pair`].
+    pub fn add_rows(
+        &mut self,
+        samples: impl IntoIterator<Item = (f64, f64, f64, f32)>,
+        rig: &RectifiedStereo,
+        image_width: usize,
+    ) {
+        let rotation = CorrectionModel::YAW
+            .with(CorrectionModel::ROLL)
+            .with(CorrectionModel::PITCH);
+        if self.config.candidates.0 & rotation.0 != 0 {
+            let stripe = (image_width as f64 / self.config.stripes.max(1) as f64).max(1.0);
+            self.rows.add(samples, rig, stripe);
+        }
+        self.decision.frames += 1;
+    }
+
+    /// Adds the evidence of one refined pair: its reduced normal equations per fold,
+    /// computed with the correction `at`, and its residual variance factor `scale2`.
+    /// Returns the updated decision.
+    pub fn add_pair(
+        &mut self,
+        reduced: &[Reduced; 2],
+        at: &DisparityCorrection,
+        scale2: f64,
+    ) -> &Decision {
+        if !(scale2.is_finite() && scale2 > 0.0) {
+            return &self.decision;
+        }
+        let at = VectorK::from(at.coefficients());
+        let mut both = reduced[0];
+        both += &reduced[1];
+        let Some((info, grad)) = both.profile() else {
+            return &self.decision;
+        };
+        if !finite(&info, &grad) {
+            return &self.decision;
+        }
+        self.joint.add(&info, &grad, &at, scale2);
+        for (fold, r) in self.folds.iter_mut().zip(reduced) {
+            if let Some((info, grad)) = r.profile()
+                && finite(&info, &grad)
+            {
+                fold.add(&info, &grad, &at, scale2);
+            }
+        }
+        self.decision.pairs += 1;
+        self.decide();
+        &self.decision
+    }
+
+    fn decide(&mut self) {
+        let c = &self.config;
+        let mut rows = self.rows.decide(c.margin);
+        rows.yaw &= c.candidates.has(CorrectionModel::YAW);
+        rows.roll &= c.candidates.has(CorrectionModel::ROLL);
+        rows.pitch &= c.candidates.has(CorrectionModel::PITCH);
+        let mut model = CorrectionModel::NONE;
+        for (flag, on) in [
+            (CorrectionModel::YAW, rows.yaw),
+            (CorrectionModel::ROLL, rows.roll),
+            (CorrectionModel::PITCH, rows.pitch),
+        ] {
+            if on {
+                model = model.with(flag);
+            }
+        }
+        let base = VectorK::from(rows.correction().coefficients());
+        // Horizontal terms on top of the rotation, by held-out rigidity.
+        let [f0, f1] = &self.folds;
+        let score = |free: &[usize]| {
+            f0.value(&fit_on_base(f1, &base, free)) + f1.value(&fit_on_base(f0, &base, free))
+                - f0.value(&base)
+                - f1.value(&base)
+        };
+        let mut free: Vec<usize> = Vec::new();
+        let mut best = 0.0;
+        let next = loop {
+            let candidate = RIGID_CAUSES
+                .iter()
+                .filter(|(cause, k)| c.candidates.has(*cause) && !free.contains(k))
+                .map(|&(cause, k)| {
+                    let mut f = free.clone();
+                    f.push(k);
+                    (cause, k, score(&f))
+                })
+                .min_by(|a, b| a.2.total_cmp(&b.2));
+            match candidate {
+                Some((cause, k, s)) if s < best - c.margin => {
+                    free.push(k);
+                    model = model.with(cause);
+                    best = s;
+                }
+                Some((_, _, s)) => break Some(s),
+                None => break None,
+            }
+        };
+        self.decision = Decision {
+            model,
+            correction: correction_of(&fit_on_base(&self.joint, &base, &free)),
+            rows,
+            rigidity_score: best,
+            rigidity_next_score: next,
+            pairs: self.decision.pairs,
+            frames: self.decision.frames,
+        };
+    }
+}
+
+fn finite(info: &MatrixK, grad: &VectorK) -> bool {
+    info.iter().chain(grad.iter()).all(|v| v.is_finite())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fits_on_a_base_and_names() {
+        let mut q = QuadraticCost::default();
+        for k in 0..K {
+            q.a[(k, k)] = 2.0 + k as f64;
+            q.b[k] = 1.0;
+        }
+        q.a[(0, 1)] = 1.0;
+        q.a[(1, 0)] = 1.0;
+        let base = VectorK::from([0.0, 0.5, 0.0, 0.0, 0.0]);
+        // Only the offset free: a00 z = b0 - (A base)_0.
+        let c = fit_on_base(&q, &base, &[0]);
+        assert!((c[0] - (1.0 - 0.5) / 2.0).abs() < 1e-9 && c[1] == 0.5);
+        assert_eq!(fit_on_base(&q, &base, &[]), base);
+        // No information: the base.
+        assert_eq!(fit_on_base(&QuadraticCost::default(), &base, &[0]), base);
+        let m = CorrectionModel::PRINCIPAL_POINT.with(CorrectionModel::YAW);
+        assert_eq!(m.name(), "principal-point+yaw");
+        assert_eq!(CorrectionModel::parse(&m.name()), Ok(m));
+        assert_eq!(CorrectionModel::parse("none"), Ok(CorrectionModel::NONE));
+        assert!(CorrectionModel::parse("tilt").is_err());
+    }
+}

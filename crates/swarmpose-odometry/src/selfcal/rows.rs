@@ -1,0 +1,243 @@
+//! The rows of a stereo pair as evidence of the right camera's rotation.
+//!
+//! A rotation `ω = (φ, ψ, θ)` (pitch, yaw, roll) of the right camera against the
+//! rectification moves each right image point vertically by
+//! `f (φ (1 + y²) − θ x − ψ x y)` (`x`, `y` the right point's normalised coordinates;
+//! [`DisparityCorrection`]'s module documentation), which the stereo matcher measures as
+//! the row offset of every match ([`StereoFrame::row_offsets_px`]). A least-squares fit
+//!
+//! ```text
+//! dy = c₀ + c₁ x + c₂ y + c₃ x y + c₄ y²
+//! ```
+//!
+//! reads the rotation off a single frame: `f ψ = −c₃`, `f θ = −c₁`, `f φ = c₄` (`c₀`
+//! also holds a vertical principal point offset and `c₂` a vertical focal length
+//! mismatch: nuisances that do not move disparities). Only matches that a tracked motion
+//! confirmed are used: a wrong stereo match, found along the same row, would pull every
+//! term towards 0. The same rotation moves the right
+//! points horizontally, which is the disparity error: yaw `−f ψ (1 + x²)`, roll `f θ y`,
+//! pitch `f φ x y`. The fit's normal equations are summed over frames (a fixed-size
+//! state), separately for two folds of the matches (alternate vertical stripes), so
+//! that each rotation term is used only when the held-out fold confirms it.
+
+use nalgebra::{SMatrix, SVector};
+use swarmpose_vision::frontend::DisparityCorrection;
+use swarmpose_vision::stereo::RectifiedStereo;
+
+/// Terms of the row-offset fit: `[1, x, y, x y, y², x², x² y, y³]`.
+const R: usize = 8;
+/// Row offsets larger than this are not used, pixels (wrong stereo matches).
+const MAX_ROW_OFFSET_PX: f32 = 1.5;
+
+type MatrixR = SMatrix<f64, R, R>;
+type VectorR = SVector<f64, R>;
+
+/// The rotation terms the rows can show, as indices into the fit.
+pub(crate) const YAW: usize = 3;
+/// Roll: the `x` term.
+pub(crate) const ROLL: usize = 1;
+/// Pitch: the `y²` term.
+pub(crate) const PITCH: usize = 4;
+/// Nuisance terms, always fitted: constant, `y` (a vertical focal length mismatch), and
+/// `x²`, `x² y`, `y³` (lens distortion left by the rectification).
+const NUISANCE: [usize; 5] = [0, 2, 5, 6, 7];
+
+/// Normal equations of the fit over one fold.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Normal {
+    a: MatrixR,
+    b: VectorR,
+    yy: f64,
+    n: usize,
+}
+
+impl Default for Normal {
+    fn default() -> Self {
+        Self {
+            a: MatrixR::zeros(),
+            b: VectorR::zeros(),
+            yy: 0.0,
+            n: 0,
+        }
+    }
+}
+
+impl Normal {
+    /// Sum of squared residuals at `c`.
+    fn rss(&self, c: &VectorR) -> f64 {
+        (self.yy - 2.0 * self.b.dot(c) + (c.transpose() * self.a * c)[0]).max(0.0)
+    }
+
+    fn plus(&self, o: &Self) -> Self {
+        Self {
+            a: self.a + o.a,
+            b: self.b + o.b,
+            yy: self.yy + o.yy,
+            n: self.n + o.n,
+        }
+    }
+
+    /// Least squares over the terms in `terms` (the others 0).
+    fn fit(&self, terms: &[usize]) -> VectorR {
+        let n = terms.len();
+        let mut a = MatrixR::identity();
+        let mut b = VectorR::zeros();
+        for (i, &ki) in terms.iter().enumerate() {
+            b[i] = self.b[ki];
+            for (j, &kj) in terms.iter().enumerate() {
+                a[(i, j)] = self.a[(ki, kj)];
+            }
+        }
+        let mut out = VectorR::zeros();
+        let scale = (0..n).map(|i| a[(i, i)]).fold(0.0, f64::max);
+        if n == 0 || scale <= 0.0 {
+            return out;
+        }
+        for i in 0..n {
+            a[(i, i)] += 1e-12 * scale;
+        }
+        if let Some(chol) = a.cholesky() {
+            let x = chol.solve(&b);
+            for (i, &ki) in terms.iter().enumerate() {
+                out[ki] = x[i];
+            }
+        }
+        out
+    }
+}
+
+/// The rotation terms the rows support, and the correction they imply.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct RowDecision {
+    /// Yaw supported.
+    pub yaw: bool,
+    /// Roll supported.
+    pub roll: bool,
+    /// Pitch supported.
+    pub pitch: bool,
+    /// Fitted `f ψ`, `f θ`, `f φ` (pixels), whether supported or not.
+    pub rotation_px: [f64; 3],
+    /// Held-out score of the terms chosen, χ² units relative to none (lower is better).
+    pub score: f64,
+    /// Row offsets used, over all frames.
+    pub measurements: usize,
+}
+
+impl RowDecision {
+    /// The disparity correction of the supported rotation terms.
+    #[must_use]
+    pub fn correction(&self) -> DisparityCorrection {
+        let [fpsi, ftheta, fphi] = self.rotation_px;
+        let mut c = DisparityCorrection::default();
+        if self.yaw {
+            c.offset_px -= fpsi;
+            c.quadratic_px -= fpsi;
+        }
+        if self.roll {
+            c.linear_y_px += ftheta;
+        }
+        if self.pitch {
+            c.cross_xy_px += fphi;
+        }
+        c
+    }
+}
+
+/// Row-offset evidence summed over frames.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct RowEvidence {
+    folds: [Normal; 2],
+}
+
+impl RowEvidence {
+    /// Adds row offsets: `(u, v, d, dy)` of stereo matches (left pixel, disparity and row
+    /// offset, pixels); `stripe_px` is the width of the fold stripes.
+    pub fn add(
+        &mut self,
+        samples: impl IntoIterator<Item = (f64, f64, f64, f32)>,
+        rig: &RectifiedStereo,
+        stripe_px: f64,
+    ) {
+        for (u, v, d, dy) in samples {
+            if !(dy.is_finite() && dy.abs() <= MAX_ROW_OFFSET_PX) {
+                continue;
+            }
+            let x = (u - d - rig.cx) / rig.fx;
+            let y = (v - rig.cy) / rig.fy;
+            let phi = VectorR::from([1.0, x, y, x * y, y * y, x * x, x * x * y, y * y * y]);
+            let fold = &mut self.folds[((u / stripe_px).floor().max(0.0) as u64 % 2) as usize];
+            let dy = f64::from(dy);
+            fold.a += phi * phi.transpose();
+            fold.b += phi * dy;
+            fold.yy += dy * dy;
+            fold.n += 1;
+        }
+    }
+
+    /// Forward selection of the rotation terms (nuisance terms always in): each added
+    /// while it lowers the held-out score (fit on one fold, residuals on the other, in
+    /// units of the residual variance) by more than `margin`.
+    #[must_use]
+    pub fn decide(&self, margin: f64) -> RowDecision {
+        let all = self.folds[0].plus(&self.folds[1]);
+        let full: Vec<usize> = (0..R).collect();
+        let mut decision = RowDecision {
+            measurements: all.n,
+            ..RowDecision::default()
+        };
+        if self.folds.iter().any(|f| f.n < 2 * R) {
+            return decision;
+        }
+        let c_full = all.fit(&full);
+        let variance = all.rss(&c_full) / (all.n.saturating_sub(R).max(1)) as f64;
+        if !(variance.is_finite() && variance > 0.0) {
+            return decision;
+        }
+        decision.rotation_px = [-c_full[YAW], -c_full[ROLL], c_full[PITCH]];
+        let score = |terms: &[usize]| {
+            let [f0, f1] = &self.folds;
+            (f0.rss(&f1.fit(terms)) + f1.rss(&f0.fit(terms))) / variance
+        };
+        let mut terms: Vec<usize> = NUISANCE.to_vec();
+        let base = score(&terms);
+        let mut best = 0.0;
+        loop {
+            let candidate = [YAW, ROLL, PITCH]
+                .into_iter()
+                .filter(|k| !terms.contains(k))
+                .map(|k| {
+                    let mut t = terms.clone();
+                    t.push(k);
+                    (k, score(&t) - base)
+                })
+                .min_by(|a, b| a.1.total_cmp(&b.1));
+            match candidate {
+                Some((k, s)) if s < best - margin => {
+                    terms.push(k);
+                    best = s;
+                }
+                _ => break,
+            }
+        }
+        decision.yaw = terms.contains(&YAW);
+        decision.roll = terms.contains(&ROLL);
+        decision.pitch = terms.contains(&PITCH);
+        decision.score = best;
+        // The supported terms refitted without the unsupported ones.
+        let c = all.fit(&terms);
+        decision.rotation_px = [
+            if decision.yaw { -c[YAW] } else { -c_full[YAW] },
+            if decision.roll {
+                -c[ROLL]
+            } else {
+                -c_full[ROLL]
+            },
+            if decision.pitch {
+                c[PITCH]
+            } else {
+                c_full[PITCH]
+            },
+        ];
+        decision
+    }
+}

@@ -1,0 +1,479 @@
+//! The back end of the engine: from each frame's triangulated features to its pose.
+//!
+//! State (bounded, whatever the length of the stream): the reference frame (the last
+//! frame with enough points) with its pose, the last pose given out, the velocity of the
+//! last tracked motion, and the self-calibration's fixed-size evidence.
+//!
+//! Per frame: match to the reference, the robust estimator's motion, the reprojection
+//! refinement ([`crate::refine`]), the self-calibration's update ([`crate::selfcal`]) and,
+//! when the correction moved, a second refinement with the new correction. A frame that
+//! cannot be tracked is predicted at constant velocity (status
+//! [`Status::ConstantVelocity`]) for at most [`OdometryConfig::max_prediction_s`], then
+//! held ([`Status::Lost`]); it becomes the new reference if it has enough points (so
+//! tracking resumes from it), otherwise the old reference is kept (a frame without
+//! texture does not break the chain).
+
+use std::time::Instant;
+
+use nalgebra::{Isometry3, Matrix6, Translation3, UnitQuaternion};
+use swarmpose_core::Estimator;
+use swarmpose_vision::features::{Descriptor, GrayView};
+use swarmpose_vision::frontend::{DisparityCorrection, StereoFrame, match_frames};
+use swarmpose_vision::image::GrayImage;
+use swarmpose_vision::temporal::TemporalConfig;
+use swarmpose_vision::temporal::subpixel::align_patch;
+
+use crate::config::{Calibration, OdometryConfig};
+use crate::error::OdometryError;
+use crate::estimate::{initial_motion, observations};
+use crate::frontend::ms;
+use crate::intake::{StereoCamera, check_timestamp};
+use crate::record::{Counts, FrameResult, StageTimes, Status};
+use crate::refine::model::{PixelNoise, StereoModel};
+use crate::refine::{Refined, refine};
+use crate::selfcal::{CorrectionModel, Decision, SelfCalibration};
+
+/// The frame that the next one is matched to.
+#[derive(Debug, Clone)]
+struct Reference<D> {
+    frame: StereoFrame<D>,
+    /// Its left image, when the frame came with one (for sub-pixel matching).
+    left: Option<GrayImage>,
+    pose: Isometry3<f64>,
+    timestamp_s: f64,
+    index: usize,
+}
+
+/// The last pose given out.
+#[derive(Debug, Clone, Copy)]
+struct Last {
+    pose: Isometry3<f64>,
+    timestamp_s: f64,
+}
+
+/// The last tracked motion and the time it spans.
+#[derive(Debug, Clone, Copy)]
+struct Velocity {
+    motion: Isometry3<f64>,
+    dt_s: f64,
+}
+
+/// A measured motion from the reference.
+struct Measured {
+    motion: Isometry3<f64>,
+    covariance: Option<Matrix6<f64>>,
+    inliers: usize,
+    correction: DisparityCorrection,
+    model: CorrectionModel,
+    ref_pose: Isometry3<f64>,
+    ref_timestamp_s: f64,
+    ref_index: usize,
+}
+
+/// A new correction that moves no disparity by more than this, pixels, does not call
+/// for a second refinement of the pair.
+const CORRECTION_TOLERANCE_PX: f64 = 0.01;
+
+/// `m` scaled to `f` times its rotation angle and translation (constant velocity over
+/// a different time step).
+fn scale_motion(m: &Isometry3<f64>, f: f64) -> Isometry3<f64> {
+    if (f - 1.0).abs() < 1e-12 {
+        return *m;
+    }
+    let r = UnitQuaternion::from_scaled_axis(m.rotation.scaled_axis() * f);
+    Isometry3::from_parts(Translation3::from(m.translation.vector * f), r)
+}
+
+/// The back end: poses from triangulated frames.
+pub struct Tracker<D: Descriptor> {
+    camera: StereoCamera,
+    noise: PixelNoise,
+    temporal: TemporalConfig,
+    config: OdometryConfig,
+    estimator: Box<dyn Estimator>,
+    selfcal: SelfCalibration,
+    reference: Option<Reference<D>>,
+    last: Option<Last>,
+    velocity: Option<Velocity>,
+    last_tracked_s: Option<f64>,
+    next_index: usize,
+}
+
+impl<D: Descriptor> Tracker<D> {
+    /// A tracker for `camera` whose measurements have `noise`, matching frames with
+    /// `temporal`.
+    #[must_use]
+    pub fn new(
+        camera: StereoCamera,
+        noise: PixelNoise,
+        temporal: TemporalConfig,
+        config: OdometryConfig,
+        estimator: Box<dyn Estimator>,
+    ) -> Self {
+        let selfcal = SelfCalibration::new(config.selfcal);
+        Self {
+            camera,
+            noise,
+            temporal,
+            config,
+            estimator,
+            selfcal,
+            reference: None,
+            last: None,
+            velocity: None,
+            last_tracked_s: None,
+            next_index: 0,
+        }
+    }
+
+    /// The estimator's name.
+    #[must_use]
+    pub fn estimator_name(&self) -> &'static str {
+        self.estimator.name()
+    }
+
+    /// The self-calibration's current decision and evidence.
+    #[must_use]
+    pub fn calibration(&self) -> &Decision {
+        self.selfcal.decision()
+    }
+
+    /// Timestamp of the last frame taken, seconds.
+    #[must_use]
+    pub fn last_timestamp_s(&self) -> Option<f64> {
+        self.last.map(|l| l.timestamp_s)
+    }
+
+    /// Heap bytes held by the state (the reference frame's features), for checks that
+    /// memory does not grow with the stream.
+    #[must_use]
+    pub fn state_bytes(&self) -> usize {
+        use nalgebra::{Matrix3, Point3};
+        use swarmpose_vision::features::Keypoint;
+        self.reference.as_ref().map_or(0, |r| {
+            let f = &r.frame;
+            (f.left_keypoints.capacity() + f.right_keypoints.capacity()) * size_of::<Keypoint>()
+                + (f.left_descriptors.capacity() + f.right_descriptors.capacity()) * size_of::<D>()
+                + f.points.capacity() * size_of::<Point3<f64>>()
+                + f.disparities_px.capacity() * size_of::<f32>()
+                + f.sigmas_m.capacity() * size_of::<f64>()
+                + f.covariances.capacity() * size_of::<Matrix3<f64>>()
+        })
+    }
+
+    /// The correction and its model to apply now.
+    fn correction(&self) -> (DisparityCorrection, CorrectionModel) {
+        match self.config.calibration {
+            Calibration::Auto => {
+                let d = self.selfcal.decision();
+                (d.correction, d.model)
+            }
+            Calibration::Off => (DisparityCorrection::default(), CorrectionModel::NONE),
+            Calibration::Fixed(c) => (c, CorrectionModel::GIVEN),
+        }
+    }
+
+    fn model(&self, correction: DisparityCorrection) -> StereoModel {
+        StereoModel {
+            rig: self.camera.rig,
+            noise: self.noise,
+            correction,
+        }
+    }
+
+    /// Largest change, pixels, of the correction over the image's columns.
+    fn correction_change(&self, a: &DisparityCorrection, b: &DisparityCorrection) -> f64 {
+        let r = &self.camera.rig;
+        let (w, h) = (self.camera.width as f64, self.camera.height as f64);
+        let mut diff = b.coefficients();
+        for (d, a) in diff.iter_mut().zip(a.coefficients()) {
+            *d -= a;
+        }
+        let diff = DisparityCorrection::from_coefficients(diff);
+        // At the corners and edge midpoints of the image.
+        let xs = [-r.cx / r.fx, 0.0, (w - r.cx) / r.fx];
+        let ys = [-r.cy / r.fy, 0.0, (h - r.cy) / r.fy];
+        xs.iter()
+            .flat_map(|x| ys.iter().map(move |y| diff.at_normalised(*x, *y).abs()))
+            .fold(0.0, f64::max)
+    }
+
+    /// The motion of `frame` from the reference, or why there is none.
+    fn measure(
+        &mut self,
+        frame: &StereoFrame<D>,
+        left: Option<GrayView<'_>>,
+        index: usize,
+        times: &mut StageTimes,
+        counts: &mut Counts,
+    ) -> Result<Measured, String> {
+        let Some(reference) = self.reference.as_ref() else {
+            return Err("no reference frame with enough points".into());
+        };
+        let (ref_pose, ref_timestamp_s, ref_index) =
+            (reference.pose, reference.timestamp_s, reference.index);
+        let min = self.config.min_inliers.max(3);
+        let t = Instant::now();
+        let m = match_frames(&reference.frame, frame, &self.temporal)
+            .map_err(|e| format!("matching failed: {e}"))?;
+        times.match_ms = ms(t);
+        counts.matches = m.correspondences.len();
+        if counts.matches < min {
+            return Err(format!("{} matches, fewer than {min}", counts.matches));
+        }
+        let (correction, model) = self.correction();
+        let t = Instant::now();
+        let seed = self.config.seed.wrapping_add(index as u64);
+        let est = initial_motion(
+            &m,
+            &correction,
+            self.camera.rig.baseline_m,
+            self.estimator.as_ref(),
+            seed,
+            min,
+        );
+        times.estimate_ms = ms(t);
+        let (start, est_inliers) = est?;
+        let mut measured = Measured {
+            motion: start,
+            covariance: None,
+            inliers: est_inliers,
+            correction,
+            model,
+            ref_pose,
+            ref_timestamp_s,
+            ref_index,
+        };
+        let needs_evidence = self.config.calibration == Calibration::Auto;
+        if !self.config.refine && !needs_evidence {
+            return Ok(measured);
+        }
+        let t = Instant::now();
+        let stripes = self.config.selfcal.stripes.max(1) as f64;
+        let mut obs = observations(&m, (self.camera.width as f64 / stripes).max(1.0));
+        if let (Some(a), Some(b)) = (reference.left.as_ref(), left) {
+            // Where A's patches appear in B, to a fraction of a pixel.
+            let mut keep = 0;
+            for k in 0..obs.current.len() {
+                let za = obs.reference[k];
+                let zb = obs.current[k];
+                if let Some((u, v)) = align_patch(
+                    a.view(),
+                    (za.u as f32, za.v as f32),
+                    b,
+                    (zb.u as f32, zb.v as f32),
+                    4,
+                    10,
+                    2.0,
+                ) {
+                    obs.reference[keep] = za;
+                    obs.current[keep] = crate::refine::model::StereoObservation {
+                        u: f64::from(u),
+                        v: f64::from(v),
+                        d: zb.d,
+                    };
+                    obs.folds[keep] = obs.folds[k];
+                    obs.source[keep] = obs.source[k];
+                    keep += 1;
+                }
+            }
+            obs.reference.truncate(keep);
+            obs.current.truncate(keep);
+            obs.folds.truncate(keep);
+            obs.source.truncate(keep);
+        }
+        let refined = refine(
+            &self.model(correction),
+            &self.config.refinement,
+            &obs.reference,
+            &obs.current,
+            Some(&obs.folds),
+            &start,
+            min,
+        )
+        .map_err(|e| format!("refinement: {e}"))?;
+        times.refine_ms = ms(t);
+        let t = Instant::now();
+        let mut best: (Refined, DisparityCorrection, CorrectionModel) =
+            (refined, correction, model);
+        if needs_evidence {
+            // The row offsets of the current frame's confirmed matches.
+            let rows = best.0.inliers.iter().map(|&k| {
+                let j = m.src_index[obs.source[k]];
+                let kp = &frame.left_keypoints[j];
+                (
+                    f64::from(kp.x),
+                    f64::from(kp.y),
+                    f64::from(frame.disparities_px[j]),
+                    frame.row_offsets_px.get(j).copied().unwrap_or(f32::NAN),
+                )
+            });
+            self.selfcal
+                .add_rows(rows, &self.camera.rig, self.camera.width);
+            let d = *self
+                .selfcal
+                .add_pair(&best.0.reduced, &correction, best.0.scale2);
+            if self.correction_change(&correction, &d.correction) > CORRECTION_TOLERANCE_PX
+                && let Ok(r) = refine(
+                    &self.model(d.correction),
+                    &self.config.refinement,
+                    &obs.reference,
+                    &obs.current,
+                    None,
+                    &best.0.motion,
+                    min,
+                )
+            {
+                best = (r, d.correction, d.model);
+            }
+        }
+        times.calibrate_ms += ms(t);
+        if self.config.refine {
+            // Otherwise the estimator alone: its motion, on the points corrected as
+            // decided before this pair.
+            let (refined, correction, model) = best;
+            measured.motion = refined.motion;
+            measured.covariance = Some(refined.covariance);
+            measured.inliers = refined.inliers.len();
+            measured.correction = correction;
+            measured.model = model;
+        }
+        Ok(measured)
+    }
+
+    /// Takes the triangulated features of the next frame, taken at `timestamp_s`, and
+    /// returns its pose. `times` carries the caller's stage times (loading, front end).
+    ///
+    /// # Errors
+    /// [`OdometryError::Frame`] for a timestamp that is not finite or does not increase;
+    /// the state is then unchanged.
+    pub fn track(
+        &mut self,
+        frame: StereoFrame<D>,
+        left: Option<GrayView<'_>>,
+        timestamp_s: f64,
+        mut times: StageTimes,
+    ) -> Result<FrameResult, OdometryError> {
+        check_timestamp(timestamp_s, self.last.map(|l| l.timestamp_s))?;
+        let index = self.next_index;
+        self.next_index += 1;
+        let mut counts = Counts {
+            left_features: frame.n_left_features,
+            right_features: frame.n_right_features,
+            stereo_points: frame.len(),
+            ..Counts::default()
+        };
+        let min = self.config.min_inliers.max(3);
+        let enough_points = frame.len() >= min;
+        let n_points = frame.len();
+
+        let too_few = || format!("{n_points} stereo points, fewer than {min}");
+        let (correction, correction_model) = self.correction();
+        let mut result = FrameResult {
+            index,
+            timestamp_s,
+            pose: Isometry3::identity(),
+            motion: Isometry3::identity(),
+            reference: None,
+            covariance: None,
+            status: Status::First,
+            counts,
+            times,
+            correction,
+            correction_model,
+        };
+        let Some(last) = self.last else {
+            // The first frame: the origin.
+            self.last = Some(Last {
+                pose: Isometry3::identity(),
+                timestamp_s,
+            });
+            if enough_points {
+                self.set_reference(frame, left, Isometry3::identity(), timestamp_s, index);
+            } else {
+                result.status = Status::Lost(too_few());
+            }
+            return Ok(result);
+        };
+        let measured = if enough_points {
+            self.measure(&frame, left, index, &mut times, &mut counts)
+        } else {
+            Err(too_few())
+        };
+        result.times = times;
+        match measured {
+            Ok(m) => {
+                let pose = m.ref_pose * m.motion;
+                self.velocity = Some(Velocity {
+                    motion: m.motion,
+                    dt_s: timestamp_s - m.ref_timestamp_s,
+                });
+                self.last_tracked_s = Some(timestamp_s);
+                counts.inliers = m.inliers;
+                result.pose = pose;
+                result.motion = last.pose.inverse() * pose;
+                result.reference = Some(m.ref_index);
+                result.covariance = m.covariance;
+                result.status = Status::Tracked;
+                result.correction = m.correction;
+                result.correction_model = m.model;
+                // Frame to frame: the tracked frame is the next reference.
+                self.set_reference(frame, left, pose, timestamp_s, index);
+            }
+            Err(why) => {
+                let horizon = self.config.max_prediction_s;
+                let velocity = self.velocity.filter(|_| {
+                    self.last_tracked_s
+                        .is_some_and(|t| timestamp_s - t <= horizon)
+                });
+                let (motion, status) = match velocity {
+                    Some(v) if v.dt_s > 0.0 => (
+                        scale_motion(&v.motion, (timestamp_s - last.timestamp_s) / v.dt_s),
+                        Status::ConstantVelocity(why),
+                    ),
+                    _ => (Isometry3::identity(), Status::Lost(why)),
+                };
+                result.pose = last.pose * motion;
+                result.motion = motion;
+                result.status = status;
+                if enough_points {
+                    // Tracking resumes from this frame.
+                    self.set_reference(frame, left, result.pose, timestamp_s, index);
+                }
+            }
+        }
+        result.counts = counts;
+        self.last = Some(Last {
+            pose: result.pose,
+            timestamp_s,
+        });
+        Ok(result)
+    }
+
+    fn set_reference(
+        &mut self,
+        frame: StereoFrame<D>,
+        left: Option<GrayView<'_>>,
+        pose: Isometry3<f64>,
+        timestamp_s: f64,
+        index: usize,
+    ) {
+        // The previous reference's image buffer is reused.
+        let mut image = self.reference.take().and_then(|r| r.left);
+        let left = left.map(|v| {
+            let mut img = image.take().unwrap_or_else(|| GrayImage::new(0, 0));
+            img.width = v.width;
+            img.height = v.height;
+            img.data.clear();
+            img.data.extend_from_slice(v.data);
+            img
+        });
+        self.reference = Some(Reference {
+            frame,
+            left,
+            pose,
+            timestamp_s,
+            index,
+        });
+    }
+}

@@ -1,0 +1,99 @@
+//! Self-calibration decisions on rigs whose error is known: the rendered synthetic street
+//! with an exact rig, a right camera whose principal point is 1 px off, and a right
+//! camera yawed by 0.004 rad; and, on synthetic feature streams, how often an exact rig
+//! gets a correction it does not need (the margin's false alarms).
+
+mod common;
+
+use swarmpose_odometry::synthetic::features::{FeatureSequence, FeatureSequenceConfig};
+use swarmpose_odometry::synthetic::{RIG, RightCameraError, SyntheticSequence};
+use swarmpose_odometry::{CorrectionModel, OdometryConfig};
+
+fn decide(error: RightCameraError) -> (common::Run, f64) {
+    let seq = SyntheticSequence::default().with_right_camera_error(error);
+    let run = common::run_sequence(&seq, OdometryConfig::default());
+    let e = common::evaluate_poses(
+        run.poses(),
+        swarmpose_datasets::StereoSequence::ground_truth(&seq).expect("known path"),
+    );
+    let drift = e.final_drift_percent.expect("a path");
+    let d = &run.calibration;
+    eprintln!(
+        "{error:?}: {} {} (rows: yaw {:.3} px, {} offsets; rigidity {} pairs, score {:.1}); drift {drift:.3} %",
+        d.model,
+        d.correction,
+        d.rows.rotation_px[0],
+        d.rows.measurements,
+        d.pairs,
+        d.rigidity_score
+    );
+    assert_eq!(run.untracked(), 0);
+    (run, drift)
+}
+
+#[test]
+fn exact_rig_gets_no_correction() {
+    let (run, drift) = decide(RightCameraError::default());
+    assert_eq!(run.calibration.model, CorrectionModel::NONE);
+    assert!(run.calibration.correction.is_none());
+    assert!(drift <= 0.1, "drift {drift} %");
+}
+
+#[test]
+fn principal_point_offset_gets_a_constant() {
+    let (run, drift) = decide(RightCameraError {
+        principal_point_px: 1.0,
+        ..RightCameraError::default()
+    });
+    let d = &run.calibration;
+    assert_eq!(d.model, CorrectionModel::PRINCIPAL_POINT);
+    assert!(
+        (d.correction.offset_px - 1.0).abs() <= 0.1,
+        "{}",
+        d.correction
+    );
+    assert_eq!(d.correction.quadratic_px, 0.0);
+    assert!(drift <= 0.2, "drift {drift} %");
+}
+
+#[test]
+fn yaw_gets_the_quadratic_term() {
+    let yaw = 0.004;
+    let (run, drift) = decide(RightCameraError {
+        yaw_rad: yaw,
+        ..RightCameraError::default()
+    });
+    let d = &run.calibration;
+    assert!(d.model.has(CorrectionModel::YAW), "{}", d.model);
+    // δ = −f ψ (1 + x²).
+    let expected = -RIG.fx * yaw;
+    let q = d.correction.quadratic_px;
+    assert!(
+        ((q - expected) / expected).abs() <= 0.1,
+        "quadratic {q:.3} px, expected {expected:.3} px"
+    );
+    assert!(drift <= 0.5, "drift {drift} %");
+}
+
+/// 24 feature streams of 25 frames each from an exact rig: none gets a correction.
+#[test]
+fn exact_rigs_rarely_get_a_correction() {
+    let mut corrected = Vec::new();
+    for seed in 0..24u64 {
+        let seq = FeatureSequence::new(FeatureSequenceConfig {
+            seed: 100 + seed,
+            landmarks_per_cell: 20,
+            ..FeatureSequenceConfig::default()
+        });
+        let mut tracker = seq.tracker(OdometryConfig::default());
+        common::stream(&seq, &mut tracker, 25, |_, _| {});
+        let d = tracker.calibration();
+        if d.model != CorrectionModel::NONE {
+            corrected.push((seed, d.model, d.correction));
+        }
+    }
+    assert!(
+        corrected.is_empty(),
+        "corrections on exact rigs: {corrected:?}"
+    );
+}

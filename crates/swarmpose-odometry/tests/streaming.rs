@@ -1,0 +1,174 @@
+//! The engine's back end on long synthetic feature streams (no images, known noise):
+//! memory does not grow with the stream, the motion covariance is honest, frames
+//! without texture are marked and tracking recovers, bad timestamps are refused.
+
+mod common;
+
+use swarmpose_odometry::synthetic::features::{FeatureSequence, FeatureSequenceConfig};
+use swarmpose_odometry::{OdometryConfig, StageTimes, Status};
+use swarmpose_vision::frontend::StereoFrame;
+
+/// 2000 frames generated on the fly: the engine's state after 2000 frames is within 10 %
+/// of its largest size over the first 500.
+#[test]
+fn memory_does_not_grow_over_2000_frames() {
+    let seq = FeatureSequence::new(FeatureSequenceConfig {
+        seed: 5,
+        landmarks_per_cell: 12,
+        clutter: 20,
+        ..FeatureSequenceConfig::default()
+    });
+    let mut tracker = seq.tracker(OdometryConfig::default());
+    let mut first_500 = 0usize;
+    let mut untracked = 0;
+    for k in 0..2000 {
+        let r = tracker
+            .track(
+                seq.frame(k),
+                None,
+                seq.timestamp_s(k),
+                StageTimes::default(),
+            )
+            .expect("frame");
+        if !matches!(r.status, Status::First | Status::Tracked) {
+            untracked += 1;
+        }
+        if k < 500 {
+            first_500 = first_500.max(tracker.state_bytes());
+        }
+    }
+    let last = tracker.state_bytes();
+    eprintln!(
+        "state: {first_500} bytes (largest over the first 500 frames), {last} after 2000; \
+         {untracked} untracked frames"
+    );
+    assert!(first_500 > 0);
+    assert!(
+        last as f64 <= 1.1 * first_500 as f64,
+        "{last} bytes after 2000 frames, {first_500} over the first 500"
+    );
+    assert_eq!(untracked, 0);
+}
+
+/// With pixel noise of known size, the mean normalised estimation error squared of the
+/// 6-DoF motion over 250 frames lies in [4.5, 7.5] (6 for an honest covariance).
+#[test]
+fn motion_covariance_is_honest() {
+    for (seed, sigma_px) in [(11u64, 0.5), (12, 1.0)] {
+        let mut config = FeatureSequenceConfig {
+            seed,
+            ..FeatureSequenceConfig::default()
+        };
+        config.noise.position_px = sigma_px;
+        config.noise.disparity_px = sigma_px / 2.0;
+        let seq = FeatureSequence::new(config);
+        let mut tracker = seq.tracker(OdometryConfig::default());
+        let mut nees = Vec::new();
+        for k in 0..251 {
+            let r = tracker
+                .track(
+                    seq.frame(k),
+                    None,
+                    seq.timestamp_s(k),
+                    StageTimes::default(),
+                )
+                .expect("frame");
+            let (Some(cov), Some(reference)) = (r.covariance, r.reference) else {
+                continue;
+            };
+            assert_eq!(reference + 1, k, "frame to frame");
+            let truth = seq.pose(k - 1).inverse() * seq.pose(k);
+            let e = common::motion_error(&r.motion, &truth);
+            let info = cov.try_inverse().expect("positive definite");
+            nees.push((e.transpose() * info * e)[0]);
+        }
+        let mean = nees.iter().sum::<f64>() / nees.len() as f64;
+        eprintln!(
+            "pixel noise {sigma_px} px: mean NEES {mean:.2} over {} motions",
+            nees.len()
+        );
+        assert!(nees.len() >= 200);
+        assert!((4.5..=7.5).contains(&mean), "mean NEES {mean:.2}");
+    }
+}
+
+/// Frames without features are marked (constant velocity, then lost after the
+/// prediction horizon), keep the chain, and tracking resumes on the next good frames.
+#[test]
+fn frames_without_texture_are_marked_and_tracking_recovers() {
+    let seq = FeatureSequence::new(FeatureSequenceConfig::default());
+    let mut tracker = seq.tracker(OdometryConfig::default());
+    let mut statuses = Vec::new();
+    for k in 0..40 {
+        // Frames 10-11 and 20-34 (1.5 s, longer than the 1 s horizon) have no texture.
+        let blank = (10..12).contains(&k) || (20..35).contains(&k);
+        let frame = if blank {
+            StereoFrame::default()
+        } else {
+            seq.frame(k)
+        };
+        let r = tracker
+            .track(frame, None, seq.timestamp_s(k), StageTimes::default())
+            .expect("frame");
+        statuses.push(r.status.clone());
+        if k == 12 {
+            // Matched to frame 9 across the two blank frames: the pose is right again.
+            assert_eq!(r.reference, Some(9));
+            let err = (r.pose.translation.vector - seq.pose(k).translation.vector).norm();
+            assert!(err < 0.05, "frame 12 {err} m from the truth");
+        }
+    }
+    assert!(
+        matches!(statuses[10], Status::ConstantVelocity(_)),
+        "{:?}",
+        statuses[10]
+    );
+    assert!(matches!(statuses[11], Status::ConstantVelocity(_)));
+    assert!(statuses[12].is_tracked());
+    assert!(matches!(statuses[21], Status::ConstantVelocity(_)));
+    assert!(
+        matches!(statuses[34], Status::Lost(_)),
+        "{:?}",
+        statuses[34]
+    );
+    assert!(statuses[35].is_tracked(), "{:?}", statuses[35]);
+    assert!(statuses[36..].iter().all(Status::is_tracked));
+}
+
+/// Timestamps that do not increase are refused, and the state is unchanged.
+#[test]
+fn timestamps_must_increase() {
+    let seq = FeatureSequence::new(FeatureSequenceConfig::default());
+    let mut tracker = seq.tracker(OdometryConfig::default());
+    for k in 0..3 {
+        tracker
+            .track(
+                seq.frame(k),
+                None,
+                seq.timestamp_s(k),
+                StageTimes::default(),
+            )
+            .expect("frame");
+    }
+    for bad in [
+        seq.timestamp_s(2),
+        seq.timestamp_s(1),
+        f64::NAN,
+        f64::INFINITY,
+    ] {
+        let e = tracker
+            .track(seq.frame(3), None, bad, StageTimes::default())
+            .expect_err("refused");
+        assert!(e.to_string().contains("timestamp"), "{e}");
+    }
+    let r = tracker
+        .track(
+            seq.frame(3),
+            None,
+            seq.timestamp_s(3),
+            StageTimes::default(),
+        )
+        .expect("frame");
+    assert_eq!(r.index, 3);
+    assert!(r.status.is_tracked());
+}
