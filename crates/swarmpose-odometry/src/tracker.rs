@@ -72,7 +72,7 @@ struct Measured {
 
 /// A new correction that moves no disparity by more than this, pixels, does not call
 /// for a second refinement of the pair.
-const CORRECTION_TOLERANCE_PX: f64 = 0.01;
+const CORRECTION_TOLERANCE_PX: f64 = 0.05;
 
 /// `m` scaled to `f` times its rotation angle and translation (constant velocity over
 /// a different time step).

@@ -170,14 +170,14 @@ fn fit_point(
     a: &StereoObservation,
     b: &StereoObservation,
 ) -> Option<(Vector3<f64>, f64)> {
-    for _ in 0..3 {
+    for _ in 0..2 {
         let (la, lb) = linearize(model, pose, &p, a, b)?;
         let h = la.d_point.transpose() * la.d_point + lb.d_point.transpose() * lb.d_point;
         let g = la.d_point.transpose() * la.residual + lb.d_point.transpose() * lb.residual;
         p -= h.try_inverse()? * g;
     }
-    let (la, lb) = linearize(model, pose, &p, a, b)?;
-    Some((p, la.residual.norm_squared() + lb.residual.norm_squared()))
+    let (a2, b2) = model.residuals2(&pose.rot, &pose.trans, &p, a, b)?;
+    Some((p, a2 + b2))
 }
 
 /// Working state of one round.
@@ -195,11 +195,14 @@ impl Problem<'_> {
         let k = self.config.huber_k;
         let mut total = 0.0;
         for (&i, p) in self.active.iter().zip(points) {
-            match linearize(self.model, pose, p, &self.reference[i], &self.current[i]) {
-                Some((la, lb)) => {
-                    total += huber_cost(la.residual.norm_squared(), k)
-                        + huber_cost(lb.residual.norm_squared(), k);
-                }
+            match self.model.residuals2(
+                &pose.rot,
+                &pose.trans,
+                p,
+                &self.reference[i],
+                &self.current[i],
+            ) {
+                Some((a2, b2)) => total += huber_cost(a2, k) + huber_cost(b2, k),
                 None => return f64::INFINITY,
             }
         }
@@ -270,7 +273,7 @@ impl Problem<'_> {
                 }
                 let c = self.cost(&next, &trial);
                 if c < cost {
-                    let done = (cost - c) < 1e-10 * cost.max(1e-300) || dxi.norm() < 1e-12;
+                    let done = (cost - c) < 1e-7 * cost.max(1e-300) || dxi.norm() < 1e-10;
                     *pose = next;
                     points.copy_from_slice(&trial);
                     cost = c;

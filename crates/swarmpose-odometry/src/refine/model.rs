@@ -114,6 +114,44 @@ impl StereoModel {
         m
     }
 
+    /// Squared norms of the whitened residuals of `p` in A and in B (no Jacobians), or
+    /// `None` when the point is not in front of camera B.
+    #[must_use]
+    pub fn residuals2(
+        &self,
+        rot: &Matrix3<f64>,
+        trans: &Vector3<f64>,
+        p: &Vector3<f64>,
+        a: &StereoObservation,
+        b: &StereoObservation,
+    ) -> Option<(f64, f64)> {
+        let r = &self.rig;
+        let c = &self.correction;
+        let bl = r.baseline_m;
+        let w = self.whiten();
+        let rho = p.z;
+        let pa = Vector3::new(
+            r.fx * p.x + r.cx - a.u,
+            r.fy * p.y + r.cy - a.v,
+            self.fb() * rho - c.at_normalised(p.x - bl * rho, p.y) - a.d,
+        );
+        let h = rot * Vector3::new(p.x, p.y, 1.0) + trans * rho;
+        if h.z <= 1e-9 {
+            return None;
+        }
+        let iz = 1.0 / h.z;
+        let (xn, yn) = (h.x * iz, h.y * iz);
+        let pb = Vector3::new(
+            r.fx * xn + r.cx - b.u,
+            r.fy * yn + r.cy - b.v,
+            self.fb() * rho * iz - c.at_normalised(xn - bl * rho * iz, yn) - b.d,
+        );
+        Some((
+            pa.component_mul(&w).norm_squared(),
+            pb.component_mul(&w).norm_squared(),
+        ))
+    }
+
     /// The measurement in frame A of the point `p`: whitened residual and Jacobians.
     #[must_use]
     pub fn in_reference(&self, p: &Vector3<f64>, z: &StereoObservation) -> Linearized {
@@ -296,6 +334,26 @@ mod tests {
                 / (2.0 * h);
             assert!((num - la.d_point.column(k)).norm() < 1e-4);
         }
+    }
+
+    #[test]
+    fn residuals_agree_with_the_linearisation() {
+        let m = model(DisparityCorrection::from_coefficients([
+            0.7, 1.9, -0.4, 0.3, 0.8,
+        ]));
+        let rot = *Rotation3::from_euler_angles(0.02, -0.05, 0.01).matrix();
+        let trans = Vector3::new(0.1, -0.05, -0.9);
+        let p = Vector3::new(0.3, -0.1, 1.0 / 12.0);
+        let z = StereoObservation {
+            u: 812.0,
+            v: 111.0,
+            d: 31.0,
+        };
+        let (a2, b2) = m.residuals2(&rot, &trans, &p, &z, &z).expect("in front");
+        let la = m.in_reference(&p, &z);
+        let lb = m.in_current(&rot, &trans, &p, &z).expect("in front");
+        assert!((a2 - la.residual.norm_squared()).abs() < 1e-9 * (1.0 + a2));
+        assert!((b2 - lb.residual.norm_squared()).abs() < 1e-9 * (1.0 + b2));
     }
 
     #[test]

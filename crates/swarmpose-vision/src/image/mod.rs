@@ -138,6 +138,44 @@ pub fn sample_bilinear(img: GrayView<'_>, x: f32, y: f32) -> Option<f32> {
     Some(top * (1.0 - fy) + bot * fy)
 }
 
+#[must_use]
+/// Samples the `n × n` patch whose top-left sample is at `(x0, y0)` (pixels, sub-pixel)
+/// into `out` (row-major): every sample shares the same fractional offset, so the
+/// bilinear weights are computed once. `out` holds at least `n²` values. `None` when the
+/// patch leaves the image.
+pub fn sample_patch(img: GrayView<'_>, x0: f32, y0: f32, n: usize, out: &mut [f32]) -> Option<()> {
+    if out.len() < n * n {
+        return None;
+    }
+    if !(x0 >= 0.0 && y0 >= 0.0) {
+        return None;
+    }
+    let (xi, yi) = (x0.floor() as usize, y0.floor() as usize);
+    if xi + n >= img.width || yi + n >= img.height {
+        return None;
+    }
+    let (fx, fy) = (x0 - xi as f32, y0 - yi as f32);
+    let (w00, w10, w01, w11) = (
+        (1.0 - fx) * (1.0 - fy),
+        fx * (1.0 - fy),
+        (1.0 - fx) * fy,
+        fx * fy,
+    );
+    let w = img.width;
+    for j in 0..n {
+        let top = &img.data[(yi + j) * w + xi..(yi + j) * w + xi + n + 1];
+        let bot = &img.data[(yi + j + 1) * w + xi..(yi + j + 1) * w + xi + n + 1];
+        let row = &mut out[j * n..(j + 1) * n];
+        for (i, o) in row.iter_mut().enumerate() {
+            *o = w00 * f32::from(top[i])
+                + w10 * f32::from(top[i + 1])
+                + w01 * f32::from(bot[i])
+                + w11 * f32::from(bot[i + 1]);
+        }
+    }
+    Some(())
+}
+
 /// Separable binomial blur `[1 4 6 4 1] / 16` (σ ≈ 1 pixel), borders clamped. `out` is
 /// resized to the image; `tmp` is scratch space (reused between calls).
 pub fn blur5(img: GrayView<'_>, tmp: &mut Vec<u16>, out: &mut Vec<u8>) {

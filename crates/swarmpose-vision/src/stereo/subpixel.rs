@@ -2,6 +2,7 @@
 //! row, then a parabola through the best cost and its two neighbours.
 
 use crate::features::GrayView;
+use crate::image::sample_patch;
 
 /// Sum of squared differences between the `(2 r + 1)²` window at left `(xl, y)` and at
 /// right `(xr, y)`. The caller keeps both windows inside.
@@ -146,31 +147,41 @@ pub fn row_offset(
     d: f32,
     r: usize,
 ) -> Option<f32> {
-    let xr0 = xl as f32 - d - r as f32;
-    if y < r + 4
+    const MAX_SIDE: usize = 13;
+    let n = 2 * r + 1;
+    let m = n + 2;
+    if m > MAX_SIDE
+        || y < r + 4
         || y + r + 4 >= left.height.min(right.height)
         || xl < r
         || xl + r >= left.width
-        || xr0 < 1.0
-        || xr0 + 2.0 * r as f32 + 2.0 >= right.width as f32
     {
         return None;
     }
-    let at = |x: f32, yy: f32| {
-        let (xi, yi) = (x as usize, yy as usize);
-        let (fx, fy) = (x - xi as f32, yy - yi as f32);
-        let g = |a: usize, b: usize| f32::from(right.data[b * right.width + a]);
-        (g(xi, yi) * (1.0 - fx) + g(xi + 1, yi) * fx) * (1.0 - fy)
-            + (g(xi, yi + 1) * (1.0 - fx) + g(xi + 1, yi + 1) * fx) * fy
-    };
+    // The left window, and the right one with a row above and below for the gradient.
+    let mut lw = [0f32; MAX_SIDE * MAX_SIDE];
+    for (j, yy) in (y - r..=y + r).enumerate() {
+        for (i, xx) in (xl - r..=xl + r).enumerate() {
+            lw[j * n + i] = f32::from(left.data[yy * left.width + xx]);
+        }
+    }
+    let mut rw = [0f32; MAX_SIDE * MAX_SIDE];
     let mut dy = 0f32;
     for _ in 0..10 {
+        // An m x m patch whose rows 1..=n are the window's, shifted by (-d, dy).
+        sample_patch(
+            right,
+            xl as f32 - d - r as f32 - 1.0,
+            y as f32 + dy - r as f32 - 1.0,
+            m,
+            &mut rw,
+        )?;
         let (mut eg, mut gg) = (0f32, 0f32);
-        for yy in y - r..=y + r {
-            for xx in xl - r..=xl + r {
-                let (xr, yr) = (xx as f32 - d, yy as f32 + dy);
-                let e = f32::from(left.data[yy * left.width + xx]) - at(xr, yr);
-                let g = 0.5 * (at(xr, yr + 1.0) - at(xr, yr - 1.0));
+        for j in 0..n {
+            for i in 0..n {
+                let c = (j + 1) * m + i + 1;
+                let e = lw[j * n + i] - rw[c];
+                let g = 0.5 * (rw[c + m] - rw[c - m]);
                 eg += e * g;
                 gg += g * g;
             }
@@ -219,6 +230,36 @@ mod tests {
             let p = refine_disparity(l, r, 40, 10, 10, 2, 3).expect("parabola");
             let d = refine_disparity_lk(l, r, 40, 10, p, 3, 8).expect("lk");
             assert!((d - true_d).abs() < 0.05, "{true_d}: parabola {p}, lk {d}");
+        }
+    }
+
+    /// A 2D pattern whose right image is shifted by a disparity and a known row offset.
+    #[test]
+    fn row_offset_is_measured() {
+        let (w, h) = (80usize, 40usize);
+        let f = |x: f32, y: f32| {
+            128.0 + 50.0 * (x * 0.37).sin() * (y * 0.29).cos() + 30.0 * ((x + 2.0 * y) * 0.13).sin()
+        };
+        for &true_dy in &[0.0f32, 0.3, -0.45, 1.1] {
+            let left: Vec<u8> = (0..w * h)
+                .map(|i| f((i % w) as f32, (i / w) as f32).round() as u8)
+                .collect();
+            // R(x - d, y + dy) = L(x, y): R(x, y) = L(x + d, y - dy).
+            let right: Vec<u8> = (0..w * h)
+                .map(|i| f((i % w) as f32 + 7.0, (i / w) as f32 - true_dy).round() as u8)
+                .collect();
+            let l = GrayView {
+                width: w,
+                height: h,
+                data: &left,
+            };
+            let r = GrayView {
+                width: w,
+                height: h,
+                data: &right,
+            };
+            let dy = row_offset(l, r, 40, 20, 7.0, 3).expect("measured");
+            assert!((dy - true_dy).abs() < 0.05, "{true_dy}: {dy}");
         }
     }
 }

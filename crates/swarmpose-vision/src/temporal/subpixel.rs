@@ -9,14 +9,17 @@
 //! displacement of what A saw.
 
 use crate::features::GrayView;
-use crate::image::sample_bilinear;
+use crate::image::sample_patch;
+
+/// Largest patch side, pixels.
+const MAX_SIDE: usize = 21;
 
 /// Gauss-Newton (inverse compositional Lucas-Kanade, translation) alignment of the
 /// `(2 r + 1)²` patch of `a` centred at `at_a` with image `b`, starting at `start_b`:
 /// the position in `b` (pixels) that minimises `Σ (B(p + w) − A(at_a + w))²`. `None`
 /// when a patch leaves an image, the patch has no texture in one direction, the
 /// iterations do not settle, or the result moves more than `max_move_px` from
-/// `start_b`.
+/// `start_b`. `r` is at most 9.
 #[must_use]
 pub fn align_patch(
     a: GrayView<'_>,
@@ -28,22 +31,25 @@ pub fn align_patch(
     max_move_px: f32,
 ) -> Option<(f32, f32)> {
     let n = 2 * r + 1;
-    let ri = r as f32;
-    // The template and its gradients (central differences of bilinear samples).
-    let mut template = [0f32; 21 * 21];
-    let mut gx = [0f32; 21 * 21];
-    let mut gy = [0f32; 21 * 21];
-    if n > 21 {
+    if n + 2 > MAX_SIDE {
         return None;
     }
+    let ri = r as f32;
+    // The template with a one-pixel border, for central-difference gradients.
+    let m = n + 2;
+    let mut big = [0f32; MAX_SIDE * MAX_SIDE];
+    sample_patch(a, at_a.0 - ri - 1.0, at_a.1 - ri - 1.0, m, &mut big)?;
+    let mut template = [0f32; MAX_SIDE * MAX_SIDE];
+    let mut gx = [0f32; MAX_SIDE * MAX_SIDE];
+    let mut gy = [0f32; MAX_SIDE * MAX_SIDE];
     let (mut hxx, mut hxy, mut hyy) = (0f32, 0f32, 0f32);
     for j in 0..n {
         for i in 0..n {
-            let (x, y) = (at_a.0 + i as f32 - ri, at_a.1 + j as f32 - ri);
+            let c = (j + 1) * m + i + 1;
             let k = j * n + i;
-            template[k] = sample_bilinear(a, x, y)?;
-            let gxk = 0.5 * (sample_bilinear(a, x + 1.0, y)? - sample_bilinear(a, x - 1.0, y)?);
-            let gyk = 0.5 * (sample_bilinear(a, x, y + 1.0)? - sample_bilinear(a, x, y - 1.0)?);
+            template[k] = big[c];
+            let gxk = 0.5 * (big[c + 1] - big[c - 1]);
+            let gyk = 0.5 * (big[c + m] - big[c - m]);
             gx[k] = gxk;
             gy[k] = gyk;
             hxx += gxk * gxk;
@@ -55,20 +61,18 @@ pub fn align_patch(
     // Texture in both directions: the smaller eigenvalue of the structure tensor.
     let trace = hxx + hyy;
     let min_eig = 0.5 * (trace - ((hxx - hyy).powi(2) + 4.0 * hxy * hxy).sqrt());
-    if det <= 0.0 || min_eig < 1.0 * (n * n) as f32 {
+    if det <= 0.0 || min_eig < (n * n) as f32 {
         return None;
     }
+    let mut patch = [0f32; MAX_SIDE * MAX_SIDE];
     let (mut px, mut py) = start_b;
     for _ in 0..iterations {
+        sample_patch(b, px - ri, py - ri, n, &mut patch)?;
         let (mut ex, mut ey) = (0f32, 0f32);
-        for j in 0..n {
-            for i in 0..n {
-                let k = j * n + i;
-                let bv = sample_bilinear(b, px + i as f32 - ri, py + j as f32 - ri)?;
-                let e = bv - template[k];
-                ex += gx[k] * e;
-                ey += gy[k] * e;
-            }
+        for k in 0..n * n {
+            let e = patch[k] - template[k];
+            ex += gx[k] * e;
+            ey += gy[k] * e;
         }
         let dx = (hyy * ex - hxy * ey) / det;
         let dy = (hxx * ey - hxy * ex) / det;
