@@ -42,9 +42,12 @@ impl CliError {
         }
     }
 
-    /// Prints `swarmpose: error: MESSAGE` as exactly one line on standard error.
+    /// Prints `swarmpose: error: MESSAGE` as exactly one line on standard error (nothing
+    /// for an empty message: a quiet stop); never panics.
     pub fn print(&self) {
-        eprintln!("swarmpose: error: {}", one_line(&self.message));
+        if !self.message.is_empty() {
+            crate::streams::err(&format!("swarmpose: error: {}", one_line(&self.message)));
+        }
     }
 }
 

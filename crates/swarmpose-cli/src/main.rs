@@ -10,6 +10,8 @@ mod commands;
 mod error;
 mod input;
 mod methods;
+mod signals;
+mod streams;
 
 use std::process::ExitCode;
 

@@ -344,3 +344,92 @@ fn tum_rgbd_directory() {
     let out = swarmpose(&["odometry", s(&dir), "--out", s(&out_dir)], None);
     check_error(&out, &["rgb.txt:1", "timestamp filename"]);
 }
+
+/// SIGTERM half-way: the run stops between two frames, keeps the poses so far (whole
+/// lines), writes the summary and exits with 143.
+#[test]
+fn sigterm_keeps_the_frames_so_far() {
+    use std::process::{Command, Stdio};
+    use std::time::{Duration, Instant};
+    let tmp = TempDir::new("odo-term");
+    let dir = still_sequence(&tmp, 400);
+    let out_dir = tmp.0.join("out");
+    let child = Command::new(env!("CARGO_BIN_EXE_swarmpose"))
+        .args(["odometry", s(&dir), "--out", s(&out_dir), "--quiet"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run swarmpose");
+    // Wait until some frames are written, then ask it to stop.
+    let traj = out_dir.join("trajectory.kitti.txt");
+    let start = Instant::now();
+    while std::fs::read_to_string(&traj).map_or(0, |t| t.lines().count()) < 5 {
+        assert!(
+            start.elapsed() < Duration::from_secs(120),
+            "no frame written"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let killed = Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .expect("kill");
+    assert!(killed.success());
+    let out = child.wait_with_output().expect("wait");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(143), "{stderr}");
+    assert!(stderr.contains("stopped by SIGTERM after"), "{stderr}");
+    let lines = std::fs::read_to_string(&traj).expect("trajectory");
+    assert!(lines.ends_with('\n'), "whole lines only");
+    let n = lines.lines().count();
+    assert!((5..400).contains(&n), "{n} poses");
+    for line in lines.lines() {
+        assert_eq!(line.split_whitespace().count(), 12, "{line}");
+    }
+    let csv = std::fs::read_to_string(out_dir.join("frames.csv")).expect("frames.csv");
+    assert_eq!(csv.lines().count(), n + 1);
+    let summary = String::from_utf8_lossy(&out.stdout);
+    assert!(summary.contains(&format!("{n} frames: ")), "{summary}");
+    assert!(out_dir.join("calibration.json").is_file());
+}
+
+/// A closed or full standard output never panics.
+#[test]
+fn closed_and_full_standard_output() {
+    use std::process::{Command, Stdio};
+    let tmp = TempDir::new("odo-pipe");
+    let out_dir = tmp.0.join("out");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_swarmpose"))
+        .args(["odometry", "--out", s(&out_dir), "--quiet"])
+        .env("RUST_BACKTRACE", "1")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run swarmpose");
+    // Close the reading end at once: the summary meets a broken pipe.
+    drop(child.stdout.take());
+    let out = child.wait_with_output().expect("wait");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !stderr.contains("panicked") && !stderr.contains("internal error"),
+        "{stderr}"
+    );
+    assert_eq!(out.status.code(), Some(141), "{stderr}");
+    if std::path::Path::new("/dev/full").exists() {
+        let full = std::fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .expect("/dev/full");
+        let out = Command::new(env!("CARGO_BIN_EXE_swarmpose"))
+            .args(["odometry", "--out", s(&out_dir), "--quiet"])
+            .stdout(full)
+            .output()
+            .expect("run");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{stderr}");
+        assert!(
+            stderr.contains("cannot write to standard output"),
+            "{stderr}"
+        );
+    }
+}

@@ -27,6 +27,8 @@ use super::odometry_output::{OutputDir, StreamFile};
 use super::stereo_options::StereoOptions;
 use crate::error::{CliError, EXIT_NOT_USABLE};
 use crate::methods::{EstimatorOptions, Method, build};
+use crate::signals::StopRequest;
+use crate::streams::{err, out};
 
 /// Smallest share of the frames after the first whose motion must be tracked for a run
 /// to be usable.
@@ -160,11 +162,11 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
     let source = match &args.sequence {
         None => {
             let seq = SyntheticSequence::default();
-            eprintln!(
+            err(&format!(
                 "swarmpose: no SEQUENCE_DIR: running on the built-in synthetic stereo sequence \
                  ({} frames rendered from a textured street along a known path)",
                 seq.len()
-            );
+            ));
             let gt = seq.ground_truth().map(<[_]>::to_vec);
             Source::Stereo(Box::new(seq), "built-in synthetic sequence".into(), gt)
         }
@@ -201,11 +203,12 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
             .build(),
     }
     .map_err(odometry_error)?;
-    let out = OutputDir::prepare(&args.out)?;
-    let mut kitti = StreamFile::create(&out, "trajectory.kitti.txt", None)?;
-    let mut tum = StreamFile::create(&out, "trajectory.tum.txt", None)?;
-    let mut frames = StreamFile::create(&out, "frames.csv", Some(FRAMES_HEADER))?;
-    let mut cov = StreamFile::create(&out, "motion_covariance.csv", Some(COVARIANCE_HEADER))?;
+    let dir = OutputDir::prepare(&args.out)?;
+    let mut kitti = StreamFile::create(&dir, "trajectory.kitti.txt", None)?;
+    let mut tum = StreamFile::create(&dir, "trajectory.tum.txt", None)?;
+    let mut frames = StreamFile::create(&dir, "frames.csv", Some(FRAMES_HEADER))?;
+    let mut cov = StreamFile::create(&dir, "motion_covariance.csv", Some(COVARIANCE_HEADER))?;
+    let stop = StopRequest::install();
     let mut track = Track {
         poses: Vec::with_capacity(n),
         stamps: Vec::with_capacity(n),
@@ -235,6 +238,9 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
         track.summary.add(r);
         track.times += &r.times;
         pb.inc(1);
+        if stop.exit_status().is_some() {
+            return ControlFlow::Break(());
+        }
         ControlFlow::Continue(())
     };
     let ended = match &source {
@@ -256,27 +262,35 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
         err.message = format!(
             "{}; stopped after {done} frame(s): their poses are in {}",
             err.message,
-            out.path().display()
+            dir.path().display()
         );
         err
     })?;
-    if let RunEnd::Stopped(done) = ended {
-        return Err(CliError::failure(format!(
-            "stopped after {done} frame(s): their poses are in {}",
-            out.path().display()
-        )));
-    }
     let (title, gt) = match &source {
         Source::Stereo(_, t, gt) => (t.clone(), gt.clone()),
         Source::Rgbd(s, t) => (t.clone(), s.ground_truth().map(<[_]>::to_vec)),
     };
-    finish(&out, &track, &odometry, &title, gt.as_deref())?;
-    if let (Source::Stereo(seq, ..), Some(dir)) = (&source, &args.sequence)
-        && seq.layout() == "karlsruhe"
-    {
-        ins_summary(dir, &track.poses);
+    if let RunEnd::Stopped(done) = ended {
+        // Stopped by a signal between two frames: the summary of what was done.
+        let gt = gt.map(|g| g[..done.min(g.len())].to_vec());
+        finish(&dir, &track, &odometry, &title, gt.as_deref())?;
+        return Err(CliError {
+            code: stop.exit_status().unwrap_or(crate::error::EXIT_FAILURE),
+            message: format!(
+                "stopped by {} after {done} frame(s): their poses and the summary are in {}",
+                stop.name().unwrap_or("a request"),
+                dir.path().display()
+            ),
+        });
     }
-    println!("written: {}", out.path().display());
+    finish(&dir, &track, &odometry, &title, gt.as_deref())?;
+    if let (Source::Stereo(seq, ..), Some(seq_dir)) = (&source, &args.sequence)
+        && seq.layout() == "karlsruhe"
+        && let Some(line) = ins_summary(seq_dir, &track.poses)
+    {
+        out(&line)?;
+    }
+    out(&format!("written: {}", dir.path().display()))?;
     let share = track.summary.tracked_share();
     if share < MIN_TRACKED_SHARE {
         return Err(CliError {
@@ -296,7 +310,7 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
 
 /// The end of a run: evaluation, plots, calibration, summary.
 fn finish(
-    out: &OutputDir,
+    dir: &OutputDir,
     track: &Track,
     odometry: &Odometry,
     title: &str,
@@ -315,11 +329,11 @@ fn finish(
             Some(swarmpose_eval::evaluate(&pairs).map_err(|e| CliError::failure(e.to_string()))?)
         }
         Some(g) => {
-            eprintln!(
+            err(&format!(
                 "swarmpose: warning: {} ground-truth poses for {} frames: not evaluated",
                 g.len(),
                 track.poses.len()
-            );
+            ));
             None
         }
         None => None,
@@ -327,13 +341,13 @@ fn finish(
     let decision = odometry.calibration();
     let calibration = serde_json::to_string_pretty(&calibration_json(decision))
         .map_err(|e| CliError::failure(format!("calibration.json: {e}")))?;
-    out.write("calibration.json", calibration.as_bytes())?;
+    dir.write("calibration.json", calibration.as_bytes())?;
     if let Some(g) = gt {
-        out.write(
+        dir.write(
             "groundtruth.kitti.txt",
             swarmpose_eval::trajectory::kitti_text(g).as_bytes(),
         )?;
-        out.write(
+        dir.write(
             "groundtruth.tum.txt",
             swarmpose_eval::trajectory::tum_text(&track.stamps, g).as_bytes(),
         )?;
@@ -341,7 +355,7 @@ fn finish(
     if let Some(e) = &evaluation {
         let text = serde_json::to_string_pretty(e)
             .map_err(|err| CliError::failure(format!("evaluation.json: {err}")))?;
-        out.write("evaluation.json", text.as_bytes())?;
+        dir.write("evaluation.json", text.as_bytes())?;
     }
     let label = format!("{} + {}", odometry.estimator(), odometry.detector());
     let plot = PlotTrack {
@@ -352,19 +366,19 @@ fn finish(
     for (name, bytes) in render_plots(&plot, title, gt, evaluation.as_ref())
         .map_err(|e| CliError::failure(e.to_string()))?
     {
-        out.write(name, &bytes)?;
+        dir.write(name, &bytes)?;
     }
     let s = &track.summary;
     let n = s.frames.max(1) as f64;
     let t = &track.times;
     let total = t.total_ms() / n;
-    println!(
+    out(&format!(
         "{title}: {}; method {}, detector {}",
         s.text(),
         odometry.estimator(),
         odometry.detector()
-    );
-    println!(
+    ))?;
+    out(&format!(
         "disparity correction: {} ({}; rows: yaw f*psi {:.3} px, roll f*theta {:.3} px, from {} \
          row offsets; rigidity: {} pairs, held-out score {:.1})",
         decision.correction,
@@ -374,8 +388,8 @@ fn finish(
         decision.rows.measurements,
         decision.pairs,
         decision.rigidity_score
-    );
-    println!(
+    ))?;
+    out(&format!(
         "time per frame: {total:.1} ms ({:.1} frames/s): load {:.1}, features {:.1}, stereo {:.1}, \
          match {:.1}, estimate {:.1}, refine {:.1}, calibrate {:.1} ms",
         1000.0 / total.max(1e-9),
@@ -386,12 +400,12 @@ fn finish(
         t.estimate_ms / n,
         t.refine_ms / n,
         t.calibrate_ms / n,
-    );
+    ))?;
     if let Some(e) = &evaluation {
         let drift = e
             .final_drift_percent
             .map_or_else(|| "n/a".to_owned(), |p| format!("{p:.3} %"));
-        println!(
+        out(&format!(
             "vs ground truth: path {:.2} m, final drift {:.3} m ({drift}), RMS eq. (20) {:.5}, \
              ATE {:.3} m raw / {:.3} m aligned, RPE {:.4} m / {:.4} deg",
             e.path_length_m,
@@ -401,39 +415,38 @@ fn finish(
             e.ate_aligned.rmse,
             e.rpe_translation.rmse,
             e.rpe_rotation_deg.rmse
-        );
+        ))?;
     }
     Ok(())
 }
 
 /// Karlsruhe has no camera ground truth, only rough INS positions of the vehicle in
-/// another frame: the ATE of our positions after their SE(3) Umeyama alignment.
-fn ins_summary(dir: &Path, poses: &[Isometry3<f64>]) {
+/// another frame: the ATE of our positions after their SE(3) Umeyama alignment, as a line
+/// to print (`None` without INS data).
+fn ins_summary(dir: &Path, poses: &[Isometry3<f64>]) -> Option<String> {
     use nalgebra::Point3;
     let ins =
         swarmpose_datasets::karlsruhe::KarlsruheSequence::open(dir).and_then(|k| k.ins_positions());
     let Ok(Some(ins)) = ins else {
-        return;
+        return None;
     };
     if ins.len() != poses.len() {
-        return;
+        return None;
     }
     let x: Vec<Point3<f64>> = poses
         .iter()
         .map(|p| Point3::from(p.translation.vector))
         .collect();
     let y: Vec<Point3<f64>> = ins.iter().map(|p| Point3::new(p[0], p[1], p[2])).collect();
-    let Ok(t) = swarmpose_eval::metrics::umeyama(&x, &y) else {
-        return;
-    };
+    let t = swarmpose_eval::metrics::umeyama(&x, &y).ok()?;
     let ate: Vec<f64> = x.iter().zip(&y).map(|(a, b)| (b - t * a).norm()).collect();
     let stats = swarmpose_eval::Stats::of(&ate);
     let length: f64 = y.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
     let last = ate.last().copied().unwrap_or(0.0);
-    println!(
+    Some(format!(
         "vs INS positions (insdata.txt, after SE(3) alignment): path {length:.2} m, ATE {:.3} m ({:.2} % of the path), final position error {last:.3} m ({:.2} %)",
         stats.rmse,
         100.0 * stats.rmse / length.max(1e-9),
         100.0 * last / length.max(1e-9)
-    );
+    ))
 }

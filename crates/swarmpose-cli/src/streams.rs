@@ -1,0 +1,37 @@
+//! Standard output and error that never panic: a closed pipe ends the command quietly
+//! (as other Unix tools do, with status 141), a full or failing standard output is an
+//! error (status 1), and a message that cannot be written to standard error is dropped.
+
+use std::io::{ErrorKind, Write};
+
+use crate::error::{CliError, EXIT_FAILURE};
+
+/// Exit status when standard output was closed by its reader (128 + SIGPIPE).
+pub const EXIT_PIPE_CLOSED: u8 = 141;
+
+/// Writes `text` and a line end to standard output.
+///
+/// # Errors
+/// A quiet [`CliError`] with [`EXIT_PIPE_CLOSED`] when the reader closed the pipe; exit
+/// status 1 for any other write error (a full disk, `> /dev/full`).
+pub fn out(text: &str) -> Result<(), CliError> {
+    let mut stdout = std::io::stdout().lock();
+    match writeln!(stdout, "{text}").and_then(|()| stdout.flush()) {
+        Ok(()) => Ok(()),
+        Err(e) if e.kind() == ErrorKind::BrokenPipe => Err(CliError {
+            code: EXIT_PIPE_CLOSED,
+            message: String::new(),
+        }),
+        Err(e) => Err(CliError {
+            code: EXIT_FAILURE,
+            message: format!("cannot write to standard output: {e}"),
+        }),
+    }
+}
+
+/// Writes `text` and a line end to standard error; an error is ignored (there is no
+/// better place to report it).
+pub fn err(text: &str) {
+    let mut stderr = std::io::stderr().lock();
+    let _ = writeln!(stderr, "{text}").and_then(|()| stderr.flush());
+}
