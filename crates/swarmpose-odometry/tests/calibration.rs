@@ -97,3 +97,30 @@ fn exact_rigs_rarely_get_a_correction() {
         "corrections on exact rigs: {corrected:?}"
     );
 }
+
+/// A camera that does not move says nothing about a principal point: even with a 1 px
+/// offset injected, no constant is fitted on nothing; the rows still see a yaw.
+#[test]
+fn a_still_camera_gets_no_principal_point() {
+    for (offset, yaw) in [(1.0, 0.0), (1.0, 1.5)] {
+        let seq = FeatureSequence::new(FeatureSequenceConfig {
+            step_m: 0.0,
+            principal_point_px: offset,
+            f_yaw_px: yaw,
+            landmarks_per_cell: 20,
+            ..FeatureSequenceConfig::default()
+        });
+        let mut tracker = seq.tracker(OdometryConfig::default());
+        common::stream(&seq, &mut tracker, 20, |_, r| {
+            assert!(r.status.is_tracked() || r.index == 0)
+        });
+        let d = tracker.calibration();
+        assert!(
+            !d.model.has(CorrectionModel::PRINCIPAL_POINT),
+            "{} {}",
+            d.model,
+            d.correction
+        );
+        assert_eq!(d.model.has(CorrectionModel::YAW), yaw != 0.0, "{}", d.model);
+    }
+}

@@ -57,6 +57,11 @@ pub struct SelfCalConfig {
     pub stripes: usize,
     /// The causes the selection may use (default [`CorrectionModel::DEFAULT_CANDIDATES`]).
     pub candidates: CorrectionModel,
+    /// Largest standard error, pixels, with which each fold must determine a term of the
+    /// rigidity evidence before the term is considered (default 0.5): a camera that does
+    /// not move says nothing about a principal point, and a fit on nothing could pass
+    /// any margin.
+    pub max_sigma_px: f64,
 }
 
 impl Default for SelfCalConfig {
@@ -65,6 +70,7 @@ impl Default for SelfCalConfig {
             margin: 10.0,
             stripes: 16,
             candidates: CorrectionModel::DEFAULT_CANDIDATES,
+            max_sigma_px: 0.5,
         }
     }
 }
@@ -332,9 +338,16 @@ impl SelfCalibration {
         let mut free: Vec<usize> = Vec::new();
         let mut best = 0.0;
         let next = loop {
+            let determined = |k: usize| {
+                self.folds
+                    .iter()
+                    .all(|f| f.a[(k, k)] * c.max_sigma_px * c.max_sigma_px >= 1.0)
+            };
             let candidate = RIGID_CAUSES
                 .iter()
-                .filter(|(cause, k)| c.candidates.has(*cause) && !free.contains(k))
+                .filter(|(cause, k)| {
+                    c.candidates.has(*cause) && !free.contains(k) && determined(*k)
+                })
                 .map(|&(cause, k)| {
                     let mut f = free.clone();
                     f.push(k);
