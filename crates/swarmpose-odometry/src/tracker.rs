@@ -74,6 +74,9 @@ struct Measured {
 /// for a second refinement of the pair.
 const CORRECTION_TOLERANCE_PX: f64 = 0.05;
 
+/// Most refinements of a pair again under the correction its own evidence leads to.
+const FIXED_POINT_ITERATIONS: usize = 4;
+
 /// `m` scaled to `f` times its rotation angle and translation (constant velocity over
 /// a different time step).
 fn scale_motion(m: &Isometry3<f64>, f: f64) -> Isometry3<f64> {
@@ -204,6 +207,7 @@ impl<D: Descriptor> Tracker<D> {
         frame: &StereoFrame<D>,
         left: Option<GrayView<'_>>,
         index: usize,
+        timestamp_s: f64,
         times: &mut StageTimes,
         counts: &mut Counts,
     ) -> Result<Measured, String> {
@@ -310,22 +314,34 @@ impl<D: Descriptor> Tracker<D> {
             });
             self.selfcal
                 .add_rows(rows, &self.camera.rig, self.camera.width);
-            let d = *self
-                .selfcal
-                .add_pair(&best.0.reduced, &correction, best.0.scale2);
-            if self.correction_change(&correction, &d.correction) > CORRECTION_TOLERANCE_PX
-                && let Ok(r) = refine(
+            // The pair's evidence depends on the correction it is computed under (its
+            // inliers are gated and weighted under it), so it is computed again under
+            // the correction it leads to, until the two agree (a fixed point per pair).
+            let dt_s = timestamp_s - ref_timestamp_s;
+            let before = self.selfcal.clone();
+            let mut cal = before.clone();
+            cal.add_pair(&best.0.reduced, &best.1, best.0.scale2, dt_s);
+            for _ in 0..FIXED_POINT_ITERATIONS {
+                let d = *cal.decision();
+                if self.correction_change(&best.1, &d.correction) <= CORRECTION_TOLERANCE_PX {
+                    break;
+                }
+                let Ok(r) = refine(
                     &self.model(d.correction),
                     &self.config.refinement,
                     &obs.reference,
                     &obs.current,
-                    None,
+                    Some(&obs.folds),
                     &best.0.motion,
                     min,
-                )
-            {
+                ) else {
+                    break;
+                };
                 best = (r, d.correction, d.model);
+                cal = before.clone();
+                cal.add_pair(&best.0.reduced, &best.1, best.0.scale2, dt_s);
             }
+            self.selfcal = cal;
         }
         times.calibrate_ms += ms(t);
         if self.config.refine {
@@ -396,7 +412,7 @@ impl<D: Descriptor> Tracker<D> {
             return Ok(result);
         };
         let measured = if enough_points {
-            self.measure(&frame, left, index, &mut times, &mut counts)
+            self.measure(&frame, left, index, timestamp_s, &mut times, &mut counts)
         } else {
             Err(too_few())
         };

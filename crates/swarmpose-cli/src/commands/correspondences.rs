@@ -280,6 +280,7 @@ mod tests {
                 disparity_offset: None,
                 disparity_quadratic: None,
                 calibrate: swarmpose_odometry::CorrectionModel::DEFAULT_CANDIDATES,
+                calibration_memory: swarmpose_odometry::selfcal::SelfCalConfig::default().memory_s,
             },
             no_covariance: false,
             self_calibrate: None,

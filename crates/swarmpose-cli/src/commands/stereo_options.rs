@@ -50,6 +50,21 @@ pub struct StereoOptions {
     #[arg(long, value_name = "CAUSES", default_value = "principal-point+yaw",
           value_parser = parse_causes)]
     pub calibrate: CorrectionModel,
+
+    /// Time constant, seconds, with which the self-calibration's evidence of past frame
+    /// pairs fades, or `inf` to keep all of it.
+    #[arg(long, value_name = "S", default_value_t = SelfCalConfig::default().memory_s,
+          value_parser = parse_memory)]
+    pub calibration_memory: f64,
+}
+
+fn parse_memory(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v > 0.0 && !v.is_nan() => Ok(v),
+        _ => Err(format!(
+            "'{s}' is not a positive number of seconds (or inf)"
+        )),
+    }
 }
 
 impl StereoOptions {
@@ -85,6 +100,7 @@ impl StereoOptions {
     pub fn calibration(&self) -> Result<(Calibration, SelfCalConfig), CliError> {
         let selfcal = SelfCalConfig {
             candidates: self.calibrate,
+            memory_s: self.calibration_memory,
             ..SelfCalConfig::default()
         };
         let mode = match self.fixed_correction()? {

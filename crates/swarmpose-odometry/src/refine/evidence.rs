@@ -133,6 +133,12 @@ impl QuadraticCost {
         self.b += (info * at - grad) / scale2;
     }
 
+    /// Multiplies the cost by `k` (evidence that fades).
+    pub fn scale(&mut self, k: f64) {
+        self.a *= k;
+        self.b *= k;
+    }
+
     /// `Q(c)`.
     #[must_use]
     pub fn value(&self, c: &VectorK) -> f64 {
