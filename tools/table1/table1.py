@@ -29,6 +29,9 @@ VARIANTS = [
     ("no correction (--calibrate none)", ["--calibrate", "none"]),
     ("constant only (--calibrate principal-point)", ["--calibrate", "principal-point"]),
     ("yaw, roll and pitch too", ["--calibrate", "principal-point+yaw+roll+pitch"]),
+    ("evidence memory 0.5 s (--calibration-memory 0.5)", ["--calibration-memory", "0.5"]),
+    ("evidence memory 3 s", ["--calibration-memory", "3"]),
+    ("all evidence kept (--calibration-memory inf)", ["--calibration-memory", "inf"]),
     ("SURF front end", ["--detector", "surf"]),
 ]
 

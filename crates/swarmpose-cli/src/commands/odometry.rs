@@ -379,11 +379,12 @@ fn finish(
         odometry.detector()
     ))?;
     out(&format!(
-        "disparity correction: {} ({}; rows: yaw f*psi {:.3} px, roll f*theta {:.3} px, from {} \
+        "disparity correction: {} ({}; rows: yaw f*psi {:.3} px{}, roll f*theta {:.3} px, from {} \
          row offsets; rigidity: {} pairs, held-out score {:.1})",
         decision.correction,
         decision.model,
         decision.rows.rotation_px[0],
+        if decision.rows.yaw { " (used)" } else { " (not used)" },
         decision.rows.rotation_px[1],
         decision.rows.measurements,
         decision.pairs,
