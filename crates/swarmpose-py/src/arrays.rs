@@ -235,9 +235,10 @@ impl<'py> GrayArray<'py> {
 
     /// The pixels, row-major: borrowed when the array is C-contiguous, else copied.
     pub(crate) fn pixels(&self) -> Cow<'_, [u8]> {
+        // `as_slice` also accepts Fortran order, whose memory is column-major.
         match self.array.as_slice() {
-            Ok(s) => Cow::Borrowed(s),
-            Err(_) => Cow::Owned(self.array.as_array().iter().copied().collect()),
+            Ok(s) if self.array.is_c_contiguous() => Cow::Borrowed(s),
+            _ => Cow::Owned(self.array.as_array().iter().copied().collect()),
         }
     }
 }

@@ -60,11 +60,7 @@ impl Sequence {
     }
 
     /// The ``(left, right)`` images of frame ``i`` as (height, width) uint8 arrays.
-    fn __getitem__<'py>(
-        &self,
-        py: Python<'py>,
-        i: isize,
-    ) -> PyResult<ImagePair<'py>> {
+    fn __getitem__<'py>(&self, py: Python<'py>, i: isize) -> PyResult<ImagePair<'py>> {
         let n = self.inner.len();
         let k = if i < 0 { i + n as isize } else { i };
         let Ok(k) = usize::try_from(k) else {
