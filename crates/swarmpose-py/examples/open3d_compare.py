@@ -61,8 +61,9 @@ def main():
     args = p.parse_args()
     try:
         import open3d as o3d
-    except ImportError:
-        print("skipped: open3d is not installed (pip install open3d)")
+    except ImportError as e:
+        # Not installed, or installed without its system libraries (libusb, libGL, ...).
+        print(f"skipped: open3d is not installed or cannot be loaded ({e}); pip install open3d")
         return 0
     threshold = 3 * args.noise * np.sqrt(3)  # metres, for Open3D and swarmpose alike
     print(f"swarmpose {swarmpose.__version__} vs open3d {o3d.__version__}: {args.n} "

@@ -59,6 +59,6 @@ def test_open3d_example_runs_or_skips():
     try:
         import open3d  # noqa: F401
     except ImportError:
-        assert out.startswith("skipped: open3d is not installed")
+        assert out.startswith("skipped: open3d is not installed or cannot be loaded")
         return
     assert "swarmpose" in out and "open3d" in out and "90%" in out
