@@ -203,25 +203,26 @@ pub(crate) fn gray_image<'py>(
     Ok(a.into_pyarray(py))
 }
 
-/// An 8-bit gray image borrowed from Python: shape (H, W), dtype uint8.
-pub(crate) struct GrayArray<'py> {
-    array: numpy::PyReadonlyArray2<'py, u8>,
+/// An image borrowed from Python: shape (H, W) of one dtype (uint8 gray, float32
+/// depth).
+pub(crate) struct ImageArray<'py, T: numpy::Element> {
+    array: numpy::PyReadonlyArray2<'py, T>,
 }
 
-impl<'py> GrayArray<'py> {
-    /// Borrows `obj` as an image.
-    pub(crate) fn new(name: &str, obj: &Bound<'py, PyAny>) -> PyResult<Self> {
-        if let Ok(array) = obj.extract::<numpy::PyReadonlyArray2<'py, u8>>() {
+impl<'py, T: numpy::Element + Copy> ImageArray<'py, T> {
+    /// Borrows `obj` as an image; `dtype` names `T` in messages.
+    pub(crate) fn new(name: &str, obj: &Bound<'py, PyAny>, dtype: &str) -> PyResult<Self> {
+        if let Ok(array) = obj.extract::<numpy::PyReadonlyArray2<'py, T>>() {
             return Ok(Self { array });
         }
         match obj.cast::<PyUntypedArray>() {
             Ok(a) => Err(PyValueError::new_err(format!(
-                "{name} image has shape {} and dtype {}: a (height, width) uint8 array expected",
+                "{name} image has shape {} and dtype {}: a (height, width) {dtype} array expected",
                 shape_text(a.shape()),
                 a.dtype()
             ))),
             Err(_) => Err(PyTypeError::new_err(format!(
-                "{name} image is a {}: a (height, width) uint8 numpy array expected",
+                "{name} image is a {}: a (height, width) {dtype} numpy array expected",
                 obj.get_type().name()?
             ))),
         }
@@ -234,7 +235,7 @@ impl<'py> GrayArray<'py> {
     }
 
     /// The pixels, row-major: borrowed when the array is C-contiguous, else copied.
-    pub(crate) fn pixels(&self) -> Cow<'_, [u8]> {
+    pub(crate) fn pixels(&self) -> Cow<'_, [T]> {
         // `as_slice` also accepts Fortran order, whose memory is column-major.
         match self.array.as_slice() {
             Ok(s) if self.array.is_c_contiguous() => Cow::Borrowed(s),

@@ -9,6 +9,7 @@
 //! |---|---|
 //! | `register` | [`swarmpose_core::Estimator::estimate_seeded`] |
 //! | `Odometry`, `Odometry.track` | [`swarmpose_odometry::Odometry`], [`swarmpose_odometry::Odometry::track`] |
+//! | `Odometry.rgbd`, `Odometry.track_rgbd` | [`swarmpose_odometry::Odometry::track_rgbd`] |
 //! | `odometry` | [`swarmpose_odometry::batch::run_sequence`] |
 //! | `Sequence` | [`swarmpose_datasets::open`] |
 //! | `evaluate` | [`swarmpose_eval::evaluate`] |
@@ -24,6 +25,8 @@ mod evaluate;
 mod frame;
 mod methods;
 mod odometry;
+mod odometry_run;
+mod options;
 mod register;
 mod sequence;
 
@@ -37,12 +40,12 @@ fn _swarmpose(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("EstimationError", py.get_type::<errors::EstimationError>())?;
     m.add_function(wrap_pyfunction!(register::register, m)?)?;
     m.add_function(wrap_pyfunction!(register::register_timing, m)?)?;
-    m.add_function(wrap_pyfunction!(odometry::odometry, m)?)?;
+    m.add_function(wrap_pyfunction!(odometry_run::odometry, m)?)?;
     m.add_function(wrap_pyfunction!(evaluate::evaluate, m)?)?;
     m.add_class::<register::Registration>()?;
     m.add_class::<register::RunnerUp>()?;
     m.add_class::<odometry::Odometry>()?;
-    m.add_class::<odometry::OdometryRun>()?;
+    m.add_class::<odometry_run::OdometryRun>()?;
     m.add_class::<frame::Frame>()?;
     m.add_class::<sequence::Sequence>()?;
     m.add("METHODS", methods::NAMES.to_vec())?;

@@ -1,95 +1,23 @@
-//! `swarmpose.Odometry` (the streaming engine: frames in, poses out) and
-//! `swarmpose.odometry` (a whole sequence directory through the same engine).
+//! `swarmpose.Odometry`: the streaming engine, frames in, poses out (stereo pairs, or
+//! RGB-D frames for an engine made by `Odometry.rgbd`).
 
-use std::ops::ControlFlow;
 use std::path::PathBuf;
 
-use numpy::{PyArray1, PyArray3};
-use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use swarmpose_odometry::batch::{camera_of, run_sequence};
-use swarmpose_odometry::config::Calibration;
+use swarmpose_odometry::batch::camera_of;
+use swarmpose_odometry::frontend::RgbdNoise;
 use swarmpose_odometry::output::calibration_json;
-use swarmpose_odometry::{CorrectionModel, FrameResult, OdometryConfig, StereoCamera, StereoInput};
+use swarmpose_odometry::{DepthView, RgbdInput, StereoCamera, StereoInput};
 use swarmpose_vision::features::GrayView;
-use swarmpose_vision::frontend::{Detector, DisparityCorrection};
 use swarmpose_vision::stereo::RectifiedStereo;
 
-use crate::arrays::{GrayArray, transforms, vector};
+use crate::arrays::ImageArray;
 use crate::errors::odometry_error;
 use crate::evaluate::json_value;
 use crate::frame::Frame;
-use crate::methods;
+use crate::options::Options;
 use crate::sequence::{Sequence, camera_dict};
-
-/// The engine's settings as keyword arguments (defaults: those of
-/// [`OdometryConfig::default`] and of the command line).
-struct Options<'a> {
-    method: &'a str,
-    threshold: Option<f64>,
-    detector: &'a str,
-    refine: bool,
-    calibrate: Option<&'a str>,
-    disparity_correction: Option<(f64, f64)>,
-    min_inliers: Option<usize>,
-    seed: u64,
-}
-
-impl Options<'_> {
-    fn config(&self) -> PyResult<OdometryConfig> {
-        let detector: Detector =
-            self.detector
-                .parse()
-                .map_err(|e: swarmpose_vision::frontend::UnknownDetector| {
-                    PyValueError::new_err(e.to_string())
-                })?;
-        let mut c = OdometryConfig {
-            detector,
-            refine: self.refine,
-            seed: self.seed,
-            ..OdometryConfig::default()
-        };
-        if let Some(n) = self.min_inliers {
-            if n < 3 {
-                return Err(PyValueError::new_err(format!(
-                    "min_inliers {n}: at least 3 are needed for a motion"
-                )));
-            }
-            c.min_inliers = n;
-        }
-        if let Some(causes) = self.calibrate {
-            let model = CorrectionModel::parse(causes).map_err(PyValueError::new_err)?;
-            c.selfcal.candidates = model;
-            if model == CorrectionModel::NONE {
-                c.calibration = Calibration::Off;
-            }
-        }
-        if let Some((offset_px, quadratic_px)) = self.disparity_correction {
-            if !(offset_px.is_finite() && quadratic_px.is_finite()) {
-                return Err(PyValueError::new_err(
-                    "disparity_correction (offset, quadratic) must be finite numbers of pixels",
-                ));
-            }
-            c.calibration = Calibration::Fixed(DisparityCorrection {
-                offset_px,
-                quadratic_px,
-                ..DisparityCorrection::default()
-            });
-        }
-        Ok(c)
-    }
-
-    fn build(&self, camera: StereoCamera) -> PyResult<swarmpose_odometry::Odometry> {
-        let config = self.config()?;
-        let estimator = methods::estimator(self.method, self.threshold)?;
-        swarmpose_odometry::Odometry::builder(camera)
-            .config(config)
-            .estimator(estimator)
-            .build()
-            .map_err(|e| odometry_error(&e))
-    }
-}
 
 /// A streaming stereo visual odometry: ``track`` takes one rectified stereo pair at a
 /// time and returns its pose at once (a ``Frame``). Its memory does not grow with the
@@ -151,6 +79,7 @@ impl Odometry {
             disparity_correction,
             min_inliers,
             seed,
+            rgbd: None,
         };
         Ok(Self {
             inner: options.build(camera)?,
@@ -184,6 +113,7 @@ impl Odometry {
             disparity_correction,
             min_inliers,
             seed,
+            rgbd: None,
         };
         Ok(Self {
             inner: options.build(camera_of(seq.inner.as_ref()))?,
@@ -202,8 +132,8 @@ impl Odometry {
         right: &Bound<'_, PyAny>,
         timestamp: f64,
     ) -> PyResult<Frame> {
-        let l = GrayArray::new("left", left)?;
-        let r = GrayArray::new("right", right)?;
+        let l = ImageArray::<u8>::new("left", left, "uint8")?;
+        let r = ImageArray::<u8>::new("right", right, "uint8")?;
         let ((lw, lh), (rw, rh)) = (l.size(), r.size());
         let (lp, rp) = (l.pixels(), r.pixels());
         let input = StereoInput {
@@ -222,6 +152,92 @@ impl Odometry {
         let engine = &mut self.inner;
         let result = py
             .detach(move || engine.track(input))
+            .map_err(|e| odometry_error(&e))?;
+        Ok(Frame { result })
+    }
+
+    /// An engine for an RGB-D camera (focal lengths and principal point in pixels,
+    /// images of ``width`` x ``height``): frames go to ``track_rgbd``. Depth noise
+    /// ``sigma_z = depth_coefficient * z**2`` (1/m; the Kinect v1's by default); ORB
+    /// features, no disparity correction; other options as for ``Odometry(...)``.
+    #[staticmethod]
+    #[pyo3(signature = (fx, fy, cx, cy, width, height, *, depth_coefficient = None,
+        method = "pso", threshold = None, refine = true, min_inliers = None, seed = 0))]
+    #[allow(clippy::too_many_arguments)]
+    fn rgbd(
+        fx: f64,
+        fy: f64,
+        cx: f64,
+        cy: f64,
+        width: usize,
+        height: usize,
+        depth_coefficient: Option<f64>,
+        method: &str,
+        threshold: Option<f64>,
+        refine: bool,
+        min_inliers: Option<usize>,
+        seed: u64,
+    ) -> PyResult<Self> {
+        let mut noise = RgbdNoise::default();
+        noise.depth_coefficient = depth_coefficient.unwrap_or(noise.depth_coefficient);
+        let camera = StereoCamera {
+            rig: RectifiedStereo {
+                fx,
+                fy,
+                cx,
+                cy,
+                baseline_m: noise.virtual_baseline_m,
+            },
+            width,
+            height,
+        };
+        let options = Options {
+            method,
+            threshold,
+            detector: "orb",
+            refine,
+            calibrate: None,
+            disparity_correction: None,
+            min_inliers,
+            seed,
+            rgbd: Some(noise),
+        };
+        Ok(Self {
+            inner: options.build(camera)?,
+        })
+    }
+
+    /// Takes the next RGB-D frame of an engine made by ``Odometry.rgbd``: a
+    /// (height, width) uint8 gray image, its registered depth as a (height, width)
+    /// float32 array in metres (0 or NaN: no depth), and the timestamp in seconds
+    /// (strictly increasing). Returns its ``Frame``; errors as ``track``.
+    fn track_rgbd(
+        &mut self,
+        py: Python<'_>,
+        gray: &Bound<'_, PyAny>,
+        depth: &Bound<'_, PyAny>,
+        timestamp: f64,
+    ) -> PyResult<Frame> {
+        let g = ImageArray::<u8>::new("gray", gray, "uint8")?;
+        let d = ImageArray::<f32>::new("depth", depth, "float32")?;
+        let ((gw, gh), (dw, dh)) = (g.size(), d.size());
+        let (gp, dp) = (g.pixels(), d.pixels());
+        let input = RgbdInput {
+            gray: GrayView {
+                width: gw,
+                height: gh,
+                data: &gp,
+            },
+            depth: DepthView {
+                width: dw,
+                height: dh,
+                data: &dp,
+            },
+            timestamp_s: timestamp,
+        };
+        let engine = &mut self.inner;
+        let result = py
+            .detach(move || engine.track_rgbd(input))
             .map_err(|e| odometry_error(&e))?;
         Ok(Frame { result })
     }
@@ -262,135 +278,6 @@ impl Odometry {
             "Odometry(detector={:?}, method={:?})",
             self.inner.detector(),
             self.inner.estimator()
-        )
-    }
-}
-
-/// Runs the odometry over a whole stereo sequence directory (KITTI, Karlsruhe or
-/// EuRoC), frame ``i`` at ``i * frame_period`` seconds, exactly as ``swarmpose
-/// odometry`` does; options as for ``Odometry(...)``. Returns an ``OdometryRun``.
-/// The GIL is released during the run; Ctrl-C stops it between frames.
-#[pyfunction]
-#[pyo3(signature = (sequence_dir, *, frame_period = 0.1, method = "pso", threshold = None,
-    detector = "orb", refine = true, calibrate = None, disparity_correction = None,
-    min_inliers = None, seed = 0))]
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn odometry(
-    py: Python<'_>,
-    sequence_dir: PathBuf,
-    frame_period: f64,
-    method: &str,
-    threshold: Option<f64>,
-    detector: &str,
-    refine: bool,
-    calibrate: Option<&str>,
-    disparity_correction: Option<(f64, f64)>,
-    min_inliers: Option<usize>,
-    seed: u64,
-) -> PyResult<OdometryRun> {
-    if !(frame_period.is_finite() && frame_period > 0.0) {
-        return Err(PyValueError::new_err(
-            "frame_period must be a positive number of seconds",
-        ));
-    }
-    let seq = Sequence::open(&sequence_dir)?;
-    let options = Options {
-        method,
-        threshold,
-        detector,
-        refine,
-        calibrate,
-        disparity_correction,
-        min_inliers,
-        seed,
-    };
-    let mut engine = options.build(camera_of(seq.inner.as_ref()))?;
-    let mut frames: Vec<FrameResult> = Vec::with_capacity(seq.inner.len());
-    let mut interrupted: Option<PyErr> = None;
-    let ended = py.detach(|| {
-        run_sequence(seq.inner.as_ref(), &mut engine, frame_period, &mut |r| {
-            frames.push(r.clone());
-            match Python::attach(|py| py.check_signals()) {
-                Ok(()) => ControlFlow::Continue(()),
-                Err(e) => {
-                    interrupted = Some(e);
-                    ControlFlow::Break(())
-                }
-            }
-        })
-    });
-    if let Some(e) = interrupted {
-        return Err(e);
-    }
-    ended.map_err(|e| odometry_error(&e))?;
-    let calibration = json_value(py, &calibration_json(engine.calibration()))?.unbind();
-    Ok(OdometryRun {
-        frames,
-        ground_truth: seq.inner.ground_truth().map(<[_]>::to_vec),
-        calibration,
-    })
-}
-
-/// The result of ``swarmpose.odometry``: every frame, and the sequence's ground truth.
-#[pyclass(frozen, module = "swarmpose")]
-pub(crate) struct OdometryRun {
-    frames: Vec<FrameResult>,
-    ground_truth: Option<Vec<nalgebra::Isometry3<f64>>>,
-    calibration: Py<PyAny>,
-}
-
-#[pymethods]
-impl OdometryRun {
-    /// Poses of the left camera in the first frame's, (N, 4, 4) (metres).
-    #[getter]
-    fn poses<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray3<f64>> {
-        let p: Vec<_> = self.frames.iter().map(|f| f.pose).collect();
-        transforms(py, &p)
-    }
-
-    /// Timestamps, seconds, (N,).
-    #[getter]
-    fn timestamps<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        let t: Vec<f64> = self.frames.iter().map(|f| f.timestamp_s).collect();
-        vector(py, &t)
-    }
-
-    /// The status of each frame (see ``Frame.status``).
-    #[getter]
-    fn statuses(&self) -> Vec<String> {
-        self.frames.iter().map(|f| f.status.text()).collect()
-    }
-
-    /// Every frame's ``Frame``.
-    #[getter]
-    fn frames(&self) -> Vec<Frame> {
-        self.frames
-            .iter()
-            .map(|r| Frame { result: r.clone() })
-            .collect()
-    }
-
-    /// The sequence's ground-truth poses, (N, 4, 4), or ``None``.
-    #[getter]
-    fn ground_truth<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray3<f64>>> {
-        self.ground_truth.as_deref().map(|g| transforms(py, g))
-    }
-
-    /// The self-calibration's decision at the end of the run.
-    #[getter]
-    fn calibration(&self, py: Python<'_>) -> Py<PyAny> {
-        self.calibration.clone_ref(py)
-    }
-
-    fn __len__(&self) -> usize {
-        self.frames.len()
-    }
-
-    fn __repr__(&self) -> String {
-        let tracked = self.frames.iter().filter(|f| f.status.is_tracked()).count();
-        format!(
-            "OdometryRun(frames={}, tracked={tracked})",
-            self.frames.len()
         )
     }
 }

@@ -173,6 +173,27 @@ class Odometry:
         self, left: npt.NDArray[np.uint8], right: npt.NDArray[np.uint8], timestamp: float
     ) -> Frame:
         """Takes the next (height, width) uint8 stereo pair at ``timestamp`` seconds."""
+    @staticmethod
+    def rgbd(
+        fx: float,
+        fy: float,
+        cx: float,
+        cy: float,
+        width: int,
+        height: int,
+        *,
+        depth_coefficient: Optional[float] = None,
+        method: str = "pso",
+        threshold: Optional[float] = None,
+        refine: bool = True,
+        min_inliers: Optional[int] = None,
+        seed: int = 0,
+    ) -> "Odometry":
+        """An engine for an RGB-D camera; frames go to ``track_rgbd``."""
+    def track_rgbd(
+        self, gray: npt.NDArray[np.uint8], depth: npt.NDArray[np.float32], timestamp: float
+    ) -> Frame:
+        """Takes the next gray image and its depth (float32 metres; 0 or NaN: none)."""
     @property
     def camera(self) -> Dict[str, float]: ...
     @property
