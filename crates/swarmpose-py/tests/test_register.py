@@ -218,22 +218,21 @@ def test_the_gil_is_released():
         time.sleep(0.001)
     worker.join()
     estimate_ms = result[0].elapsed_s * 1e3
-    # Held GIL: ticks only while the arrays are converted (a few ms). Released: about
-    # one per millisecond of estimation; a loaded machine sleeps longer, so ask a third.
-    assert ticks > estimate_ms / 3, (ticks, estimate_ms)
+    # Held GIL: ticks only while the arrays are converted (1 or 2 seen). Released:
+    # about one per millisecond of estimation; a loaded machine sleeps longer, so ask
+    # for one per 20 ms.
+    assert ticks > max(5.0, estimate_ms / 20), (ticks, estimate_ms)
 
 
 def run_two_at_once(src, dst):
-    """Two registrations started together in two threads: their estimation intervals
-    (end time minus the Rust elapsed time, to the end time) and the wall time."""
+    """Two registrations started together in two threads: the Rust estimation time of
+    each, and the wall time of both."""
     barrier = threading.Barrier(2)
-    spans = [None, None]
+    elapsed = [0.0, 0.0]
 
     def one(k):
         barrier.wait()
-        r = swarmpose.register(src, dst)
-        end = time.perf_counter()
-        spans[k] = (end - r.elapsed_s, end)
+        elapsed[k] = swarmpose.register(src, dst).elapsed_s
 
     threads = [threading.Thread(target=one, args=(k,)) for k in range(2)]
     t = time.perf_counter()
@@ -241,17 +240,17 @@ def run_two_at_once(src, dst):
         th.start()
     for th in threads:
         th.join()
-    return spans, time.perf_counter() - t
+    return elapsed, time.perf_counter() - t
 
 
 def test_two_registrations_run_at_once():
-    """With the GIL released, two estimations overlap in time; holding it, the second
-    could only start after the first ended."""
+    """Holding the GIL, the two estimations could only run one after the other, so
+    the wall time would exceed the sum of their times. Released, they overlap: on two
+    free cores each takes its own time; sharing one core, each takes longer, and the
+    sum grows past the wall time either way."""
     src, dst, _ = big_scene()
-    (a0, a1), (b0, b1) = run_two_at_once(src, dst)[0]
-    overlap = min(a1, b1) - max(a0, b0)
-    shorter = min(a1 - a0, b1 - b0)
-    assert overlap > 0.5 * shorter, (overlap, shorter)
+    elapsed, wall = run_two_at_once(src, dst)
+    assert wall < 0.9 * sum(elapsed), (wall, elapsed)
 
 
 def test_two_threads_take_the_time_of_one_call_each():
@@ -262,7 +261,7 @@ def test_two_threads_take_the_time_of_one_call_each():
     load = os.getloadavg()[0]
     if cores < 2 or load > cores - 0.5:
         pytest.skip(f"load average {load:.1f} on {cores} cores: no second core is free "
-                    "(test_two_registrations_run_at_once shows the calls overlap)")
+                    "(test_two_registrations_run_at_once shows that the calls overlap)")
     src, dst, _ = big_scene()
     swarmpose.register(src, dst)  # warm up
     ratios = []
