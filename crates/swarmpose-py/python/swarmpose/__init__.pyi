@@ -1,0 +1,260 @@
+"""Type stubs of swarmpose (the Rust extension swarmpose._swarmpose)."""
+
+import os
+import pathlib
+from typing import Any, Dict, List, Optional, Sequence as Seq, Tuple, Union
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+METHODS: List[str]
+"""Estimator names for ``method=``: ``pso``, ``pso-paper``, ``svd``, ``msac``."""
+
+_Points = Union[npt.NDArray[np.float32], npt.NDArray[np.float64], Seq[Seq[float]]]
+_Path = Union[str, "os.PathLike[str]"]
+_Poses = Union[npt.NDArray[np.float32], npt.NDArray[np.float64]]
+
+class EstimationError(RuntimeError):
+    """The estimator ran but found no pose with enough support."""
+
+class RunnerUp:
+    """A second rigid motion found among the correspondences the estimate left over."""
+    @property
+    def rotation(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def quaternion_wxyz(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def translation(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def transform(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def inliers(self) -> npt.NDArray[np.int64]: ...
+
+class Registration:
+    """The motion ``dst ~ R @ src + t`` (metres), its inliers and diagnostics."""
+    @property
+    def rotation(self) -> npt.NDArray[np.float64]:
+        """Rotation matrix R, (3, 3)."""
+    @property
+    def quaternion_wxyz(self) -> npt.NDArray[np.float64]:
+        """Rotation as a unit quaternion [w, x, y, z], w >= 0."""
+    @property
+    def translation(self) -> npt.NDArray[np.float64]:
+        """Translation t, metres, (3,)."""
+    @property
+    def transform(self) -> npt.NDArray[np.float64]:
+        """4x4 homogeneous transform [[R, t], [0, 1]]."""
+    @property
+    def inliers(self) -> npt.NDArray[np.int64]:
+        """0-based indices of the inlier correspondences, ascending."""
+    @property
+    def inlier_ratio(self) -> float: ...
+    @property
+    def ambiguous(self) -> bool:
+        """A second motion with comparable support was found (pso only)."""
+    @property
+    def runner_up(self) -> Optional[RunnerUp]: ...
+    @property
+    def method(self) -> str: ...
+    @property
+    def seed(self) -> int: ...
+    @property
+    def n_correspondences(self) -> int: ...
+    @property
+    def noise_model(self) -> str:
+        """"covariance", "threshold" or "none"."""
+    @property
+    def threshold(self) -> Optional[float]:
+        """Inlier threshold used, metres."""
+    @property
+    def final_cost(self) -> float:
+        """Truncated quadratic cost over all correspondences, m^2."""
+    @property
+    def residual_rms(self) -> float:
+        """RMS of the inlier residuals, metres."""
+    @property
+    def iterations(self) -> int: ...
+    @property
+    def cost_evaluations(self) -> int: ...
+    @property
+    def elapsed_s(self) -> float:
+        """Time of the estimation in Rust, seconds."""
+
+def register(
+    src: _Points,
+    dst: _Points,
+    *,
+    method: str = "pso",
+    threshold: Optional[float] = None,
+    seed: int = 0,
+    src_cov: Optional[npt.ArrayLike] = None,
+    dst_cov: Optional[npt.ArrayLike] = None,
+) -> Registration:
+    """Estimates ``dst ~ R @ src + t`` from (N, 3) float32/float64 point sets (metres)
+    with optional (N, 3, 3) covariances (m^2). Releases the GIL while estimating.
+
+    Raises ValueError (shapes, NaN, too few or degenerate points, bad options),
+    TypeError (dtype), EstimationError (no pose with enough support)."""
+
+def _register_timing(
+    src: _Points, dst: _Points, *, method: str = "pso", seed: int = 0, repeats: int = 1
+) -> List[float]:
+    """Seconds of each of ``repeats`` Rust estimator calls on the same data."""
+
+class Frame:
+    """The odometry engine's answer for one frame."""
+    @property
+    def index(self) -> int: ...
+    @property
+    def timestamp(self) -> float: ...
+    @property
+    def pose(self) -> npt.NDArray[np.float64]:
+        """4x4 pose of the left camera in the first frame's (x right, y down, z forward, metres)."""
+    @property
+    def motion(self) -> npt.NDArray[np.float64]:
+        """4x4 motion from the previous frame."""
+    @property
+    def reference(self) -> Optional[int]: ...
+    @property
+    def covariance(self) -> Optional[npt.NDArray[np.float64]]:
+        """6x6 covariance of the measured motion (metres, radians)."""
+    @property
+    def status(self) -> str:
+        """"first", "tracked", "constant-velocity (REASON)" or "lost (REASON)"."""
+    @property
+    def tracked(self) -> bool: ...
+    @property
+    def predicted(self) -> bool: ...
+    @property
+    def counts(self) -> Dict[str, int]: ...
+    @property
+    def times_ms(self) -> Dict[str, float]: ...
+    @property
+    def correction(self) -> Dict[str, float]: ...
+    @property
+    def correction_model(self) -> str: ...
+
+class Odometry:
+    """Streaming stereo visual odometry: one rectified pair in, its pose out."""
+    def __init__(
+        self,
+        fx: float,
+        fy: float,
+        cx: float,
+        cy: float,
+        baseline: float,
+        width: int,
+        height: int,
+        *,
+        method: str = "pso",
+        threshold: Optional[float] = None,
+        detector: str = "orb",
+        refine: bool = True,
+        calibrate: Optional[str] = None,
+        disparity_correction: Optional[Tuple[float, float]] = None,
+        min_inliers: Optional[int] = None,
+        seed: int = 0,
+    ) -> None: ...
+    @staticmethod
+    def from_sequence(
+        sequence_dir: _Path,
+        *,
+        method: str = "pso",
+        threshold: Optional[float] = None,
+        detector: str = "orb",
+        refine: bool = True,
+        calibrate: Optional[str] = None,
+        disparity_correction: Optional[Tuple[float, float]] = None,
+        min_inliers: Optional[int] = None,
+        seed: int = 0,
+    ) -> "Odometry": ...
+    def track(
+        self, left: npt.NDArray[np.uint8], right: npt.NDArray[np.uint8], timestamp: float
+    ) -> Frame:
+        """Takes the next (height, width) uint8 stereo pair at ``timestamp`` seconds."""
+    @staticmethod
+    def rgbd(
+        fx: float,
+        fy: float,
+        cx: float,
+        cy: float,
+        width: int,
+        height: int,
+        *,
+        depth_coefficient: Optional[float] = None,
+        method: str = "pso",
+        threshold: Optional[float] = None,
+        refine: bool = True,
+        min_inliers: Optional[int] = None,
+        seed: int = 0,
+    ) -> "Odometry":
+        """An engine for an RGB-D camera; frames go to ``track_rgbd``."""
+    def track_rgbd(
+        self, gray: npt.NDArray[np.uint8], depth: npt.NDArray[np.float32], timestamp: float
+    ) -> Frame:
+        """Takes the next gray image and its depth (float32 metres; 0 or NaN: none)."""
+    @property
+    def camera(self) -> Dict[str, float]: ...
+    @property
+    def detector(self) -> str: ...
+    @property
+    def method(self) -> str: ...
+    @property
+    def calibration(self) -> Dict[str, Any]: ...
+    @property
+    def state_bytes(self) -> int: ...
+
+class OdometryRun:
+    """Every frame of a ``swarmpose.odometry`` run."""
+    @property
+    def poses(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def timestamps(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def statuses(self) -> List[str]: ...
+    @property
+    def frames(self) -> List[Frame]: ...
+    @property
+    def ground_truth(self) -> Optional[npt.NDArray[np.float64]]: ...
+    @property
+    def calibration(self) -> Dict[str, Any]: ...
+    def __len__(self) -> int: ...
+
+def odometry(
+    sequence_dir: _Path,
+    *,
+    frame_period: float = 0.1,
+    method: str = "pso",
+    threshold: Optional[float] = None,
+    detector: str = "orb",
+    refine: bool = True,
+    calibrate: Optional[str] = None,
+    disparity_correction: Optional[Tuple[float, float]] = None,
+    min_inliers: Optional[int] = None,
+    seed: int = 0,
+) -> OdometryRun:
+    """Runs a whole KITTI, Karlsruhe or EuRoC sequence directory, as ``swarmpose odometry``."""
+
+class Sequence:
+    """A recorded stereo sequence: ``seq[i]`` is the (left, right) uint8 images of frame i."""
+    def __init__(self, path: _Path) -> None: ...
+    def __len__(self) -> int: ...
+    def __getitem__(self, i: int) -> Tuple[npt.NDArray[np.uint8], npt.NDArray[np.uint8]]: ...
+    @property
+    def layout(self) -> str: ...
+    @property
+    def root(self) -> pathlib.Path: ...
+    @property
+    def camera(self) -> Dict[str, float]: ...
+    @property
+    def ground_truth(self) -> Optional[npt.NDArray[np.float64]]: ...
+
+def evaluate(
+    estimate: Union[_Poses, _Path],
+    ground_truth: Union[_Poses, _Path],
+    *,
+    format: Optional[str] = None,
+    max_diff: float = 0.01,
+) -> Dict[str, Any]:
+    """Trajectory metrics (as ``swarmpose evaluate --json``) of (N, 4, 4) poses or files."""

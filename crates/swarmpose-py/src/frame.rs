@@ -1,0 +1,137 @@
+//! `swarmpose.Frame`: the odometry engine's answer for one frame.
+
+use numpy::PyArray2;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use swarmpose_odometry::{FrameResult, Status};
+use swarmpose_vision::frontend::DisparityCorrection;
+
+use crate::arrays::{matrix, transform};
+
+/// One frame's pose, its status, counts and stage timings.
+#[pyclass(frozen, module = "swarmpose")]
+pub(crate) struct Frame {
+    pub(crate) result: FrameResult,
+}
+
+#[pymethods]
+impl Frame {
+    /// 0-based index of the frame in the stream.
+    #[getter]
+    fn index(&self) -> usize {
+        self.result.index
+    }
+
+    /// Timestamp, seconds, as given.
+    #[getter]
+    fn timestamp(&self) -> f64 {
+        self.result.timestamp_s
+    }
+
+    /// Pose of the left camera in the left camera frame of the first frame (x right,
+    /// y down, z forward, metres), 4x4.
+    #[getter]
+    fn pose<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        transform(py, &self.result.pose)
+    }
+
+    /// The motion from the previous frame ``T_{k-1,k}`` (this camera's pose in the
+    /// previous one), 4x4; the identity for the first frame.
+    #[getter]
+    fn motion<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        transform(py, &self.result.motion)
+    }
+
+    /// The frame the motion was measured from (``None`` unless tracked).
+    #[getter]
+    fn reference(&self) -> Option<usize> {
+        self.result.reference
+    }
+
+    /// 6x6 covariance of the measured motion, of ``(v, w)`` (metres, radians, in this
+    /// camera's frame), or ``None`` when it was not refined.
+    #[getter]
+    fn covariance<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray2<f64>>> {
+        self.result.covariance.as_ref().map(|c| matrix(py, c))
+    }
+
+    /// ``"first"``, ``"tracked"``, ``"constant-velocity (REASON)"`` or
+    /// ``"lost (REASON)"``, as in the CLI's ``frames.csv``.
+    #[getter]
+    fn status(&self) -> String {
+        self.result.status.text()
+    }
+
+    /// True when the motion was estimated from the images.
+    #[getter]
+    fn tracked(&self) -> bool {
+        self.result.status.is_tracked()
+    }
+
+    /// True when the pose was predicted or held rather than measured.
+    #[getter]
+    fn predicted(&self) -> bool {
+        !matches!(self.result.status, Status::First | Status::Tracked)
+    }
+
+    /// Feature counts: left_features, right_features, stereo_points, matches, inliers.
+    #[getter]
+    fn counts<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let c = &self.result.counts;
+        let d = PyDict::new(py);
+        d.set_item("left_features", c.left_features)?;
+        d.set_item("right_features", c.right_features)?;
+        d.set_item("stereo_points", c.stereo_points)?;
+        d.set_item("matches", c.matches)?;
+        d.set_item("inliers", c.inliers)?;
+        Ok(d)
+    }
+
+    /// Wall-clock time of each stage, milliseconds (and their total).
+    #[getter]
+    fn times_ms<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let t = &self.result.times;
+        let d = PyDict::new(py);
+        d.set_item("load", t.load_ms)?;
+        d.set_item("features", t.features_ms)?;
+        d.set_item("stereo", t.stereo_ms)?;
+        d.set_item("match", t.match_ms)?;
+        d.set_item("estimate", t.estimate_ms)?;
+        d.set_item("refine", t.refine_ms)?;
+        d.set_item("calibrate", t.calibrate_ms)?;
+        d.set_item("total", t.total_ms())?;
+        Ok(d)
+    }
+
+    /// The disparity correction applied to this frame: its terms, pixels.
+    #[getter]
+    fn correction<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        for (name, value) in DisparityCorrection::TERM_NAMES
+            .iter()
+            .zip(self.result.correction.coefficients())
+        {
+            d.set_item(format!("{name}_px"), value)?;
+        }
+        Ok(d)
+    }
+
+    /// The model of that correction (its causes, ``"none"`` for none).
+    #[getter]
+    fn correction_model(&self) -> String {
+        self.result.correction_model.name()
+    }
+
+    fn __repr__(&self) -> String {
+        let t = self.result.pose.translation.vector;
+        format!(
+            "Frame(index={}, status={:?}, position=[{:.4}, {:.4}, {:.4}], inliers={})",
+            self.result.index,
+            self.result.status.text(),
+            t.x,
+            t.y,
+            t.z,
+            self.result.counts.inliers
+        )
+    }
+}

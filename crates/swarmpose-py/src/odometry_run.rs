@@ -1,0 +1,149 @@
+//! `swarmpose.odometry`: a whole sequence directory through the streaming engine, as
+//! `swarmpose odometry` runs it.
+
+use std::ops::ControlFlow;
+use std::path::PathBuf;
+
+use numpy::{PyArray1, PyArray3};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use swarmpose_odometry::FrameResult;
+use swarmpose_odometry::batch::{camera_of, run_sequence};
+use swarmpose_odometry::output::calibration_json;
+
+use crate::arrays::{transforms, vector};
+use crate::errors::odometry_error;
+use crate::evaluate::json_value;
+use crate::frame::Frame;
+use crate::options::Options;
+use crate::sequence::Sequence;
+
+/// Runs the odometry over a whole stereo sequence directory (KITTI, Karlsruhe or
+/// EuRoC), frame ``i`` at ``i * frame_period`` seconds, exactly as ``swarmpose
+/// odometry`` does; options as for ``Odometry(...)``. Returns an ``OdometryRun``.
+/// The GIL is released during the run; Ctrl-C stops it between frames.
+#[pyfunction]
+#[pyo3(signature = (sequence_dir, *, frame_period = 0.1, method = "pso", threshold = None,
+    detector = "orb", refine = true, calibrate = None, disparity_correction = None,
+    min_inliers = None, seed = 0))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn odometry(
+    py: Python<'_>,
+    sequence_dir: PathBuf,
+    frame_period: f64,
+    method: &str,
+    threshold: Option<f64>,
+    detector: &str,
+    refine: bool,
+    calibrate: Option<&str>,
+    disparity_correction: Option<(f64, f64)>,
+    min_inliers: Option<usize>,
+    seed: u64,
+) -> PyResult<OdometryRun> {
+    if !(frame_period.is_finite() && frame_period > 0.0) {
+        return Err(PyValueError::new_err(
+            "frame_period must be a positive number of seconds",
+        ));
+    }
+    let seq = Sequence::open(&sequence_dir)?;
+    let options = Options {
+        method,
+        threshold,
+        detector,
+        refine,
+        calibrate,
+        disparity_correction,
+        min_inliers,
+        seed,
+        rgbd: None,
+    };
+    let mut engine = options.build(camera_of(seq.inner.as_ref()))?;
+    let mut frames: Vec<FrameResult> = Vec::with_capacity(seq.inner.len());
+    let mut interrupted: Option<PyErr> = None;
+    let ended = py.detach(|| {
+        run_sequence(seq.inner.as_ref(), &mut engine, frame_period, &mut |r| {
+            frames.push(r.clone());
+            match Python::attach(|py| py.check_signals()) {
+                Ok(()) => ControlFlow::Continue(()),
+                Err(e) => {
+                    interrupted = Some(e);
+                    ControlFlow::Break(())
+                }
+            }
+        })
+    });
+    if let Some(e) = interrupted {
+        return Err(e);
+    }
+    ended.map_err(|e| odometry_error(&e))?;
+    let calibration = json_value(py, &calibration_json(engine.calibration()))?.unbind();
+    Ok(OdometryRun {
+        frames,
+        ground_truth: seq.inner.ground_truth().map(<[_]>::to_vec),
+        calibration,
+    })
+}
+
+/// The result of ``swarmpose.odometry``: every frame, and the sequence's ground truth.
+#[pyclass(frozen, module = "swarmpose")]
+pub(crate) struct OdometryRun {
+    frames: Vec<FrameResult>,
+    ground_truth: Option<Vec<nalgebra::Isometry3<f64>>>,
+    calibration: Py<PyAny>,
+}
+
+#[pymethods]
+impl OdometryRun {
+    /// Poses of the left camera in the first frame's, (N, 4, 4) (metres).
+    #[getter]
+    fn poses<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray3<f64>> {
+        let p: Vec<_> = self.frames.iter().map(|f| f.pose).collect();
+        transforms(py, &p)
+    }
+
+    /// Timestamps, seconds, (N,).
+    #[getter]
+    fn timestamps<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        let t: Vec<f64> = self.frames.iter().map(|f| f.timestamp_s).collect();
+        vector(py, &t)
+    }
+
+    /// The status of each frame (see ``Frame.status``).
+    #[getter]
+    fn statuses(&self) -> Vec<String> {
+        self.frames.iter().map(|f| f.status.text()).collect()
+    }
+
+    /// Every frame's ``Frame``.
+    #[getter]
+    fn frames(&self) -> Vec<Frame> {
+        self.frames
+            .iter()
+            .map(|r| Frame { result: r.clone() })
+            .collect()
+    }
+
+    /// The sequence's ground-truth poses, (N, 4, 4), or ``None``.
+    #[getter]
+    fn ground_truth<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray3<f64>>> {
+        self.ground_truth.as_deref().map(|g| transforms(py, g))
+    }
+
+    /// The self-calibration's decision at the end of the run.
+    #[getter]
+    fn calibration(&self, py: Python<'_>) -> Py<PyAny> {
+        self.calibration.clone_ref(py)
+    }
+
+    fn __len__(&self) -> usize {
+        self.frames.len()
+    }
+
+    fn __repr__(&self) -> String {
+        let tracked = self.frames.iter().filter(|f| f.status.is_tracked()).count();
+        format!(
+            "OdometryRun(frames={}, tracked={tracked})",
+            self.frames.len()
+        )
+    }
+}

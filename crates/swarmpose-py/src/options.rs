@@ -1,0 +1,85 @@
+//! The odometry engine's settings as Python keyword arguments, shared by
+//! `swarmpose.Odometry(...)`, `Odometry.from_sequence`, `Odometry.rgbd` and
+//! `swarmpose.odometry`.
+
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use swarmpose_odometry::config::Calibration;
+use swarmpose_odometry::frontend::RgbdNoise;
+use swarmpose_odometry::{CorrectionModel, OdometryConfig, StereoCamera};
+use swarmpose_vision::frontend::{Detector, DisparityCorrection};
+
+use crate::errors::odometry_error;
+use crate::methods;
+
+/// The engine's settings as keyword arguments (defaults: those of
+/// [`OdometryConfig::default`] and of the command line).
+pub(crate) struct Options<'a> {
+    pub(crate) method: &'a str,
+    pub(crate) threshold: Option<f64>,
+    pub(crate) detector: &'a str,
+    pub(crate) refine: bool,
+    pub(crate) calibrate: Option<&'a str>,
+    pub(crate) disparity_correction: Option<(f64, f64)>,
+    pub(crate) min_inliers: Option<usize>,
+    pub(crate) seed: u64,
+    /// An RGB-D camera with this depth noise (frames go to `track_rgbd`).
+    pub(crate) rgbd: Option<RgbdNoise>,
+}
+
+impl Options<'_> {
+    fn config(&self) -> PyResult<OdometryConfig> {
+        let detector: Detector =
+            self.detector
+                .parse()
+                .map_err(|e: swarmpose_vision::frontend::UnknownDetector| {
+                    PyValueError::new_err(e.to_string())
+                })?;
+        let mut c = OdometryConfig {
+            detector,
+            refine: self.refine,
+            seed: self.seed,
+            ..OdometryConfig::default()
+        };
+        if let Some(n) = self.min_inliers {
+            if n < 3 {
+                return Err(PyValueError::new_err(format!(
+                    "min_inliers {n}: at least 3 are needed for a motion"
+                )));
+            }
+            c.min_inliers = n;
+        }
+        if let Some(causes) = self.calibrate {
+            let model = CorrectionModel::parse(causes).map_err(PyValueError::new_err)?;
+            c.selfcal.candidates = model;
+            if model == CorrectionModel::NONE {
+                c.calibration = Calibration::Off;
+            }
+        }
+        if let Some((offset_px, quadratic_px)) = self.disparity_correction {
+            if !(offset_px.is_finite() && quadratic_px.is_finite()) {
+                return Err(PyValueError::new_err(
+                    "disparity_correction (offset, quadratic) must be finite numbers of pixels",
+                ));
+            }
+            c.calibration = Calibration::Fixed(DisparityCorrection {
+                offset_px,
+                quadratic_px,
+                ..DisparityCorrection::default()
+            });
+        }
+        Ok(c)
+    }
+
+    pub(crate) fn build(&self, camera: StereoCamera) -> PyResult<swarmpose_odometry::Odometry> {
+        let config = self.config()?;
+        let estimator = methods::estimator(self.method, self.threshold)?;
+        let mut builder = swarmpose_odometry::Odometry::builder(camera)
+            .config(config)
+            .estimator(estimator);
+        if let Some(noise) = self.rgbd {
+            builder = builder.rgbd(noise);
+        }
+        builder.build().map_err(|e| odometry_error(&e))
+    }
+}

@@ -1,0 +1,148 @@
+"""swarmpose.Odometry, swarmpose.odometry, swarmpose.Sequence and swarmpose.evaluate:
+the streaming engine from Python gives the trajectory of `swarmpose odometry`, and bad
+input raises with the Rust messages."""
+
+import subprocess
+
+import numpy as np
+import pytest
+
+import swarmpose
+
+KITTI_CAMERA = dict(fx=718.856, fy=718.856, cx=607.1928, cy=185.2157, baseline=0.53717,
+                    width=1241, height=376)
+
+
+def read_kitti(path):
+    rows = np.loadtxt(path).reshape(-1, 3, 4)
+    poses = np.tile(np.eye(4), (len(rows), 1, 1))
+    poses[:, :3, :] = rows
+    return poses
+
+
+def test_streaming_matches_the_cli(kitti_seq2, swarmpose_bin, tmp_path):
+    """Frames given one at a time from numpy arrays give the CLI's trajectory (same
+    engine, same defaults, frame i at 0.1 i s)."""
+    out = tmp_path / "cli"
+    subprocess.run([str(swarmpose_bin), "odometry", str(kitti_seq2), "--out", str(out),
+                    "--quiet"], check=True, capture_output=True)
+    cli = read_kitti(out / "trajectory.kitti.txt")
+
+    seq = swarmpose.Sequence(kitti_seq2)
+    odo = swarmpose.Odometry.from_sequence(kitti_seq2)
+    frames = []
+    for i in range(len(seq)):
+        left, right = seq[i]
+        frames.append(odo.track(left, right, 0.1 * i))
+    poses = np.stack([f.pose for f in frames])
+    assert poses.shape == cli.shape == (51, 4, 4)
+    # The CLI prints the shortest decimal that reads back as the same double.
+    assert np.max(np.abs(poses - cli)) < 1e-12
+    assert frames[0].status == "first"
+    assert sum(f.tracked for f in frames) >= 45
+    assert all(f.covariance is None or f.covariance.shape == (6, 6) for f in frames)
+
+    run = swarmpose.odometry(kitti_seq2)
+    assert np.array_equal(run.poses, poses)
+    assert run.statuses == [f.status for f in frames]
+
+    metrics = swarmpose.evaluate(run.poses, run.ground_truth)
+    cli_metrics = subprocess.run(
+        [str(swarmpose_bin), "evaluate", str(out / "trajectory.kitti.txt"),
+         str(out / "groundtruth.kitti.txt"), "--json"],
+        check=True, capture_output=True, text=True).stdout
+    import json
+    cli_metrics = json.loads(cli_metrics)
+    for key in ("eq20_rms", "final_drift_m", "path_length_m"):
+        assert metrics[key] == pytest.approx(cli_metrics[key], rel=1e-9, abs=1e-12), key
+    files = swarmpose.evaluate(out / "trajectory.kitti.txt", out / "groundtruth.kitti.txt")
+    assert files["eq20_rms"] == pytest.approx(metrics["eq20_rms"], rel=1e-9)
+
+
+def test_sequence_reads_frames(kitti_seq2):
+    seq = swarmpose.Sequence(str(kitti_seq2))
+    assert len(seq) == 51 and seq.layout == "kitti"
+    left, right = seq[-1]
+    assert left.shape == right.shape == (376, 1241) and left.dtype == np.uint8
+    assert seq.camera["fx"] == pytest.approx(718.856)
+    assert seq.ground_truth.shape == (51, 4, 4)
+    with pytest.raises(IndexError):
+        seq[51]
+
+
+def test_track_takes_non_contiguous_images(kitti_seq2):
+    """A Fortran-ordered copy is read (copied) correctly: the same pose as C order."""
+    seq = swarmpose.Sequence(kitti_seq2)
+    a = swarmpose.Odometry.from_sequence(kitti_seq2)
+    b = swarmpose.Odometry.from_sequence(kitti_seq2)
+    for i in range(3):
+        left, right = seq[i]
+        ra = a.track(left, right, 0.1 * i)
+        rb = b.track(np.asfortranarray(left), np.asfortranarray(right), 0.1 * i)
+        assert np.array_equal(ra.pose, rb.pose)
+
+
+def test_bad_camera():
+    with pytest.raises(ValueError) as e:
+        swarmpose.Odometry(**{**KITTI_CAMERA, "fx": -1.0})
+    assert str(e.value) == "camera: fx is -1: it must be a finite positive number"
+    with pytest.raises(ValueError) as e:
+        swarmpose.Odometry(**KITTI_CAMERA, detector="sift")
+    assert "sift" in str(e.value)
+    with pytest.raises(ValueError) as e:
+        swarmpose.Odometry(**KITTI_CAMERA, method="icp")
+    assert str(e.value) == 'unknown method "icp": one of pso, pso-paper, svd, msac'
+
+
+def test_bad_frames_leave_the_engine_usable():
+    odo = swarmpose.Odometry(**KITTI_CAMERA)
+    small = np.zeros((10, 20), np.uint8)
+    with pytest.raises(ValueError) as e:
+        odo.track(small, small, 0.0)
+    assert str(e.value) == "the left image is 20x10, but the camera's images are 1241x376"
+    with pytest.raises(ValueError) as e:
+        odo.track(np.zeros((376, 1241), np.float32), small, 0.0)
+    assert str(e.value).startswith("left image has shape (376, 1241) and dtype float32")
+    with pytest.raises(TypeError):
+        odo.track([[0]], small, 0.0)
+    frame = np.zeros((376, 1241), np.uint8)
+    first = odo.track(frame, frame, 1.0)
+    assert first.index == 0 and np.array_equal(first.pose, np.eye(4))
+    with pytest.raises(ValueError) as e:
+        odo.track(frame, frame, 1.0)
+    assert str(e.value) == ("timestamp 1 s does not come after the previous frame's 1 s: "
+                            "timestamps must increase")
+    second = odo.track(frame, frame, 1.1)
+    assert second.index == 1
+
+
+def test_paths_that_do_not_exist(tmp_path):
+    missing = tmp_path / "nowhere"
+    with pytest.raises(FileNotFoundError) as e:
+        swarmpose.Sequence(missing)
+    assert str(e.value) == f"{missing}: missing (sequence directory)"
+    with pytest.raises(FileNotFoundError):
+        swarmpose.odometry(missing)
+    with pytest.raises(FileNotFoundError):
+        swarmpose.evaluate(missing, missing)
+    with pytest.raises(ValueError) as e:
+        swarmpose.Sequence(tmp_path)
+    assert "unknown sequence layout" in str(e.value)
+
+
+def test_evaluate_arrays():
+    """A trajectory against itself: zero errors; against a shifted copy: the shift."""
+    steps = np.tile(np.eye(4), (20, 1, 1))
+    steps[:, 2, 3] = np.arange(20.0)
+    m = swarmpose.evaluate(steps, steps)
+    assert m["eq20_rms"] == 0.0 and m["final_drift_m"] == 0.0
+    assert m["path_length_m"] == pytest.approx(19.0)
+    moved = steps.copy()
+    moved[:, 0, 3] += 0.5
+    assert swarmpose.evaluate(moved, steps)["ate_raw"]["rmse"] == pytest.approx(0.5)
+    with pytest.raises(ValueError) as e:
+        swarmpose.evaluate(steps[:5], steps)
+    assert str(e.value).startswith("estimate has 5 poses but ground_truth has 20")
+    with pytest.raises(ValueError) as e:
+        swarmpose.evaluate(steps[:, :3], steps)
+    assert str(e.value) == "estimate has shape (20, 3, 4): (N, 4, 4) expected"
