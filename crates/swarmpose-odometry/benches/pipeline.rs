@@ -1,8 +1,9 @@
 //! Throughput of the streaming engine on the 51 frames of kitti_vo_seq2 (loading, ORB
-//! front end, robust PSO, reprojection refinement, online self-calibration), one thread
-//! (nothing in the engine spawns threads). One iteration is the whole sequence through a
-//! new engine; frames per second = 51 / time. A first pass prints the per-stage split and
-//! the per-frame latency (p50, p99). Needs `kitti_vo_seq2` under the data root
+//! front end, robust PSO, reprojection refinement, online self-calibration), on one
+//! thread (`track`) and on two (`run_two_threads`: loading and the front end of frame
+//! k + 1 beside the back end of frame k). One iteration is the whole sequence through a
+//! new engine; frames per second = 51 / time. A first pass prints the per-stage split
+//! and the per-frame latency (p50, p99). Needs `kitti_vo_seq2` under the data root
 //! (`SWARMPOSE_DATA`); skipped with a message otherwise.
 //!
 //! `cargo bench -p swarmpose-odometry --bench pipeline`
@@ -11,8 +12,10 @@ use std::hint::black_box;
 use std::time::{Duration, Instant};
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use std::ops::ControlFlow;
 use swarmpose_datasets::open;
-use swarmpose_odometry::batch::{camera_of, collect};
+
+use swarmpose_odometry::batch::{camera_of, collect, run_sequence_two_threads};
 use swarmpose_odometry::{Odometry, OdometryConfig, StageTimes, StereoInput};
 
 fn percentile(sorted: &[f64], p: f64) -> f64 {
@@ -67,6 +70,18 @@ fn bench_pipeline(c: &mut Criterion) {
         b.iter(|| {
             let mut odo = Odometry::new(camera, config.clone()).expect("engine");
             black_box(collect(seq.as_ref(), &mut odo, 0.1))
+        });
+    });
+    g.bench_function("kitti_vo_seq2/load+engine, two threads", |b| {
+        b.iter(|| {
+            let mut odo = Odometry::new(camera, config.clone()).expect("engine");
+            let mut n = 0;
+            run_sequence_two_threads(seq.as_ref(), &mut odo, 0.1, &mut |r| {
+                n += black_box(r.index);
+                ControlFlow::Continue(())
+            })
+            .expect("run");
+            n
         });
     });
     g.bench_function("kitti_vo_seq2/engine", |b| {

@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use swarmpose_datasets::StereoSequence;
 
-use crate::engine::Odometry;
+use crate::engine::{Odometry, OwnedStereoFrame};
 use crate::error::OdometryError;
 use crate::frontend::ms;
 use crate::intake::{DepthView, RgbdInput, StereoCamera, StereoInput};
@@ -65,6 +65,31 @@ pub fn run_sequence(
         }
     }
     Ok(RunEnd::Finished)
+}
+
+/// [`run_sequence`] on two threads ([`Odometry::run_two_threads`]): frame `i + 1` is
+/// loaded and goes through the front end while the back end works on frame `i`. The
+/// same results as [`run_sequence`].
+///
+/// # Errors
+/// As [`run_sequence`].
+pub fn run_sequence_two_threads(
+    seq: &dyn StereoSequence,
+    odometry: &mut Odometry,
+    frame_period_s: f64,
+    on_frame: &mut dyn FnMut(&FrameResult) -> ControlFlow<()>,
+) -> Result<RunEnd, OdometryError> {
+    let frames = (0..seq.len()).map(|i| {
+        let t = Instant::now();
+        let pair = seq.frame(i).map_err(OdometryError::from)?;
+        Ok(OwnedStereoFrame {
+            load_ms: ms(t),
+            left: pair.left,
+            right: pair.right,
+            timestamp_s: i as f64 * frame_period_s,
+        })
+    });
+    odometry.run_two_threads(frames, on_frame)
 }
 
 /// [`run_sequence`] for a TUM RGB-D sequence (its own timestamps).

@@ -18,12 +18,16 @@
 //! # Ok::<(), swarmpose_odometry::OdometryError>(())
 //! ```
 
+use std::ops::ControlFlow;
+
 use swarmpose_core::{Estimator, PsoEstimator, PsoEstimatorConfig};
 use swarmpose_vision::features::{BinaryDescriptor, FloatDescriptor64};
 use swarmpose_vision::frontend::{Detector, Frontend};
+use swarmpose_vision::image::GrayImage;
 use swarmpose_vision::orb::OrbExtractor;
 use swarmpose_vision::surf::Surf;
 
+use crate::batch::RunEnd;
 use crate::config::{Calibration, OdometryConfig};
 use crate::error::OdometryError;
 use crate::frontend::{RgbdNoise, rgbd_frame, stereo_frame};
@@ -291,5 +295,108 @@ impl Odometry {
             let frame = rgbd_frame(f.as_ref(), &rig, &noise, input.gray, input.depth, &mut times);
             t.track(frame, Some(input.gray), input.timestamp_s, times)
         })
+    }
+}
+
+/// A stereo frame whose images the caller owns, for [`Odometry::run_two_threads`].
+#[derive(Debug, Clone)]
+pub struct OwnedStereoFrame {
+    /// Left image.
+    pub left: GrayImage,
+    /// Right image.
+    pub right: GrayImage,
+    /// Timestamp, seconds (strictly increasing along the stream).
+    pub timestamp_s: f64,
+    /// The caller's time to obtain the images, milliseconds (0 if not measured).
+    pub load_ms: f64,
+}
+
+impl Odometry {
+    /// Runs the stereo frames of `frames` through the engine on two threads: while the
+    /// back end (matching, estimate, refinement, self-calibration) works on frame `k`,
+    /// a second thread obtains frame `k + 1` (the iterator runs there) and runs its
+    /// front end (features, stereo matching). The results are those of [`Odometry::track`]
+    /// called frame by frame (the front end does not depend on the back end's state),
+    /// and reach `on_frame` in order, each as soon as it exists; `on_frame` may stop the
+    /// run by returning [`ControlFlow::Break`]. Returns how the run ended.
+    ///
+    /// # Errors
+    /// [`OdometryError::AtFrame`] with the 0-based position in `frames` of the first
+    /// frame that the iterator could not give or the engine could not take; the frames
+    /// before it were given to `on_frame`. [`OdometryError::Camera`] for an RGB-D engine.
+    pub fn run_two_threads<I>(
+        &mut self,
+        frames: I,
+        on_frame: &mut dyn FnMut(&FrameResult) -> ControlFlow<()>,
+    ) -> Result<RunEnd, OdometryError>
+    where
+        I: Iterator<Item = Result<OwnedStereoFrame, OdometryError>> + Send,
+    {
+        if self.sensor != Sensor::Stereo {
+            return Err(OdometryError::Camera {
+                message: "this engine takes RGB-D frames (track_rgbd), not stereo pairs".into(),
+            });
+        }
+        let camera = self.camera;
+        with_inner!(&mut self.inner, f, t => {
+            let frontend = f.as_ref();
+            std::thread::scope(|scope| {
+                // One frame in flight between the threads: memory stays bounded.
+                let (tx, rx) = std::sync::mpsc::sync_channel(1);
+                scope.spawn(move || {
+                    for (index, item) in frames.enumerate() {
+                        let front = item.and_then(|frame| {
+                            let input = StereoInput {
+                                left: frame.left.view(),
+                                right: frame.right.view(),
+                                timestamp_s: frame.timestamp_s,
+                            };
+                            // The timestamp's order is checked by the back end.
+                            check_stereo(&camera, &input, None)?;
+                            let mut times = StageTimes {
+                                load_ms: frame.load_ms,
+                                ..StageTimes::default()
+                            };
+                            let features = stereo_frame(
+                                frontend,
+                                frame.left.view(),
+                                frame.right.view(),
+                                &mut times,
+                            );
+                            Ok((features, frame, times))
+                        });
+                        let failed = front.is_err();
+                        let message = front.map_err(|e| at_frame(index, e));
+                        // A closed channel: the back end stopped.
+                        if tx.send(message).is_err() || failed {
+                            break;
+                        }
+                    }
+                });
+                let mut taken = 0;
+                for message in rx {
+                    let (features, frame, times) = message?;
+                    let r = t
+                        .track(features, Some(frame.left.view()), frame.timestamp_s, times)
+                        .map_err(|e| at_frame(taken, e))?;
+                    taken += 1;
+                    if on_frame(&r).is_break() {
+                        return Ok(RunEnd::Stopped(taken));
+                    }
+                }
+                Ok(RunEnd::Finished)
+            })
+        })
+    }
+}
+
+/// `e` at the frame of 0-based index `index`.
+fn at_frame(index: usize, e: OdometryError) -> OdometryError {
+    match e {
+        e @ OdometryError::AtFrame { .. } => e,
+        e => OdometryError::AtFrame {
+            index,
+            source: Box::new(e),
+        },
     }
 }

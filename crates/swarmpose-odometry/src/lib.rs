@@ -16,6 +16,10 @@
 //! | the engine | [`engine`] |
 //! | output (trajectory, per-frame log, covariances) | [`output`] |
 //!
+//! The engine runs on the caller's thread ([`Odometry::track`]), or on two
+//! ([`Odometry::run_two_threads`]: the front end of the next frame beside the back end
+//! of this one, with the same results).
+//!
 //! Around it: runs over recorded sequences ([`batch`]), TUM RGB-D input ([`rgbd`]), the
 //! plots of figure 17 ([`plots`]) and synthetic sequences ([`synthetic`]). Measured
 //! results: `RESULTS.md` beside this crate's manifest.
@@ -39,7 +43,7 @@ pub mod synthetic;
 pub mod tracker;
 
 pub use config::{Calibration, OdometryConfig};
-pub use engine::{Odometry, OdometryBuilder};
+pub use engine::{Odometry, OdometryBuilder, OwnedStereoFrame};
 pub use error::OdometryError;
 pub use intake::{DepthView, RgbdInput, StereoCamera, StereoInput};
 pub use record::{Counts, FrameResult, StageTimes, Status};
