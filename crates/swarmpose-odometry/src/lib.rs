@@ -9,7 +9,7 @@
 //! |---|---|
 //! | frame intake (the camera, frames, checks) | [`intake`] |
 //! | front end (features, stereo matching, RGB-D depth) | [`frontend`] |
-//! | estimate (matching, robust estimator) | [`estimate`] |
+//! | estimate (matching, robust estimator) | `estimate` (private) |
 //! | reprojection refinement and covariance | [`refine`] |
 //! | self-calibration of the disparity correction | [`selfcal`] |
 //! | the state machine from frames to poses | [`tracker`] |

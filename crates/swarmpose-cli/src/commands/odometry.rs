@@ -384,7 +384,11 @@ fn finish(
         decision.correction,
         decision.model,
         decision.rows.rotation_px[0],
-        if decision.rows.yaw { " (used)" } else { " (not used)" },
+        if decision.rows.yaw {
+            " (used)"
+        } else {
+            " (not used)"
+        },
         decision.rows.rotation_px[1],
         decision.rows.measurements,
         decision.pairs,

@@ -4,7 +4,7 @@
 //! rectification moves each right image point vertically by
 //! `f (φ (1 + y²) − θ x − ψ x y)` (`x`, `y` the right point's normalised coordinates;
 //! [`DisparityCorrection`]'s module documentation), which the stereo matcher measures as
-//! the row offset of every match ([`StereoFrame::row_offsets_px`]). A least-squares fit
+//! the row offset of every match (`StereoFrame::row_offsets_px` of the vision crate). A least-squares fit
 //!
 //! ```text
 //! dy = c₀ + c₁ x + c₂ y + c₃ x y + c₄ y²
