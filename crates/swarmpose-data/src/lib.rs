@@ -4,6 +4,8 @@
 //!
 //! - [`correspondence_csv`]: matched 3D points, one correspondence per row,
 //!   `src_x,src_y,src_z,dst_x,dst_y,dst_z` in metres, with `dst = R src + t`;
+//! - [`register_report`]: the JSON report of `swarmpose register`, read back to draw
+//!   its inliers;
 //! - [`truth`]: the ground-truth JSON written beside each scenario CSV by the scenario
 //!   generator (`gen_scenarios.py`).
 //!
@@ -13,6 +15,7 @@
 #![warn(clippy::unwrap_used)]
 
 pub mod correspondence_csv;
+pub mod register_report;
 pub mod truth;
 
 pub use correspondence_csv::{CsvError, CsvErrorKind, HEADER, HEADER_WITH_COVARIANCE, STDIN_NAME};

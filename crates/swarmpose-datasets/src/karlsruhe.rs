@@ -56,6 +56,14 @@ pub fn detect(dir: &Path) -> bool {
 /// [`DatasetError::Parse`] naming the file and line.
 pub fn read_calibration(path: &Path) -> Result<RectifiedStereo, DatasetError> {
     let text = read_text(path, "Karlsruhe calibration calib.txt")?;
+    parse_calibration(&text, path)
+}
+
+/// [`read_calibration`] of text already read; messages name `path`.
+///
+/// # Errors
+/// As [`read_calibration`].
+pub fn parse_calibration(text: &str, path: &Path) -> Result<RectifiedStereo, DatasetError> {
     let (mut p1, mut p2) = (None, None);
     for (k, line) in text.lines().enumerate() {
         let Some((name, rest)) = line.split_once(':') else {

@@ -38,6 +38,14 @@ pub struct KittiSequence {
 /// [`DatasetError::Parse`] naming the file and line of a malformed row or a missing one.
 pub fn read_calibration(path: &Path) -> Result<RectifiedStereo, DatasetError> {
     let text = read_text(path, "KITTI calibration calib.txt")?;
+    parse_calibration(&text, path)
+}
+
+/// [`read_calibration`] of text already read; messages name `path`.
+///
+/// # Errors
+/// As [`read_calibration`].
+pub fn parse_calibration(text: &str, path: &Path) -> Result<RectifiedStereo, DatasetError> {
     let (mut p0, mut p1) = (None, None);
     let mut unnamed = Vec::new();
     for (k, line) in text.lines().enumerate() {
@@ -114,6 +122,14 @@ pub fn read_calibration(path: &Path) -> Result<RectifiedStereo, DatasetError> {
 /// [`DatasetError::Parse`] naming the file and line.
 pub fn read_poses(path: &Path) -> Result<Vec<Isometry3<f64>>, DatasetError> {
     let text = read_text(path, "ground-truth poses")?;
+    parse_poses(&text, path)
+}
+
+/// [`read_poses`] of text already read; messages name `path`.
+///
+/// # Errors
+/// As [`read_poses`].
+pub fn parse_poses(text: &str, path: &Path) -> Result<Vec<Isometry3<f64>>, DatasetError> {
     let mut out = Vec::new();
     for (k, line) in text.lines().enumerate() {
         if line.trim().is_empty() {

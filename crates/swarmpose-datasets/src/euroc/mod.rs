@@ -20,7 +20,7 @@ use crate::error::DatasetError;
 use crate::text::{numbers, parse_error, read_text};
 use crate::{RectifiedStereo, StereoPair, StereoSequence, check_counts, load_indexed_pair};
 
-pub use yaml::{SensorYaml, read_sensor_yaml};
+pub use yaml::{SensorYaml, parse_sensor_yaml, read_sensor_yaml};
 
 /// The `mav0` directory of `dir` (`dir` itself when it is one).
 fn mav0(dir: &Path) -> PathBuf {
@@ -42,6 +42,21 @@ pub fn detect(dir: &Path) -> bool {
 fn read_image_list(cam_dir: &Path) -> Result<Vec<(i64, PathBuf)>, DatasetError> {
     let path = cam_dir.join("data.csv");
     let text = read_text(&path, "EuRoC image list data.csv")?;
+    parse_image_list(&text, &path, cam_dir)
+}
+
+/// The `(timestamp ns, image path)` rows of the text of a camera's `data.csv` at `path`
+/// (`timestamp [ns], filename` per line, `#` comments); the images are in
+/// `cam_dir/data/`.
+///
+/// # Errors
+/// [`DatasetError::Parse`] naming `path` and the line.
+pub fn parse_image_list(
+    text: &str,
+    path: &Path,
+    cam_dir: &Path,
+) -> Result<Vec<(i64, PathBuf)>, DatasetError> {
+    let path = path.to_owned();
     let mut out = Vec::new();
     for (k, line) in text.lines().enumerate() {
         let line = line.trim();
@@ -62,6 +77,18 @@ fn read_image_list(cam_dir: &Path) -> Result<Vec<(i64, PathBuf)>, DatasetError> 
 /// Body poses `(timestamp ns, world_from_body)` of a EuRoC ground-truth `data.csv`.
 fn read_groundtruth(path: &Path) -> Result<Vec<(i64, Isometry3<f64>)>, DatasetError> {
     let text = read_text(path, "EuRoC ground truth data.csv")?;
+    parse_groundtruth(&text, path)
+}
+
+/// Body poses `(timestamp ns, world_from_body)` of the text of a EuRoC ground-truth
+/// `data.csv` (`timestamp, p_x, p_y, p_z [m], q_w, q_x, q_y, q_z, ...` per line).
+///
+/// # Errors
+/// [`DatasetError::Parse`] naming `path` and the line.
+pub fn parse_groundtruth(
+    text: &str,
+    path: &Path,
+) -> Result<Vec<(i64, Isometry3<f64>)>, DatasetError> {
     let mut out = Vec::new();
     for (k, line) in text.lines().enumerate() {
         let line = line.trim();

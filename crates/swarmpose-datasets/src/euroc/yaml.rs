@@ -55,6 +55,14 @@ pub struct SensorYaml {
 /// [`DatasetError::Parse`] naming the file (and line) of a missing or malformed entry.
 pub fn read_sensor_yaml(path: &Path) -> Result<SensorYaml, DatasetError> {
     let text = read_text(path, "EuRoC camera sensor.yaml")?;
+    parse_sensor_yaml(&text, path)
+}
+
+/// [`read_sensor_yaml`] of text already read; messages name `path`.
+///
+/// # Errors
+/// As [`read_sensor_yaml`].
+pub fn parse_sensor_yaml(text: &str, path: &Path) -> Result<SensorYaml, DatasetError> {
     let check = |v: &[f64], n: usize, key: &str, line: usize| {
         if v.len() == n {
             Ok(())
@@ -66,16 +74,16 @@ pub fn read_sensor_yaml(path: &Path) -> Result<SensorYaml, DatasetError> {
             ))
         }
     };
-    let (k, lk) = array_after(&text, "intrinsics", 0, path)?;
+    let (k, lk) = array_after(text, "intrinsics", 0, path)?;
     check(&k, 4, "intrinsics", lk)?;
-    let (d, ld) = array_after(&text, "distortion_coefficients", 0, path)?;
+    let (d, ld) = array_after(text, "distortion_coefficients", 0, path)?;
     check(&d, 4, "distortion_coefficients", ld)?;
-    let (res, lr) = array_after(&text, "resolution", 0, path)?;
+    let (res, lr) = array_after(text, "resolution", 0, path)?;
     check(&res, 2, "resolution", lr)?;
     let tbs_at = text
         .find("T_BS:")
         .ok_or_else(|| parse_error(path, 0, "no 'T_BS' transform"))?;
-    let (t, lt) = array_after(&text, "data", tbs_at, path)?;
+    let (t, lt) = array_after(text, "data", tbs_at, path)?;
     check(&t, 16, "T_BS data", lt)?;
     if !(k[0] > 0.0 && k[1] > 0.0 && res[0] >= 1.0 && res[1] >= 1.0) {
         return Err(parse_error(

@@ -67,7 +67,16 @@ impl GrayImage {
             path: path.to_owned(),
             source,
         })?;
-        let decoded = image::load_from_memory_with_format(&bytes, image::ImageFormat::Png)
+        Self::decode_png(&bytes, path)
+    }
+
+    /// Decodes the bytes of a PNG (any colour type; converted to 8-bit luma); messages
+    /// name `path`.
+    ///
+    /// # Errors
+    /// [`ImageError::Decode`] naming `path`.
+    pub fn decode_png(bytes: &[u8], path: &Path) -> Result<Self, ImageError> {
+        let decoded = image::load_from_memory_with_format(bytes, image::ImageFormat::Png)
             .map_err(|e| ImageError::Decode {
                 path: path.to_owned(),
                 message: e.to_string(),
