@@ -113,7 +113,8 @@ mod tests {
     #[test]
     fn a_report_of_the_same_points_gives_its_inliers() {
         let sum = points_checksum(&data(0.5));
-        let text = format!(r#"{{"n_correspondences":3,"points_checksum":"{sum}","inliers":[0,2]}}"#);
+        let text =
+            format!(r#"{{"n_correspondences":3,"points_checksum":"{sum}","inliers":[0,2]}}"#);
         assert_eq!(
             parse_inliers(&text, "r.json", 3, &sum).expect("ok"),
             vec![true, false, true]

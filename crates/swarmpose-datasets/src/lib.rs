@@ -19,6 +19,7 @@
 
 pub mod error;
 pub mod euroc;
+mod frames;
 pub mod karlsruhe;
 pub mod kitti;
 mod text;
@@ -30,6 +31,12 @@ use nalgebra::Isometry3;
 pub use error::DatasetError;
 pub use swarmpose_vision::image::GrayImage;
 pub use swarmpose_vision::stereo::RectifiedStereo;
+
+/// The stereo baselines accepted from a calibration, metres: from 5 mm (the smallest
+/// stereo modules) to 10 m (wide rigs on vehicles). A value outside is a malformed or
+/// mis-scaled file (a `P1[0][3]` in another unit, a missing minus sign), refused rather
+/// than giving points a thousand times too near or too far.
+pub const BASELINE_RANGE_M: (f64, f64) = (0.005, 10.0);
 
 /// One rectified stereo frame, 8-bit grayscale, both images the same size.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -173,57 +180,6 @@ pub fn load_pair(
         });
     }
     Ok(StereoPair { left: l, right: r })
-}
-
-/// Checks that the left and right lists have the same length and are not empty.
-pub(crate) fn check_counts(
-    dir: &Path,
-    left: &[PathBuf],
-    left_dir: &Path,
-    right: &[PathBuf],
-    right_dir: &Path,
-) -> Result<(), DatasetError> {
-    if left.len() != right.len() {
-        return Err(DatasetError::CountMismatch {
-            left_dir: left_dir.to_owned(),
-            left: left.len(),
-            right_dir: right_dir.to_owned(),
-            right: right.len(),
-        });
-    }
-    if left.is_empty() {
-        return Err(DatasetError::Empty {
-            dir: dir.to_owned(),
-        });
-    }
-    Ok(())
-}
-
-/// Checks that every left image has its right partner: `partner(left file name)` is
-/// the expected right file name.
-pub(crate) fn check_partners(
-    left: &[PathBuf],
-    right: &[PathBuf],
-    right_dir: &Path,
-    partner: impl Fn(&str) -> String,
-) -> Result<(), DatasetError> {
-    let names: std::collections::BTreeSet<String> = right
-        .iter()
-        .filter_map(|p| p.file_name()?.to_str().map(str::to_owned))
-        .collect();
-    for l in left {
-        let Some(name) = l.file_name().and_then(|n| n.to_str()) else {
-            continue;
-        };
-        let want = partner(name);
-        if !names.contains(&want) {
-            return Err(DatasetError::Missing {
-                path: right_dir.join(want),
-                what: "the right image of a left image",
-            });
-        }
-    }
-    Ok(())
 }
 
 /// Size of the first image of a sequence (read from its header by decoding it).

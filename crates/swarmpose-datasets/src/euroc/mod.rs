@@ -17,8 +17,9 @@ use swarmpose_vision::rectify::{
 };
 
 use crate::error::DatasetError;
-use crate::text::{numbers, parse_error, read_text};
-use crate::{RectifiedStereo, StereoPair, StereoSequence, check_counts, load_indexed_pair};
+use crate::frames::check_pairs;
+use crate::text::{check_baseline, numbers, parse_error, read_text};
+use crate::{RectifiedStereo, StereoPair, StereoSequence, load_indexed_pair};
 
 pub use yaml::{SensorYaml, parse_sensor_yaml, read_sensor_yaml};
 
@@ -122,6 +123,48 @@ pub fn parse_groundtruth(
     Ok(out)
 }
 
+/// Checks the timestamps of a camera list: strictly increasing, and no interval longer
+/// than 1.5 times the median (a frame missing from the list: the odometry numbers frames
+/// by their order, so a gap would shift every later frame in time).
+fn check_timestamps(rows: &[(i64, PathBuf)], list: &Path) -> Result<(), DatasetError> {
+    let frames_error = |k: usize, message: String| DatasetError::Frames {
+        path: list.to_owned(),
+        message: format!("row {} ({}): {message}", k + 1, rows[k].1.display()),
+    };
+    for (k, w) in rows.windows(2).enumerate() {
+        if w[1].0 <= w[0].0 {
+            return Err(frames_error(
+                k + 1,
+                format!(
+                    "timestamp {} does not follow {}: timestamps must increase",
+                    w[1].0, w[0].0
+                ),
+            ));
+        }
+    }
+    let mut steps: Vec<i64> = rows.windows(2).map(|w| w[1].0 - w[0].0).collect();
+    steps.sort_unstable();
+    let Some(&median) = steps.get(steps.len() / 2) else {
+        return Ok(());
+    };
+    if let Some(k) = rows
+        .windows(2)
+        .position(|w| (w[1].0 - w[0].0) as f64 > 1.5 * median as f64)
+    {
+        return Err(frames_error(
+            k + 1,
+            format!(
+                "{} ns after the previous frame, {:.1} times the usual {median} ns: a \
+                 frame is missing before it (frames are taken in order, so a gap would \
+                 shift every later frame in time)",
+                rows[k + 1].0 - rows[k].0,
+                (rows[k + 1].0 - rows[k].0) as f64 / median as f64
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// A EuRoC sequence, rectified on load.
 #[derive(Debug, Clone)]
 pub struct EurocSequence {
@@ -150,27 +193,12 @@ impl EurocSequence {
         let (c0, c1) = (m.join("cam0"), m.join("cam1"));
         let l = read_image_list(&c0)?;
         let r = read_image_list(&c1)?;
+        let (list0, list1) = (c0.join("data.csv"), c1.join("data.csv"));
+        check_timestamps(&l, &list0)?;
+        check_timestamps(&r, &list1)?;
+        check_pairs(dir, &l, &list0, &r, &list1)?;
         let left: Vec<PathBuf> = l.iter().map(|x| x.1.clone()).collect();
         let right: Vec<PathBuf> = r.iter().map(|x| x.1.clone()).collect();
-        check_counts(
-            dir,
-            &left,
-            &c0.join("data.csv"),
-            &right,
-            &c1.join("data.csv"),
-        )?;
-        if let Some(k) = l.iter().zip(&r).position(|(a, b)| a.0 != b.0) {
-            return Err(parse_error(
-                &c1.join("data.csv"),
-                0,
-                format!(
-                    "row {} has timestamp {} but cam0 has {}",
-                    k + 1,
-                    r[k].0,
-                    l[k].0
-                ),
-            ));
-        }
         let s0 = read_sensor_yaml(&c0.join("sensor.yaml"))?;
         let s1 = read_sensor_yaml(&c1.join("sensor.yaml"))?;
         if (s0.camera.width, s0.camera.height) != (s1.camera.width, s1.camera.height) {
@@ -190,6 +218,12 @@ impl EurocSequence {
             &right_from_left.translation.vector,
         )
         .map_err(|e| parse_error(&c1.join("sensor.yaml"), 0, e.to_string()))?;
+        check_baseline(
+            &c1.join("sensor.yaml"),
+            0,
+            rectification.rig.baseline_m,
+            "T_BS of cam0 and cam1",
+        )?;
         let (w, h) = (rectification.width, rectification.height);
         let left_map = rectify_map(
             &s0.camera,

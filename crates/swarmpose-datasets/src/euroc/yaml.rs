@@ -7,7 +7,7 @@ use nalgebra::{Isometry3, Matrix3, Translation3};
 use swarmpose_vision::rectify::RadTanCamera;
 
 use crate::error::DatasetError;
-use crate::text::{numbers, parse_error, read_text};
+use crate::text::{KeyLines, numbers, parse_error, read_text, strip_bom};
 
 /// The numbers of the `[...]` array following `key:` (searched from byte `from`), with
 /// the 1-based line where the key is.
@@ -63,6 +63,20 @@ pub fn read_sensor_yaml(path: &Path) -> Result<SensorYaml, DatasetError> {
 /// # Errors
 /// As [`read_sensor_yaml`].
 pub fn parse_sensor_yaml(text: &str, path: &Path) -> Result<SensorYaml, DatasetError> {
+    let text = strip_bom(text);
+    // A key given twice would be read from its first place silently.
+    let mut keys = KeyLines::default();
+    for (k, line) in text.lines().enumerate() {
+        let key = line.split('#').next().unwrap_or("").trim_start();
+        if let Some((name, _)) = key.split_once(':')
+            && matches!(
+                name.trim(),
+                "intrinsics" | "distortion_coefficients" | "resolution" | "T_BS"
+            )
+        {
+            keys.first(name.trim(), k + 1, path)?;
+        }
+    }
     let check = |v: &[f64], n: usize, key: &str, line: usize| {
         if v.len() == n {
             Ok(())

@@ -76,10 +76,12 @@ impl GrayImage {
     /// # Errors
     /// [`ImageError::Decode`] naming `path`.
     pub fn decode_png(bytes: &[u8], path: &Path) -> Result<Self, ImageError> {
-        let decoded = image::load_from_memory_with_format(bytes, image::ImageFormat::Png)
-            .map_err(|e| ImageError::Decode {
-                path: path.to_owned(),
-                message: e.to_string(),
+        let decoded =
+            image::load_from_memory_with_format(bytes, image::ImageFormat::Png).map_err(|e| {
+                ImageError::Decode {
+                    path: path.to_owned(),
+                    message: e.to_string(),
+                }
             })?;
         let luma = decoded.into_luma8();
         let (w, h) = (luma.width() as usize, luma.height() as usize);
