@@ -4,12 +4,14 @@
 //! `swarmpose: error: ...`, with exit status 2 for bad usage or input and 1 for a run
 //! that failed.
 
+#![forbid(unsafe_code)]
 #![warn(clippy::unwrap_used)]
 
 mod commands;
 mod error;
 mod input;
 mod methods;
+mod output_file;
 mod signals;
 mod streams;
 

@@ -12,6 +12,7 @@
 //! Every error names its input (a file path, or `<stdin>`) and, where one applies, the
 //! 1-based line number, so a command-line tool can print it as one line.
 #![deny(missing_docs)]
+#![forbid(unsafe_code)]
 #![warn(clippy::unwrap_used)]
 
 pub mod correspondence_csv;

@@ -15,7 +15,7 @@ use crate::frames::{check_pairs, list_numbered};
 use crate::text::{
     KeyLines, check_baseline, check_same_intrinsics, numbers, parse_error, read_text, strip_bom,
 };
-use crate::{RectifiedStereo, StereoPair, StereoSequence, first_size, load_listed_pair};
+use crate::{RectifiedStereo, StereoPair, StereoSequence, first_image, load_listed_pair};
 
 fn is_left(name: &str) -> bool {
     name.starts_with("I1_") && crate::text::is_png(name)
@@ -159,6 +159,7 @@ pub struct KarlsruheSequence {
     right: Vec<PathBuf>,
     rig: RectifiedStereo,
     size: (usize, usize),
+    notes: Vec<String>,
 }
 
 impl KarlsruheSequence {
@@ -183,7 +184,7 @@ impl KarlsruheSequence {
             .find(|p| p.is_file())
             .unwrap_or_else(|| dir.join("calib.txt"));
         let rig = read_calibration(&calib)?;
-        let size = first_size(&left[0])?;
+        let (size, notes) = first_image(&left[0])?;
         Ok(Self {
             images,
             root: dir.to_owned(),
@@ -191,6 +192,7 @@ impl KarlsruheSequence {
             right,
             rig,
             size,
+            notes,
         })
     }
 }
@@ -242,6 +244,10 @@ impl StereoSequence for KarlsruheSequence {
 
     fn frame(&self, i: usize) -> Result<StereoPair, DatasetError> {
         load_listed_pair(&self.root, &self.left, &self.right, i, self.size)
+    }
+
+    fn notes(&self) -> &[String] {
+        &self.notes
     }
 
     fn ground_truth(&self) -> Option<&[Isometry3<f64>]> {

@@ -13,7 +13,7 @@ use crate::text::{
     KeyLines, check_baseline, check_same_intrinsics, numbers, parse_error, read_text, strip_bom,
 };
 use crate::{
-    RectifiedStereo, StereoPair, StereoSequence, first_size, load_listed_pair, pose_from_3x4,
+    RectifiedStereo, StereoPair, StereoSequence, first_image, load_listed_pair, pose_from_3x4,
 };
 
 /// True when `dir` looks like a KITTI sequence.
@@ -30,6 +30,7 @@ pub struct KittiSequence {
     right: Vec<PathBuf>,
     rig: RectifiedStereo,
     size: (usize, usize),
+    notes: Vec<String>,
     poses: Option<Vec<Isometry3<f64>>>,
 }
 
@@ -213,7 +214,7 @@ impl KittiSequence {
         let left: Vec<PathBuf> = left.into_iter().map(|x| x.1).collect();
         let right: Vec<PathBuf> = right.into_iter().map(|x| x.1).collect();
         let rig = read_calibration(&dir.join("calib.txt"))?;
-        let size = first_size(&left[0])?;
+        let (size, notes) = first_image(&left[0])?;
         let pose_file = official_poses(dir).unwrap_or_else(|| dir.join("poses.txt"));
         let poses = if pose_file.is_file() {
             let p = read_poses(&pose_file)?;
@@ -234,6 +235,7 @@ impl KittiSequence {
             right,
             rig,
             size,
+            notes,
             poses,
         })
     }
@@ -274,6 +276,10 @@ impl StereoSequence for KittiSequence {
 
     fn frame(&self, i: usize) -> Result<StereoPair, DatasetError> {
         load_listed_pair(&self.root, &self.left, &self.right, i, self.size)
+    }
+
+    fn notes(&self) -> &[String] {
+        &self.notes
     }
 
     fn ground_truth(&self) -> Option<&[Isometry3<f64>]> {

@@ -15,6 +15,7 @@
 //! Frames: ground-truth poses are those of the (rectified) LEFT camera at each frame,
 //! expressed in the left camera frame of frame 0 (x right, y down, z forward, metres).
 #![deny(missing_docs)]
+#![forbid(unsafe_code)]
 #![warn(clippy::unwrap_used)]
 
 pub mod error;
@@ -75,6 +76,12 @@ pub trait StereoSequence: Send + Sync {
     /// A missing or unreadable image, images of different sizes, or `i` out of range;
     /// the message names the file.
     fn frame(&self, i: usize) -> Result<StereoPair, DatasetError>;
+
+    /// Warnings found when the sequence was opened (for example 16-bit images read as
+    /// 12-bit data without an `sBIT` chunk saying so), one line each, naming the file.
+    fn notes(&self) -> &[String] {
+        &[]
+    }
 
     /// Ground-truth pose of the left camera at each frame in the left camera frame of
     /// frame 0, when the sequence has camera ground truth.
@@ -182,10 +189,25 @@ pub fn load_pair(
     Ok(StereoPair { left: l, right: r })
 }
 
-/// Size of the first image of a sequence (read from its header by decoding it).
-pub(crate) fn first_size(path: &Path) -> Result<(usize, usize), DatasetError> {
-    let img = GrayImage::load_png(path)?;
-    Ok((img.width, img.height))
+/// Size of the first image of a sequence (read by decoding it), and a warning when it is
+/// a 16-bit PNG read as 12-bit data without an `sBIT` chunk saying so.
+pub(crate) fn first_image(path: &Path) -> Result<((usize, usize), Vec<String>), DatasetError> {
+    let bytes = std::fs::read(path).map_err(|source| DatasetError::Io {
+        path: path.to_owned(),
+        source,
+    })?;
+    let (img, depth) = GrayImage::decode_png_with_depth(&bytes, path)?;
+    let notes = (depth.source == swarmpose_vision::image::DepthSource::Guessed12)
+        .then(|| {
+            format!(
+                "{}: a 16-bit PNG whose values all fit in 12 bits and no sBIT chunk gives \
+                 the depth: read as 12-bit data (scaled by 4095, not 65535)",
+                path.display()
+            )
+        })
+        .into_iter()
+        .collect();
+    Ok(((img.width, img.height), notes))
 }
 
 /// The rotation nearest a 3x3 matrix read from a file, with a capped iteration count

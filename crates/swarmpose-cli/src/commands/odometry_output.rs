@@ -12,9 +12,7 @@ use crate::error::CliError;
 /// Name of the manifest in an output folder.
 pub const MANIFEST: &str = ".swarmpose-manifest";
 
-fn write_error(path: &Path, e: &dyn std::fmt::Display) -> CliError {
-    CliError::failure(format!("{}: cannot write: {e}", path.display()))
-}
+use crate::output_file::write_error;
 
 /// An output folder being written by one run.
 #[derive(Debug)]
@@ -71,19 +69,7 @@ impl OutputDir {
     /// Exit status 1 naming the file.
     pub fn write(&self, name: &str, bytes: &[u8]) -> Result<(), CliError> {
         self.record(name)?;
-        let path = self.path.join(name);
-        let tmp = self.path.join(format!(".{name}.partial"));
-        let result = (|| -> std::io::Result<()> {
-            let mut f = File::create(&tmp)?;
-            f.write_all(bytes)?;
-            f.sync_all()?;
-            std::fs::rename(&tmp, &path)
-        })();
-        if let Err(e) = result {
-            let _ = std::fs::remove_file(&tmp);
-            return Err(write_error(&path, &e));
-        }
-        Ok(())
+        crate::output_file::write_bytes(&self.path.join(name), bytes)
     }
 }
 

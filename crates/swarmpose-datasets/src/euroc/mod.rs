@@ -177,6 +177,7 @@ pub struct EurocSequence {
     left_map: RemapTable,
     right_map: RemapTable,
     poses: Option<Vec<Isometry3<f64>>>,
+    notes: Vec<String>,
 }
 
 /// Largest time gap between a frame and its ground-truth row, nanoseconds.
@@ -199,6 +200,10 @@ impl EurocSequence {
         check_pairs(dir, &l, &list0, &r, &list1)?;
         let left: Vec<PathBuf> = l.iter().map(|x| x.1.clone()).collect();
         let right: Vec<PathBuf> = r.iter().map(|x| x.1.clone()).collect();
+        let notes = match left.first() {
+            Some(first) => crate::first_image(first)?.1,
+            None => Vec::new(),
+        };
         let s0 = read_sensor_yaml(&c0.join("sensor.yaml"))?;
         let s1 = read_sensor_yaml(&c1.join("sensor.yaml"))?;
         if (s0.camera.width, s0.camera.height) != (s1.camera.width, s1.camera.height) {
@@ -273,6 +278,7 @@ impl EurocSequence {
             left_map,
             right_map,
             poses,
+            notes,
         })
     }
 
@@ -331,6 +337,10 @@ impl StereoSequence for EurocSequence {
             left: remap(raw.left.view(), &self.left_map),
             right: remap(raw.right.view(), &self.right_map),
         })
+    }
+
+    fn notes(&self) -> &[String] {
+        &self.notes
     }
 
     fn ground_truth(&self) -> Option<&[Isometry3<f64>]> {
