@@ -195,9 +195,9 @@ impl EurocSequence {
         let l = read_image_list(&c0)?;
         let r = read_image_list(&c1)?;
         let (list0, list1) = (c0.join("data.csv"), c1.join("data.csv"));
+        check_pairs(dir, &l, &list0, &r, &list1)?;
         check_timestamps(&l, &list0)?;
         check_timestamps(&r, &list1)?;
-        check_pairs(dir, &l, &list0, &r, &list1)?;
         let left: Vec<PathBuf> = l.iter().map(|x| x.1.clone()).collect();
         let right: Vec<PathBuf> = r.iter().map(|x| x.1.clone()).collect();
         let notes = match left.first() {
