@@ -92,6 +92,9 @@ fn main() -> ExitCode {
             // Help and version go to standard output with status 0.
             return match e.print() {
                 Ok(()) => ExitCode::SUCCESS,
+                Err(io) if io.kind() == std::io::ErrorKind::BrokenPipe => {
+                    ExitCode::from(streams::EXIT_PIPE_CLOSED)
+                }
                 Err(_) => ExitCode::from(error::EXIT_FAILURE),
             };
         }
