@@ -178,7 +178,7 @@ fn all_cases() -> Vec<Case> {
     cases.push(case(format!("{HEADER}\n"), "no correspondences"));
     cases.push(case(format!("{HEADER}\n\n\n"), "no correspondences"));
     let mut gap = csv_with(false, |_, _| {});
-    gap.insert_str(HEADER.len() + 1, "\n");
+    gap.insert(HEADER.len() + 1, '\n');
     cases.push(case(gap, "line 2: blank line inside the data"));
     cases.push(case(
         format!("\n{}", csv_with(false, |_, _| {})),

@@ -78,4 +78,59 @@ mod tests {
         assert_eq!(to_8bit(&[0, 4095, 2048, 9000], 12), vec![0, 255, 128, 255]);
         assert_eq!(to_8bit(&[65535, 257], 16), vec![255, 1]);
     }
+
+    /// A 16-bit gray PNG of `values` (4 x 1), with an `sBIT` chunk of 12 bits when asked.
+    fn png16(values: [u16; 4], sbit12: bool) -> Vec<u8> {
+        let mut bytes = Vec::new();
+        let mut enc = png::Encoder::new(&mut bytes, 4, 1);
+        enc.set_color(png::ColorType::Grayscale);
+        enc.set_depth(png::BitDepth::Sixteen);
+        let mut w = enc.write_header().expect("header");
+        let data: Vec<u8> = values.iter().flat_map(|v| v.to_be_bytes()).collect();
+        w.write_image_data(&data).expect("data");
+        drop(w);
+        if sbit12 {
+            // After the signature (8 bytes) and IHDR (4 + 4 + 13 + 4 bytes): length 1,
+            // "sBIT", 12, and the chunk's CRC-32.
+            let chunk = [
+                0, 0, 0, 1, b's', b'B', b'I', b'T', 12, 0xe1, 0x67, 0x9f, 0x80,
+            ];
+            bytes.splice(33..33, chunk);
+        }
+        bytes
+    }
+
+    #[test]
+    fn sixteen_bit_pngs_are_scaled_by_the_depth_of_their_data() {
+        use crate::image::GrayImage;
+        let path = std::path::Path::new("t.png");
+        // Full range: scaled by 65535.
+        let (img, d) =
+            GrayImage::decode_png_with_depth(&png16([0, 257, 32896, 65535], false), path)
+                .expect("png");
+        assert_eq!(
+            (img.data, d.source),
+            (vec![0, 1, 128, 255], DepthSource::Full16)
+        );
+        // 12-bit data, nothing says so: scaled by 4095 (by 65535 it was near-black).
+        let (img, d) = GrayImage::decode_png_with_depth(&png16([0, 16, 2048, 4095], false), path)
+            .expect("png");
+        assert_eq!(
+            (img.data, d.source),
+            (vec![0, 1, 128, 255], DepthSource::Guessed12)
+        );
+        // sBIT says 12 bits: no guess.
+        let (img, d) =
+            GrayImage::decode_png_with_depth(&png16([0, 16, 2048, 4095], true), path).expect("png");
+        assert_eq!(
+            (img.data, d),
+            (
+                vec![0, 1, 128, 255],
+                Depth {
+                    bits: 12,
+                    source: DepthSource::SBit
+                }
+            )
+        );
+    }
 }
