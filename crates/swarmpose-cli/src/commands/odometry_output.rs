@@ -73,11 +73,14 @@ impl OutputDir {
     }
 }
 
-/// A file written line by line, each line flushed at once.
+/// A file written line by line, each line flushed at once; a line that cannot be written
+/// whole (a full disk) is cut off, so the file holds whole lines only.
 #[derive(Debug)]
 pub struct StreamFile {
     path: PathBuf,
     file: File,
+    /// Bytes of the whole lines written so far.
+    len: u64,
 }
 
 impl StreamFile {
@@ -89,7 +92,7 @@ impl StreamFile {
         dir.record(name)?;
         let path = dir.path.join(name);
         let file = File::create(&path).map_err(|e| write_error(&path, &e))?;
-        let mut s = Self { path, file };
+        let mut s = Self { path, file, len: 0 };
         if let Some(h) = header {
             s.line(h)?;
         }
@@ -104,9 +107,21 @@ impl StreamFile {
         let mut buf = String::with_capacity(text.len() + 1);
         buf.push_str(text);
         buf.push('\n');
-        self.file
+        match self
+            .file
             .write_all(buf.as_bytes())
             .and_then(|()| self.file.flush())
-            .map_err(|e| write_error(&self.path, &e))
+        {
+            Ok(()) => {
+                self.len += buf.len() as u64;
+                Ok(())
+            }
+            Err(e) => {
+                // A full disk may have taken part of the line: cut the file back to its
+                // whole lines.
+                let _ = self.file.set_len(self.len);
+                Err(write_error(&self.path, &e))
+            }
+        }
     }
 }
