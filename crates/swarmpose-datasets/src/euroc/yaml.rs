@@ -107,6 +107,24 @@ pub fn parse_sensor_yaml(text: &str, path: &Path) -> Result<SensorYaml, DatasetE
         ));
     }
     let r = Matrix3::new(t[0], t[1], t[2], t[4], t[5], t[6], t[8], t[9], t[10]);
+    let det = r.determinant();
+    let off = (r * r.transpose() - Matrix3::identity()).norm();
+    if det < 0.0 {
+        return Err(parse_error(
+            path,
+            lt,
+            format!("the T_BS rotation has determinant {det:.3} (a reflection): a rotation has +1"),
+        ));
+    }
+    if !(off <= 1e-2) {
+        return Err(parse_error(
+            path,
+            lt,
+            format!(
+                "the T_BS 3x3 part is not a rotation (|R Rᵀ - I| = {off:.3e}, at most 1e-2 accepted)"
+            ),
+        ));
+    }
     let rot = crate::nearest_rotation(&r);
     Ok(SensorYaml {
         camera: RadTanCamera {
