@@ -54,7 +54,12 @@ Exit status: 0 on success; 2 for bad options or an unreadable, malformed or too 
 sequence (a frame that cannot be read stops the run: the frames before it are kept and the \
 message names the frame); 1 when an output cannot be written; 3 when the run finished but \
 fewer than half of the motions were tracked (the result is not usable; the outputs are \
-still written).")]
+still written); 130/143 when stopped by SIGINT/SIGTERM between two frames (the frames done \
+and the summary are kept); 141 when standard output was closed by its reader. The last \
+line on standard output says how many frames were tracked, held at constant velocity or \
+lost. --out is created and checked writable before the first frame; files an earlier run \
+wrote there (listed in its .swarmpose-manifest) are removed; files written at the end \
+are written under a temporary name and renamed when complete.")]
 pub struct OdometryArgs {
     /// Sequence directory; without it, the built-in synthetic stereo sequence.
     #[arg(value_name = "SEQUENCE_DIR")]
