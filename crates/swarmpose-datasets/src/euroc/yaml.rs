@@ -116,7 +116,7 @@ pub fn parse_sensor_yaml(text: &str, path: &Path) -> Result<SensorYaml, DatasetE
             format!("the T_BS rotation has determinant {det:.3} (a reflection): a rotation has +1"),
         ));
     }
-    if !(off <= 1e-2) {
+    if off.is_nan() || off > 1e-2 {
         return Err(parse_error(
             path,
             lt,
