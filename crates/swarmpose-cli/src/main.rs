@@ -1,15 +1,20 @@
 //! `swarmpose`: rigid 3D-3D pose estimation from matched points on the command line.
 //!
 //! Each subcommand lives in [`commands`]; every failure is printed as one line,
-//! `swarmpose: error: ...`, with exit status 2 for bad usage or input and 1 for a run
-//! that failed.
+//! `swarmpose: error: ...`, with exit status 2 for bad usage or input, 1 for a run that
+//! failed or an output that could not be written, 3 for a run that finished but whose
+//! result is not usable (its outputs are written), 130/143 for a run stopped by
+//! SIGINT/SIGTERM (odometry keeps the frames done), and 141 (quietly) when the reader of
+//! standard output closed it.
 
+#![forbid(unsafe_code)]
 #![warn(clippy::unwrap_used)]
 
 mod commands;
 mod error;
 mod input;
 mod methods;
+mod output_file;
 mod signals;
 mod streams;
 
@@ -90,6 +95,9 @@ fn main() -> ExitCode {
             // Help and version go to standard output with status 0.
             return match e.print() {
                 Ok(()) => ExitCode::SUCCESS,
+                Err(io) if io.kind() == std::io::ErrorKind::BrokenPipe => {
+                    ExitCode::from(streams::EXIT_PIPE_CLOSED)
+                }
                 Err(_) => ExitCode::from(error::EXIT_FAILURE),
             };
         }

@@ -15,8 +15,22 @@ pub const EXIT_PIPE_CLOSED: u8 = 141;
 /// A quiet [`CliError`] with [`EXIT_PIPE_CLOSED`] when the reader closed the pipe; exit
 /// status 1 for any other write error (a full disk, `> /dev/full`).
 pub fn out(text: &str) -> Result<(), CliError> {
+    let mut line = String::with_capacity(text.len() + 1);
+    line.push_str(text);
+    line.push('\n');
+    out_text(&line)
+}
+
+/// Writes `text` as it is (several lines, each with its line end) to standard output.
+///
+/// # Errors
+/// As [`out`].
+pub fn out_text(text: &str) -> Result<(), CliError> {
     let mut stdout = std::io::stdout().lock();
-    match writeln!(stdout, "{text}").and_then(|()| stdout.flush()) {
+    match stdout
+        .write_all(text.as_bytes())
+        .and_then(|()| stdout.flush())
+    {
         Ok(()) => Ok(()),
         Err(e) if e.kind() == ErrorKind::BrokenPipe => Err(CliError {
             code: EXIT_PIPE_CLOSED,
@@ -34,4 +48,12 @@ pub fn out(text: &str) -> Result<(), CliError> {
 pub fn err(text: &str) {
     let mut stderr = std::io::stderr().lock();
     let _ = writeln!(stderr, "{text}").and_then(|()| stderr.flush());
+}
+
+/// Writes `swarmpose: warning: TEXT` to standard error (see [`err`]).
+pub fn warn(text: &str) {
+    err(&format!(
+        "swarmpose: warning: {}",
+        crate::error::one_line(text)
+    ));
 }

@@ -31,6 +31,7 @@
 //! # Ok::<(), swarmpose_core::PoseError>(())
 //! ```
 #![deny(missing_docs)]
+#![forbid(unsafe_code)]
 #![warn(clippy::unwrap_used)]
 
 pub mod arun;

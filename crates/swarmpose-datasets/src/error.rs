@@ -46,21 +46,33 @@ pub enum DatasetError {
         /// What is wrong.
         message: String,
     },
-    /// The left and right cameras list a different number of images.
+    /// A frame of one camera has no partner in the other.
     #[error(
-        "left/right image count mismatch: {} has {left}, {} has {right}",
-        left_dir.display(),
-        right_dir.display()
+        "{}: frame {key} has no partner in {} ({left} left and {right} right frames): each \
+         frame needs both images",
+        present.display(),
+        other.display()
     )]
-    CountMismatch {
-        /// Where the left images are listed.
-        left_dir: PathBuf,
-        /// Number of left images.
+    Unpaired {
+        /// The first frame present on one side only.
+        present: PathBuf,
+        /// Its number (or timestamp, nanoseconds).
+        key: i64,
+        /// Where its partner was looked for (a folder or a list).
+        other: PathBuf,
+        /// Number of left frames.
         left: usize,
-        /// Where the right images are listed.
-        right_dir: PathBuf,
-        /// Number of right images.
+        /// Number of right frames.
         right: usize,
+    },
+    /// The frames of a folder or list are not numbered one after the other: a gap, a
+    /// number given twice, or a file that is not a frame.
+    #[error("{}: {message}", path.display())]
+    Frames {
+        /// The first file at fault (or the missing one).
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
     },
     /// Two images of one sequence have different sizes.
     #[error(

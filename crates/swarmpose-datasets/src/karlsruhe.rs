@@ -11,18 +11,14 @@ use std::path::{Path, PathBuf};
 use nalgebra::Isometry3;
 
 use crate::error::DatasetError;
-use crate::text::{list_sorted, numbers, parse_error, read_text};
-use crate::{
-    RectifiedStereo, StereoPair, StereoSequence, check_counts, check_partners, first_size,
-    load_listed_pair,
+use crate::frames::{check_pairs, list_numbered};
+use crate::text::{
+    KeyLines, check_baseline, check_same_intrinsics, numbers, parse_error, read_text, strip_bom,
 };
+use crate::{RectifiedStereo, StereoPair, StereoSequence, first_image, load_listed_pair};
 
 fn is_left(name: &str) -> bool {
     name.starts_with("I1_") && crate::text::is_png(name)
-}
-
-fn is_right(name: &str) -> bool {
-    name.starts_with("I2_") && crate::text::is_png(name)
 }
 
 /// The directory holding the `I1_*.png` images: `dir` or a `*_Images` subdirectory.
@@ -56,11 +52,21 @@ pub fn detect(dir: &Path) -> bool {
 /// [`DatasetError::Parse`] naming the file and line.
 pub fn read_calibration(path: &Path) -> Result<RectifiedStereo, DatasetError> {
     let text = read_text(path, "Karlsruhe calibration calib.txt")?;
+    parse_calibration(&text, path)
+}
+
+/// [`read_calibration`] of text already read; messages name `path`.
+///
+/// # Errors
+/// As [`read_calibration`].
+pub fn parse_calibration(text: &str, path: &Path) -> Result<RectifiedStereo, DatasetError> {
     let (mut p1, mut p2) = (None, None);
-    for (k, line) in text.lines().enumerate() {
+    let mut keys = KeyLines::default();
+    for (k, line) in strip_bom(text).lines().enumerate() {
         let Some((name, rest)) = line.split_once(':') else {
             continue;
         };
+        keys.first(name.trim(), k + 1, path)?;
         let slot = match name.trim() {
             "P1_roi" => &mut p1,
             "P2_roi" => &mut p2,
@@ -86,17 +92,25 @@ pub fn read_calibration(path: &Path) -> Result<RectifiedStereo, DatasetError> {
         return Err(parse_error(
             path,
             l1,
-            "P1_roi focal lengths must be positive",
+            format!(
+                "P1_roi focal lengths must be positive (fx = {}, fy = {})",
+                p1[0], p1[5]
+            ),
         ));
     }
+    check_same_intrinsics(path, ("P1_roi", &p1), ("P2_roi", l2, &p2))?;
     let baseline_m = -p2[3] / p2[0];
     if baseline_m.is_nan() || baseline_m <= 0.0 {
         return Err(parse_error(
             path,
             l2,
-            "P2_roi[0][3] gives no positive baseline",
+            format!(
+                "P2_roi[0][3] = {} gives no positive baseline (expected -f * b)",
+                p2[3]
+            ),
         ));
     }
+    check_baseline(path, l2, baseline_m, &format!("P2_roi[0][3] = {:e}", p2[3]))?;
     Ok(RectifiedStereo {
         fx: p1[0],
         fy: p1[5],
@@ -145,6 +159,7 @@ pub struct KarlsruheSequence {
     right: Vec<PathBuf>,
     rig: RectifiedStereo,
     size: (usize, usize),
+    notes: Vec<String>,
 }
 
 impl KarlsruheSequence {
@@ -158,17 +173,18 @@ impl KarlsruheSequence {
             path: dir.join("I1_000000.png"),
             what: "Karlsruhe left images I1_*.png",
         })?;
-        let left = list_sorted(&images, is_left)?;
-        let right = list_sorted(&images, is_right)?;
-        check_counts(dir, &left, &images, &right, &images)?;
-        check_partners(&left, &right, &images, |n| n.replacen("I1_", "I2_", 1))?;
+        let left = list_numbered(&images, "I1_")?;
+        let right = list_numbered(&images, "I2_")?;
+        check_pairs(dir, &left, &images, &right, &images)?;
+        let left: Vec<PathBuf> = left.into_iter().map(|x| x.1).collect();
+        let right: Vec<PathBuf> = right.into_iter().map(|x| x.1).collect();
         let calib = [dir.join("calib.txt"), images.join("calib.txt")]
             .into_iter()
             .chain(dir.parent().map(|p| p.join("calib.txt")))
             .find(|p| p.is_file())
             .unwrap_or_else(|| dir.join("calib.txt"));
         let rig = read_calibration(&calib)?;
-        let size = first_size(&left[0])?;
+        let (size, notes) = first_image(&left[0])?;
         Ok(Self {
             images,
             root: dir.to_owned(),
@@ -176,6 +192,7 @@ impl KarlsruheSequence {
             right,
             rig,
             size,
+            notes,
         })
     }
 }
@@ -227,6 +244,10 @@ impl StereoSequence for KarlsruheSequence {
 
     fn frame(&self, i: usize) -> Result<StereoPair, DatasetError> {
         load_listed_pair(&self.root, &self.left, &self.right, i, self.size)
+    }
+
+    fn notes(&self) -> &[String] {
+        &self.notes
     }
 
     fn ground_truth(&self) -> Option<&[Isometry3<f64>]> {

@@ -8,10 +8,12 @@ use std::path::{Path, PathBuf};
 use nalgebra::Isometry3;
 
 use crate::error::DatasetError;
-use crate::text::{is_png, list_sorted, numbers, parse_error, read_text};
+use crate::frames::{check_pairs, list_numbered};
+use crate::text::{
+    KeyLines, check_baseline, check_same_intrinsics, numbers, parse_error, read_text, strip_bom,
+};
 use crate::{
-    RectifiedStereo, StereoPair, StereoSequence, check_counts, check_partners, first_size,
-    load_listed_pair, pose_from_3x4,
+    RectifiedStereo, StereoPair, StereoSequence, first_image, load_listed_pair, pose_from_3x4,
 };
 
 /// True when `dir` looks like a KITTI sequence.
@@ -28,6 +30,7 @@ pub struct KittiSequence {
     right: Vec<PathBuf>,
     rig: RectifiedStereo,
     size: (usize, usize),
+    notes: Vec<String>,
     poses: Option<Vec<Isometry3<f64>>>,
 }
 
@@ -38,9 +41,18 @@ pub struct KittiSequence {
 /// [`DatasetError::Parse`] naming the file and line of a malformed row or a missing one.
 pub fn read_calibration(path: &Path) -> Result<RectifiedStereo, DatasetError> {
     let text = read_text(path, "KITTI calibration calib.txt")?;
+    parse_calibration(&text, path)
+}
+
+/// [`read_calibration`] of text already read; messages name `path`.
+///
+/// # Errors
+/// As [`read_calibration`].
+pub fn parse_calibration(text: &str, path: &Path) -> Result<RectifiedStereo, DatasetError> {
     let (mut p0, mut p1) = (None, None);
     let mut unnamed = Vec::new();
-    for (k, line) in text.lines().enumerate() {
+    let mut keys = KeyLines::default();
+    for (k, line) in strip_bom(text).lines().enumerate() {
         let line_no = k + 1;
         let line = line.trim();
         if line.is_empty() {
@@ -50,6 +62,9 @@ pub fn read_calibration(path: &Path) -> Result<RectifiedStereo, DatasetError> {
             Some((n, r)) => (Some(n.trim()), r),
             None => (None, line),
         };
+        if let Some(n) = name {
+            keys.first(n, line_no, path)?;
+        }
         let slot = match name {
             Some("P0") => &mut p0,
             Some("P1") => &mut p1,
@@ -76,9 +91,17 @@ pub fn read_calibration(path: &Path) -> Result<RectifiedStereo, DatasetError> {
                 ),
             ));
         }
+        if slot.is_some() {
+            // An unnamed row beside a named one of the same slot.
+            return Err(parse_error(
+                path,
+                line_no,
+                "P0/P1 given both by name and as an unnamed row: keep one",
+            ));
+        }
         *slot = Some((v, line_no));
     }
-    let (Some((p0, _)), Some((p1, l1))) = (p0, p1) else {
+    let (Some((p0, l0)), Some((p1, l1))) = (p0, p1) else {
         return Err(parse_error(
             path,
             0,
@@ -86,8 +109,16 @@ pub fn read_calibration(path: &Path) -> Result<RectifiedStereo, DatasetError> {
         ));
     };
     if !(p0[0] > 0.0 && p0[5] > 0.0) {
-        return Err(parse_error(path, 1, "P0 focal lengths must be positive"));
+        return Err(parse_error(
+            path,
+            l0,
+            format!(
+                "P0 focal lengths must be positive (fx = {}, fy = {})",
+                p0[0], p0[5]
+            ),
+        ));
     }
+    check_same_intrinsics(path, ("P0", &p0), ("P1", l1, &p1))?;
     let baseline_m = -p1[3] / p1[0];
     if baseline_m.is_nan() || baseline_m <= 0.0 {
         return Err(parse_error(
@@ -99,6 +130,7 @@ pub fn read_calibration(path: &Path) -> Result<RectifiedStereo, DatasetError> {
             ),
         ));
     }
+    check_baseline(path, l1, baseline_m, &format!("P1[0][3] = {:e}", p1[3]))?;
     Ok(RectifiedStereo {
         fx: p0[0],
         fy: p0[5],
@@ -114,6 +146,14 @@ pub fn read_calibration(path: &Path) -> Result<RectifiedStereo, DatasetError> {
 /// [`DatasetError::Parse`] naming the file and line.
 pub fn read_poses(path: &Path) -> Result<Vec<Isometry3<f64>>, DatasetError> {
     let text = read_text(path, "ground-truth poses")?;
+    parse_poses(&text, path)
+}
+
+/// [`read_poses`] of text already read; messages name `path`.
+///
+/// # Errors
+/// As [`read_poses`].
+pub fn parse_poses(text: &str, path: &Path) -> Result<Vec<Isometry3<f64>>, DatasetError> {
     let mut out = Vec::new();
     for (k, line) in text.lines().enumerate() {
         if line.trim().is_empty() {
@@ -129,11 +169,22 @@ pub fn read_poses(path: &Path) -> Result<Vec<Isometry3<f64>>, DatasetError> {
         }
         let r = nalgebra::Matrix3::new(v[0], v[1], v[2], v[4], v[5], v[6], v[8], v[9], v[10]);
         let off = (r * r.transpose() - nalgebra::Matrix3::identity()).norm();
-        if off > 1e-2 || r.determinant() < 0.0 {
+        let det = r.determinant();
+        if det < 0.0 {
             return Err(parse_error(
                 path,
                 k + 1,
-                format!("the 3x3 part is not a rotation (|R Rᵀ - I| = {off:.3e})"),
+                format!("the 3x3 part has determinant {det:.3} (a reflection): a rotation has +1"),
+            ));
+        }
+        if off > 1e-2 {
+            return Err(parse_error(
+                path,
+                k + 1,
+                format!(
+                    "the 3x3 part is not a rotation (|R Rᵀ - I| = {off:.3e}, at most 1e-2 \
+                     accepted)"
+                ),
             ));
         }
         out.push(pose_from_3x4(&v));
@@ -157,12 +208,13 @@ impl KittiSequence {
                 });
             }
         }
-        let left = list_sorted(&ld, is_png)?;
-        let right = list_sorted(&rd, is_png)?;
-        check_counts(dir, &left, &ld, &right, &rd)?;
-        check_partners(&left, &right, &rd, str::to_owned)?;
+        let left = list_numbered(&ld, "")?;
+        let right = list_numbered(&rd, "")?;
+        check_pairs(dir, &left, &ld, &right, &rd)?;
+        let left: Vec<PathBuf> = left.into_iter().map(|x| x.1).collect();
+        let right: Vec<PathBuf> = right.into_iter().map(|x| x.1).collect();
         let rig = read_calibration(&dir.join("calib.txt"))?;
-        let size = first_size(&left[0])?;
+        let (size, notes) = first_image(&left[0])?;
         let pose_file = official_poses(dir).unwrap_or_else(|| dir.join("poses.txt"));
         let poses = if pose_file.is_file() {
             let p = read_poses(&pose_file)?;
@@ -183,6 +235,7 @@ impl KittiSequence {
             right,
             rig,
             size,
+            notes,
             poses,
         })
     }
@@ -223,6 +276,10 @@ impl StereoSequence for KittiSequence {
 
     fn frame(&self, i: usize) -> Result<StereoPair, DatasetError> {
         load_listed_pair(&self.root, &self.left, &self.right, i, self.size)
+    }
+
+    fn notes(&self) -> &[String] {
+        &self.notes
     }
 
     fn ground_truth(&self) -> Option<&[Isometry3<f64>]> {

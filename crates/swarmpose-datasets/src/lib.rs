@@ -15,10 +15,12 @@
 //! Frames: ground-truth poses are those of the (rectified) LEFT camera at each frame,
 //! expressed in the left camera frame of frame 0 (x right, y down, z forward, metres).
 #![deny(missing_docs)]
+#![forbid(unsafe_code)]
 #![warn(clippy::unwrap_used)]
 
 pub mod error;
 pub mod euroc;
+mod frames;
 pub mod karlsruhe;
 pub mod kitti;
 mod text;
@@ -30,6 +32,12 @@ use nalgebra::Isometry3;
 pub use error::DatasetError;
 pub use swarmpose_vision::image::GrayImage;
 pub use swarmpose_vision::stereo::RectifiedStereo;
+
+/// The stereo baselines accepted from a calibration, metres: from 5 mm (the smallest
+/// stereo modules) to 10 m (wide rigs on vehicles). A value outside is a malformed or
+/// mis-scaled file (a `P1[0][3]` in another unit, a missing minus sign), refused rather
+/// than giving points a thousand times too near or too far.
+pub const BASELINE_RANGE_M: (f64, f64) = (0.005, 10.0);
 
 /// One rectified stereo frame, 8-bit grayscale, both images the same size.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -68,6 +76,12 @@ pub trait StereoSequence: Send + Sync {
     /// A missing or unreadable image, images of different sizes, or `i` out of range;
     /// the message names the file.
     fn frame(&self, i: usize) -> Result<StereoPair, DatasetError>;
+
+    /// Warnings found when the sequence was opened (for example 16-bit images read as
+    /// 12-bit data without an `sBIT` chunk saying so), one line each, naming the file.
+    fn notes(&self) -> &[String] {
+        &[]
+    }
 
     /// Ground-truth pose of the left camera at each frame in the left camera frame of
     /// frame 0, when the sequence has camera ground truth.
@@ -175,66 +189,32 @@ pub fn load_pair(
     Ok(StereoPair { left: l, right: r })
 }
 
-/// Checks that the left and right lists have the same length and are not empty.
-pub(crate) fn check_counts(
-    dir: &Path,
-    left: &[PathBuf],
-    left_dir: &Path,
-    right: &[PathBuf],
-    right_dir: &Path,
-) -> Result<(), DatasetError> {
-    if left.len() != right.len() {
-        return Err(DatasetError::CountMismatch {
-            left_dir: left_dir.to_owned(),
-            left: left.len(),
-            right_dir: right_dir.to_owned(),
-            right: right.len(),
-        });
-    }
-    if left.is_empty() {
-        return Err(DatasetError::Empty {
-            dir: dir.to_owned(),
-        });
-    }
-    Ok(())
-}
-
-/// Checks that every left image has its right partner: `partner(left file name)` is
-/// the expected right file name.
-pub(crate) fn check_partners(
-    left: &[PathBuf],
-    right: &[PathBuf],
-    right_dir: &Path,
-    partner: impl Fn(&str) -> String,
-) -> Result<(), DatasetError> {
-    let names: std::collections::BTreeSet<String> = right
-        .iter()
-        .filter_map(|p| p.file_name()?.to_str().map(str::to_owned))
+/// Size of the first image of a sequence (read by decoding it), and a warning when it is
+/// a 16-bit PNG read as 12-bit data without an `sBIT` chunk saying so.
+pub(crate) fn first_image(path: &Path) -> Result<((usize, usize), Vec<String>), DatasetError> {
+    let bytes = std::fs::read(path).map_err(|source| DatasetError::Io {
+        path: path.to_owned(),
+        source,
+    })?;
+    let (img, depth) = GrayImage::decode_png_with_depth(&bytes, path)?;
+    let notes = (depth.source == swarmpose_vision::image::DepthSource::Guessed12)
+        .then(|| {
+            format!(
+                "{}: a 16-bit PNG whose values all fit in 12 bits and no sBIT chunk gives \
+                 the depth: read as 12-bit data (scaled by 4095, not 65535)",
+                path.display()
+            )
+        })
+        .into_iter()
         .collect();
-    for l in left {
-        let Some(name) = l.file_name().and_then(|n| n.to_str()) else {
-            continue;
-        };
-        let want = partner(name);
-        if !names.contains(&want) {
-            return Err(DatasetError::Missing {
-                path: right_dir.join(want),
-                what: "the right image of a left image",
-            });
-        }
-    }
-    Ok(())
-}
-
-/// Size of the first image of a sequence (read from its header by decoding it).
-pub(crate) fn first_size(path: &Path) -> Result<(usize, usize), DatasetError> {
-    let img = GrayImage::load_png(path)?;
-    Ok((img.width, img.height))
+    Ok(((img.width, img.height), notes))
 }
 
 /// The rotation nearest a 3x3 matrix read from a file, with a capped iteration count
 /// (nalgebra's uncapped `Rotation3::from_matrix` can spin on a matrix far from any
-/// rotation, such as a corrupted file's).
+/// rotation, such as a corrupted file's). Callers check first that `m` is within 1e-2 of
+/// a rotation: even capped, nalgebra's perturbation loop never ends on a matrix with an
+/// entry of 1e58 (found by the `euroc_sensor_yaml` fuzz target).
 pub(crate) fn nearest_rotation(m: &nalgebra::Matrix3<f64>) -> nalgebra::UnitQuaternion<f64> {
     use nalgebra::{Rotation3, UnitQuaternion};
     UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_eps(

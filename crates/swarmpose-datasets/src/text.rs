@@ -1,6 +1,6 @@
 //! Small text-parsing helpers shared by the loaders.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use crate::error::DatasetError;
 
@@ -40,31 +40,82 @@ pub(crate) fn numbers(text: &str, path: &Path, line: usize) -> Result<Vec<f64>, 
         .collect()
 }
 
-/// The entries of `dir`, sorted by name, whose file names satisfy `keep`.
-pub(crate) fn list_sorted(
-    dir: &Path,
-    keep: impl Fn(&str) -> bool,
-) -> Result<Vec<PathBuf>, DatasetError> {
-    let rd = std::fs::read_dir(dir).map_err(|source| DatasetError::Io {
-        path: dir.to_owned(),
-        source,
-    })?;
-    let mut out = Vec::new();
-    for e in rd {
-        let e = e.map_err(|source| DatasetError::Io {
-            path: dir.to_owned(),
-            source,
-        })?;
-        let name = e.file_name();
-        if name.to_str().is_some_and(&keep) {
-            out.push(e.path());
-        }
-    }
-    out.sort();
-    Ok(out)
-}
-
 /// True for a `.png` file name (any case).
 pub(crate) fn is_png(name: &str) -> bool {
     name.to_ascii_lowercase().ends_with(".png")
+}
+
+/// `text` without a leading UTF-8 byte-order mark (some editors write one).
+pub(crate) fn strip_bom(text: &str) -> &str {
+    text.strip_prefix('\u{feff}').unwrap_or(text)
+}
+
+/// The first line of each key of a `key: values` file: a key given twice is an error
+/// naming both lines (the reader would otherwise keep one of them silently).
+#[derive(Debug, Default)]
+pub(crate) struct KeyLines(std::collections::BTreeMap<String, usize>);
+
+impl KeyLines {
+    /// Records `key` at `line` (1-based).
+    pub(crate) fn first(
+        &mut self,
+        key: &str,
+        line: usize,
+        path: &Path,
+    ) -> Result<(), DatasetError> {
+        if let Some(&before) = self.0.get(key) {
+            return Err(parse_error(
+                path,
+                line,
+                format!("'{key}' is given twice (lines {before} and {line}): keep one"),
+            ));
+        }
+        self.0.insert(key.to_owned(), line);
+        Ok(())
+    }
+}
+
+/// Checks that two row-major 3x4 projection matrices of a rectified pair have the same
+/// focal lengths and principal point (entries 0, 5, 2, 6), to a relative 1e-6.
+pub(crate) fn check_same_intrinsics(
+    path: &Path,
+    (name0, p0): (&str, &[f64]),
+    (name1, line1, p1): (&str, usize, &[f64]),
+) -> Result<(), DatasetError> {
+    let same = |a: f64, b: f64| (a - b).abs() <= 1e-6 * a.abs().max(b.abs()).max(1.0);
+    let labels = [(0, "fx"), (5, "fy"), (2, "cx"), (6, "cy")];
+    if let Some((k, label)) = labels.iter().find(|(k, _)| !same(p0[*k], p1[*k])) {
+        return Err(parse_error(
+            path,
+            line1,
+            format!(
+                "{name1} {label} = {} differs from {name0} {label} = {}: the images of a \
+                 rectified pair share one camera matrix (fx, fy, cx, cy), only the \
+                 baseline term differs",
+                p1[*k], p0[*k]
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Checks that a stereo baseline (metres) lies in [`crate::BASELINE_RANGE_M`].
+pub(crate) fn check_baseline(
+    path: &Path,
+    line: usize,
+    baseline_m: f64,
+    what: &str,
+) -> Result<(), DatasetError> {
+    let (lo, hi) = crate::BASELINE_RANGE_M;
+    if baseline_m.is_finite() && (lo..=hi).contains(&baseline_m) {
+        return Ok(());
+    }
+    Err(parse_error(
+        path,
+        line,
+        format!(
+            "{what} gives a baseline of {baseline_m:.3e} m, outside the {lo} to {hi} m of a \
+             stereo rig"
+        ),
+    ))
 }

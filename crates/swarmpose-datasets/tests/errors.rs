@@ -90,15 +90,78 @@ fn missing_images_name_the_directory() {
 }
 
 #[test]
-fn a_count_mismatch_names_both_directories() {
+fn a_count_mismatch_names_the_first_frame_on_one_side_only() {
     let k = Kitti::new("count", 3);
     std::fs::remove_file(k.path("image_1/000002.png")).expect("rm");
     let e = error_of(&k.0);
     assert!(
-        e.contains("count mismatch") && e.contains("image_0") && e.contains("image_1"),
+        e.contains("image_0/000002.png: frame 2 has no partner in")
+            && e.contains("image_1 (3 left and 2 right frames)"),
         "{e}"
     );
-    assert!(e.contains("has 3") && e.contains("has 2"), "{e}");
+}
+
+#[test]
+fn frames_are_what_they_are_named() {
+    // A frame missing from both folders: the gap is named, not renumbered.
+    let k = Kitti::new("gap", 8);
+    for side in ["image_0", "image_1"] {
+        std::fs::remove_file(k.path(&format!("{side}/000006.png"))).expect("rm");
+    }
+    let e = error_of(&k.0);
+    assert!(
+        e.contains("image_0/000006.png: missing: frame 7 comes after frame 5"),
+        "{e}"
+    );
+    // A stray copy is not a frame.
+    let k = Kitti::new("stray", 4);
+    write_png(&k.path("image_0/000003_copy.png"), 40, 30);
+    let e = error_of(&k.0);
+    assert!(
+        e.contains("image_0/000003_copy.png: not a frame image"),
+        "{e}"
+    );
+    // The same number twice.
+    let k = Kitti::new("dup", 4);
+    write_png(&k.path("image_0/0003.png"), 40, 30);
+    let e = error_of(&k.0);
+    assert!(e.contains("frame number 3 again"), "{e}");
+}
+
+#[test]
+fn an_inconsistent_calibration_is_refused() {
+    let k = Kitti::new("calib-dup", 1);
+    let p0 = "P0: 700 0 20 0 0 700 15 0 0 0 1 0";
+    let p1 = "P1: 700 0 20 -350 0 700 15 0 0 0 1 0";
+    std::fs::write(k.path("calib.txt"), format!("{p0}\n{p1}\n{p1}\n")).expect("calib");
+    let e = error_of(&k.0);
+    assert!(
+        e.contains("calib.txt:3: 'P1' is given twice (lines 2 and 3)"),
+        "{e}"
+    );
+    std::fs::write(
+        k.path("calib.txt"),
+        format!("{p0}\nP1: 500 0 20 -250 0 500 15 0 0 0 1 0\n"),
+    )
+    .expect("calib");
+    let e = error_of(&k.0);
+    assert!(
+        e.contains("calib.txt:2: P1 fx = 500 differs from P0 fx = 700"),
+        "{e}"
+    );
+    std::fs::write(
+        k.path("calib.txt"),
+        format!("{p0}\nP1: 700 0 20 -9.8e-10 0 700 15 0 0 0 1 0\n"),
+    )
+    .expect("calib");
+    let e = error_of(&k.0);
+    assert!(
+        e.contains("calib.txt:2: P1[0][3] = -9.8e-10 gives a baseline of 1.400e-12 m"),
+        "{e}"
+    );
+    // A byte-order mark is accepted.
+    std::fs::write(k.path("calib.txt"), format!("\u{feff}{p0}\n{p1}\n")).expect("calib");
+    assert!(open(&k.0).is_ok());
 }
 
 #[test]

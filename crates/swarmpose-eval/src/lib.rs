@@ -19,6 +19,7 @@
 //! # Ok::<(), swarmpose_eval::EvalError>(())
 //! ```
 #![deny(missing_docs)]
+#![forbid(unsafe_code)]
 #![warn(clippy::unwrap_used)]
 
 pub mod associate;

@@ -225,11 +225,21 @@ fn numbers(line: &str, path: &Path, line_no: usize) -> Result<Vec<f64>, EvalErro
 fn pose_from_3x4(m: &[f64], path: &Path, line_no: usize) -> Result<Isometry3<f64>, EvalError> {
     let r = Matrix3::new(m[0], m[1], m[2], m[4], m[5], m[6], m[8], m[9], m[10]);
     let err = (r * r.transpose() - Matrix3::identity()).norm();
-    if err > 1e-2 || r.determinant() < 0.0 {
+    let det = r.determinant();
+    if det < 0.0 {
         return Err(EvalError::parse(
             path,
             line_no,
-            format!("the 3x3 part is not a rotation (|R Rᵀ - I| = {err:.3e})"),
+            format!("the 3x3 part has determinant {det:.3} (a reflection): a rotation has +1"),
+        ));
+    }
+    if err > 1e-2 {
+        return Err(EvalError::parse(
+            path,
+            line_no,
+            format!(
+                "the 3x3 part is not a rotation (|R Rᵀ - I| = {err:.3e}, at most 1e-2 accepted)"
+            ),
         ));
     }
     let rot = Rotation3::from_matrix_eps(&r, 1e-15, 100, Rotation3::identity());

@@ -24,6 +24,7 @@
 //! plots of figure 17 ([`plots`]) and synthetic sequences ([`synthetic`]). Measured
 //! results: `RESULTS.md` beside this crate's manifest.
 #![deny(missing_docs)]
+#![forbid(unsafe_code)]
 #![warn(clippy::unwrap_used)]
 
 pub mod batch;

@@ -24,10 +24,23 @@ pub fn ensure_writable_dir(dir: &Path) -> Result<(), SimError> {
     Ok(())
 }
 
-/// Writes `contents` to `path`.
+/// Writes `contents` to `path` whole: under a temporary name beside it first, renamed
+/// when complete, so that an error, a full disk or a kill never leaves a truncated file
+/// under the final name.
 ///
 /// # Errors
-/// [`SimError::Io`] naming the file.
+/// [`SimError::Io`] naming the file (the temporary file is removed).
 pub fn write_file(path: &Path, contents: impl AsRef<[u8]>) -> Result<(), SimError> {
-    fs::write(path, contents).map_err(|e| SimError::io(path, e))
+    use std::io::Write;
+    let name = path
+        .file_name()
+        .map_or_else(|| "output".into(), |n| n.to_string_lossy().into_owned());
+    let tmp = path.with_file_name(format!(".{name}.partial-{}", std::process::id()));
+    let result = fs::File::create(&tmp)
+        .and_then(|mut f| f.write_all(contents.as_ref()).and_then(|()| f.sync_all()))
+        .and_then(|()| fs::rename(&tmp, path));
+    result.map_err(|e| {
+        let _ = fs::remove_file(&tmp);
+        SimError::io(path, e)
+    })
 }

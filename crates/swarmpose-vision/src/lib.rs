@@ -18,6 +18,7 @@
 //! | [`render`] | a tiny renderer of textured planes (tests without data) |
 //! | [`draw`] | match drawings (the paper's figure 9) |
 #![deny(missing_docs)]
+#![forbid(unsafe_code)]
 #![warn(clippy::unwrap_used)]
 
 pub mod bucketing;

@@ -255,22 +255,16 @@ pub fn run(args: &BenchArgs) -> Result<(), CliError> {
         }
     }
     if let Some(path) = &args.runs_csv {
-        std::fs::write(path, runs_csv(&results)).map_err(|e| {
-            CliError::failure(format!(
-                "{}: cannot write the runs CSV: {e}",
-                path.display()
-            ))
-        })?;
+        crate::output_file::write_bytes(path, runs_csv(&results).as_bytes())?;
     }
-    print!("{}", tables(&results, &args.methods));
-    println!(
+    crate::streams::out_text(&tables(&results, &args.methods))?;
+    crate::streams::out(&format!(
         "\n{} scenarios from {}, {} estimators, {:.1} s wall time.",
         files.len(),
         args.suite.display(),
         args.methods.len(),
         started.elapsed().as_secs_f64()
-    );
-    Ok(())
+    ))
 }
 
 type Results = BTreeMap<CellKey, BTreeMap<u64, BTreeMap<String, Vec<Outcome>>>>;

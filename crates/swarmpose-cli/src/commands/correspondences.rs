@@ -8,7 +8,8 @@
 use std::path::{Path, PathBuf};
 
 use clap::Args;
-use swarmpose_data::correspondence_csv;
+use swarmpose_core::Correspondences;
+use swarmpose_data::{correspondence_csv, register_report};
 use swarmpose_datasets::{DatasetError, StereoPair, StereoSequence, open};
 use swarmpose_odometry::batch::{camera_of, run_sequence};
 use swarmpose_odometry::config::Calibration;
@@ -18,7 +19,9 @@ use swarmpose_vision::features::FeatureExtractor;
 use swarmpose_vision::frontend::{Detector, DisparityCorrection, FrameMatches, Frontend};
 
 use super::stereo_options::StereoOptions;
-use crate::error::CliError;
+use crate::error::{CliError, EXIT_NOT_USABLE};
+use crate::output_file::{create_parent, write_bytes, write_with};
+use crate::streams::{err, warn};
 
 /// Arguments of `swarmpose correspondences`.
 #[derive(Debug, Args)]
@@ -33,8 +36,12 @@ of both points' stereo noise covariances (m^2, from the pixel noise; elongated a
 viewing ray), which `register` uses for a Mahalanobis inlier test and fit (omit them with \
 --no-covariance). A one-line summary goes to standard error.
 
-Exit status: 0 on success; 2 for bad options or an unreadable or malformed sequence; 1 \
-when an output cannot be written.")]
+Exit status: 0 on success; 2 for bad options, an unreadable or malformed sequence, or an \
+--inliers report made from another CSV (checked by its row count and points_checksum \
+before anything is written); 1 when an output cannot be written; 3 when no \
+correspondence was found (the CSV is written with its header only: not usable). Outputs \
+are written under a temporary name and renamed when complete; missing folders are \
+created.")]
 pub struct CorrespondencesArgs {
     /// Sequence directory.
     #[arg(value_name = "SEQUENCE_DIR")]
@@ -123,10 +130,10 @@ fn self_calibrate(
         "terms beyond --disparity-offset and --disparity-quadratic: use --self-calibrate again"
             .to_owned()
     };
-    eprintln!(
+    err(&format!(
         "swarmpose: self-calibrated disparity correction {c} ({}) over {pairs} pairs ({reuse})",
         d.model
-    );
+    ));
     Ok(c)
 }
 
@@ -155,31 +162,19 @@ fn matches<E: FeatureExtractor>(
         })
 }
 
-/// Inlier flags from a `register` JSON report of `n` correspondences.
-fn read_inliers(path: &Path, n: usize) -> Result<Vec<bool>, CliError> {
-    let name = path.display();
+/// Inlier flags from a `register` JSON report, checked to be of `data` (its row count
+/// and points checksum).
+fn read_inliers(path: &Path, data: &Correspondences) -> Result<Vec<bool>, CliError> {
+    let name = path.display().to_string();
     let text = std::fs::read_to_string(path)
         .map_err(|e| CliError::usage(format!("{name}: cannot read: {e}")))?;
-    let value: serde_json::Value = serde_json::from_str(text.trim())
-        .map_err(|e| CliError::usage(format!("{name}: not a register JSON report: {e}")))?;
-    let list = value
-        .get("inliers")
-        .and_then(|v| v.as_array())
-        .ok_or_else(|| CliError::usage(format!("{name}: no \"inliers\" array")))?;
-    let mut flags = vec![false; n];
-    for v in list {
-        let i = v
-            .as_u64()
-            .and_then(|i| usize::try_from(i).ok())
-            .filter(|&i| i < n)
-            .ok_or_else(|| {
-                CliError::usage(format!(
-                    "{name}: inlier {v} is not an index below {n} (the report is of another CSV?)"
-                ))
-            })?;
-        flags[i] = true;
-    }
-    Ok(flags)
+    register_report::parse_inliers(
+        &text,
+        &name,
+        data.len(),
+        &register_report::points_checksum(data),
+    )
+    .map_err(|e| CliError::usage(e.to_string()))
 }
 
 /// Runs `correspondences`.
@@ -193,6 +188,14 @@ pub fn run(args: &CorrespondencesArgs) -> Result<(), CliError> {
         _ => return Err(CliError::usage("--frames takes two frame indices, I and J")),
     };
     let seq: Box<dyn StereoSequence> = open(&args.sequence).map_err(dataset_error)?;
+    for note in seq.notes() {
+        warn(note);
+    }
+    // The output folders exist (or are made) before any work.
+    create_parent(&args.out)?;
+    if let Some(png) = &args.draw {
+        create_parent(png)?;
+    }
     for f in [i, j] {
         if f >= seq.len() {
             return Err(CliError::usage(format!(
@@ -214,7 +217,7 @@ pub fn run(args: &CorrespondencesArgs) -> Result<(), CliError> {
         Detector::Orb => matches(&mut Frontend::orb(rig), correction, args, &a, &b)?,
         Detector::Surf => matches(&mut Frontend::surf(rig), correction, args, &a, &b)?,
     };
-    let data = if args.no_covariance {
+    let data = if args.no_covariance || m.correspondences.is_empty() {
         m.correspondences.clone()
     } else {
         m.correspondences_with_covariance().map_err(|e| {
@@ -223,29 +226,51 @@ pub fn run(args: &CorrespondencesArgs) -> Result<(), CliError> {
             ))
         })?
     };
-    correspondence_csv::write_path(&args.out, &data)?;
-    if let Some(png) = &args.draw {
-        let flags = match &args.inliers {
-            Some(p) => Some(read_inliers(p, m.correspondences.len())?),
-            None => None,
+    // The report is checked before anything is written.
+    let flags = match &args.inliers {
+        Some(p) => Some(read_inliers(p, &data)?),
+        None => None,
+    };
+    let csv = if data.is_empty() {
+        let header = if args.no_covariance {
+            swarmpose_data::HEADER
+        } else {
+            swarmpose_data::HEADER_WITH_COVARIANCE
         };
-        draw_matches(
+        format!("{header}\n").into_bytes()
+    } else {
+        let mut bytes = Vec::new();
+        correspondence_csv::write_to(&mut bytes, &data, &args.out.display().to_string())?;
+        bytes
+    };
+    write_bytes(&args.out, &csv)?;
+    if let Some(png) = &args.draw {
+        let canvas = draw_matches(
             a.left.view(),
             b.left.view(),
             &m.dst_pixels,
             &m.src_pixels,
             flags.as_deref(),
-        )
-        .save_png(png)
-        .map_err(CliError::failure)?;
+        );
+        write_with(png, |tmp| canvas.save_png(tmp))?;
     }
-    eprintln!(
+    err(&format!(
         "swarmpose: {} ({}), frames {i} -> {j}: {} correspondences written to {}",
         args.sequence.display(),
         seq.layout(),
         m.correspondences.len(),
         args.out.display()
-    );
+    ));
+    if data.is_empty() {
+        return Err(CliError {
+            code: EXIT_NOT_USABLE,
+            message: format!(
+                "not usable: no correspondence between frames {i} and {j} ({} has the header \
+                 only)",
+                args.out.display()
+            ),
+        });
+    }
     Ok(())
 }
 
@@ -255,15 +280,34 @@ mod tests {
 
     #[test]
     fn inliers_of_a_register_report() {
+        use nalgebra::Point3;
         let dir = std::env::temp_dir().join(format!("swarmpose-corr-{}", std::process::id()));
         std::fs::create_dir_all(&dir).expect("tmp");
+        let points = |n: usize| -> Correspondences {
+            let p: Vec<Point3<f64>> = (0..n).map(|i| Point3::new(i as f64, 1.0, 2.0)).collect();
+            Correspondences::new(p.clone(), p).expect("points")
+        };
+        let (three, two) = (points(3), points(2));
         let p = dir.join("r.json");
-        std::fs::write(&p, r#"{"method":"pso","inliers":[0,2]}"#).expect("write");
-        assert_eq!(read_inliers(&p, 3).expect("ok"), vec![true, false, true]);
-        let e = read_inliers(&p, 2).expect_err("index 2 of 2");
-        assert!(e.message.contains("r.json") && e.message.contains("below 2"));
+        std::fs::write(
+            &p,
+            format!(
+                r#"{{"method":"pso","n_correspondences":3,"points_checksum":"{}","inliers":[0,2]}}"#,
+                register_report::points_checksum(&three)
+            ),
+        )
+        .expect("write");
+        assert_eq!(
+            read_inliers(&p, &three).expect("ok"),
+            vec![true, false, true]
+        );
+        let e = read_inliers(&p, &two).expect_err("another CSV");
+        assert!(
+            e.message.contains("r.json") && e.message.contains("another CSV"),
+            "{e}"
+        );
         std::fs::write(&p, "{}").expect("write");
-        assert!(read_inliers(&p, 2).is_err());
+        assert!(read_inliers(&p, &three).is_err());
         let _ = std::fs::remove_dir_all(&dir);
     }
 

@@ -29,9 +29,11 @@ fn defaults<T: Args + FromArgMatches>(name: &'static str) -> Result<T, CliError>
 /// # Errors
 /// Whatever the two jobs report.
 pub fn run(_args: &DemoArgs) -> Result<(), CliError> {
-    println!("== swarmpose simulate: the paper's section 6 simulation (figures 6 and 7) ==");
+    crate::streams::out(
+        "== swarmpose simulate: the paper's section 6 simulation (figures 6 and 7) ==",
+    )?;
     simulate::run(&defaults::<simulate::SimulateArgs>("simulate")?)?;
-    println!();
-    println!("== swarmpose odometry: the built-in synthetic stereo sequence ==");
+    crate::streams::out("")?;
+    crate::streams::out("== swarmpose odometry: the built-in synthetic stereo sequence ==")?;
     odometry::run_command(&defaults::<odometry::OdometryArgs>("odometry")?)
 }

@@ -10,7 +10,8 @@ use clap::{Args, ValueEnum};
 use swarmpose_eval::associate::{DEFAULT_MAX_DIFF_S, by_index, by_timestamp};
 use swarmpose_eval::{EvalError, Evaluation, Format, Stats, Trajectory, evaluate};
 
-use crate::error::CliError;
+use crate::error::{CliError, EXIT_NOT_USABLE};
+use crate::streams::{out, out_text};
 
 /// File format of both trajectories.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -43,7 +44,9 @@ the ground-truth path length; KITTI devkit segment errors (100-800 m) when the p
 at least 100 m long.
 
 Exit status: 0 on success; 2 for bad options or input (unreadable or malformed file, \
-the ground truth has fewer poses than the estimate, too few poses).")]
+the ground truth has fewer poses than the estimate, too few poses); 3 when a metric is \
+not a finite number (for example from translations near 1e308: the result is printed \
+but not usable); 1 when standard output cannot be written (a closed pipe ends quietly).")]
 pub struct EvaluateArgs {
     /// Estimated trajectory.
     #[arg(value_name = "ESTIMATE")]
@@ -185,9 +188,63 @@ pub fn run(args: &EvaluateArgs) -> Result<(), CliError> {
     if args.json {
         let text = serde_json::to_string(&e)
             .map_err(|err| CliError::failure(format!("cannot encode JSON: {err}")))?;
-        println!("{text}");
+        out(&text)?;
     } else {
-        print!("{}", table(&e, args));
+        out_text(&table(&e, args))?;
+    }
+    if let Some(name) = first_non_finite(&e) {
+        return Err(CliError {
+            code: EXIT_NOT_USABLE,
+            message: format!(
+                "not usable: {name} is not a finite number (the poses are too large for \
+                 double precision?); the metrics above cannot be trusted"
+            ),
+        });
     }
     Ok(())
+}
+
+/// The name of the first metric of `e` that is not a finite number, if any.
+#[must_use]
+pub fn first_non_finite(e: &Evaluation) -> Option<&'static str> {
+    let stats = |s: &Stats| [s.rmse, s.mean, s.median, s.std, s.min, s.max];
+    let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+    let checks: [(&'static str, bool); 10] = [
+        ("the path length", e.path_length_m.is_finite()),
+        (
+            "eq. (20)",
+            e.eq20_rms.is_finite() && finite(&e.eq20_per_frame),
+        ),
+        (
+            "eq. (20) of absolute orientations",
+            e.eq20_absolute_rms.is_finite(),
+        ),
+        (
+            "ATE raw",
+            finite(&stats(&e.ate_raw)) && finite(&e.ate_raw_per_frame),
+        ),
+        (
+            "ATE aligned",
+            finite(&stats(&e.ate_aligned)) && finite(&e.ate_aligned_per_frame),
+        ),
+        (
+            "RPE translation",
+            finite(&stats(&e.rpe_translation)) && finite(&e.rpe_translation_per_frame),
+        ),
+        (
+            "RPE rotation",
+            finite(&stats(&e.rpe_rotation_deg)) && finite(&e.rpe_rotation_deg_per_frame),
+        ),
+        ("the final drift", e.final_drift_m.is_finite()),
+        (
+            "the final drift in percent",
+            e.final_drift_percent.is_none_or(f64::is_finite),
+        ),
+        (
+            "the KITTI segment errors",
+            e.kitti.translation_percent.is_none_or(f64::is_finite)
+                && e.kitti.rotation_deg_per_m.is_none_or(f64::is_finite),
+        ),
+    ];
+    checks.iter().find(|c| !c.1).map(|c| c.0)
 }

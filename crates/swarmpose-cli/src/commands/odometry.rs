@@ -28,7 +28,7 @@ use super::stereo_options::StereoOptions;
 use crate::error::{CliError, EXIT_NOT_USABLE};
 use crate::methods::{EstimatorOptions, Method, build};
 use crate::signals::StopRequest;
-use crate::streams::{err, out};
+use crate::streams::{err, out, warn};
 
 /// Smallest share of the frames after the first whose motion must be tracked for a run
 /// to be usable.
@@ -54,7 +54,12 @@ Exit status: 0 on success; 2 for bad options or an unreadable, malformed or too 
 sequence (a frame that cannot be read stops the run: the frames before it are kept and the \
 message names the frame); 1 when an output cannot be written; 3 when the run finished but \
 fewer than half of the motions were tracked (the result is not usable; the outputs are \
-still written).")]
+still written); 130/143 when stopped by SIGINT/SIGTERM between two frames (the frames done \
+and the summary are kept); 141 when standard output was closed by its reader. The last \
+line on standard output says how many frames were tracked, held at constant velocity or \
+lost. --out is created and checked writable before the first frame; files an earlier run \
+wrote there (listed in its .swarmpose-manifest) are removed; files written at the end \
+are written under a temporary name and renamed when complete.")]
 pub struct OdometryArgs {
     /// Sequence directory; without it, the built-in synthetic stereo sequence.
     #[arg(value_name = "SEQUENCE_DIR")]
@@ -176,6 +181,9 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
         }
         Some(dir) => {
             let seq = open(dir).map_err(|e| CliError::usage(e.to_string()))?;
+            for note in seq.notes() {
+                warn(note);
+            }
             let title = format!("{} ({})", dir.display(), seq.layout());
             let gt = seq.ground_truth().map(<[_]>::to_vec);
             Source::Stereo(seq, title, gt)
@@ -290,18 +298,24 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
     {
         out(&line)?;
     }
-    out(&format!("written: {}", dir.path().display()))?;
+    out(&format!(
+        "written: {} ({})",
+        dir.path().display(),
+        track.summary.text()
+    ))?;
     let share = track.summary.tracked_share();
     if share < MIN_TRACKED_SHARE {
         return Err(CliError {
             code: EXIT_NOT_USABLE,
             message: format!(
-                "not usable: {} motions of {} were tracked ({:.0} %, fewer than {:.0} %); \
-                 the outputs are written",
+                "not usable: {} motions of {} were tracked ({:.0} %, fewer than {:.0} %; {} at \
+                 constant velocity, {} lost); the outputs are written",
                 track.summary.tracked,
                 track.summary.motions(),
                 100.0 * share,
-                100.0 * MIN_TRACKED_SHARE
+                100.0 * MIN_TRACKED_SHARE,
+                track.summary.constant_velocity,
+                track.summary.lost
             ),
         });
     }

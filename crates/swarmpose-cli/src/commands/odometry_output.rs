@@ -12,9 +12,7 @@ use crate::error::CliError;
 /// Name of the manifest in an output folder.
 pub const MANIFEST: &str = ".swarmpose-manifest";
 
-fn write_error(path: &Path, e: &dyn std::fmt::Display) -> CliError {
-    CliError::failure(format!("{}: cannot write: {e}", path.display()))
-}
+use crate::output_file::write_error;
 
 /// An output folder being written by one run.
 #[derive(Debug)]
@@ -71,27 +69,18 @@ impl OutputDir {
     /// Exit status 1 naming the file.
     pub fn write(&self, name: &str, bytes: &[u8]) -> Result<(), CliError> {
         self.record(name)?;
-        let path = self.path.join(name);
-        let tmp = self.path.join(format!(".{name}.partial"));
-        let result = (|| -> std::io::Result<()> {
-            let mut f = File::create(&tmp)?;
-            f.write_all(bytes)?;
-            f.sync_all()?;
-            std::fs::rename(&tmp, &path)
-        })();
-        if let Err(e) = result {
-            let _ = std::fs::remove_file(&tmp);
-            return Err(write_error(&path, &e));
-        }
-        Ok(())
+        crate::output_file::write_bytes(&self.path.join(name), bytes)
     }
 }
 
-/// A file written line by line, each line flushed at once.
+/// A file written line by line, each line flushed at once; a line that cannot be written
+/// whole (a full disk) is cut off, so the file holds whole lines only.
 #[derive(Debug)]
 pub struct StreamFile {
     path: PathBuf,
     file: File,
+    /// Bytes of the whole lines written so far.
+    len: u64,
 }
 
 impl StreamFile {
@@ -103,7 +92,7 @@ impl StreamFile {
         dir.record(name)?;
         let path = dir.path.join(name);
         let file = File::create(&path).map_err(|e| write_error(&path, &e))?;
-        let mut s = Self { path, file };
+        let mut s = Self { path, file, len: 0 };
         if let Some(h) = header {
             s.line(h)?;
         }
@@ -118,9 +107,21 @@ impl StreamFile {
         let mut buf = String::with_capacity(text.len() + 1);
         buf.push_str(text);
         buf.push('\n');
-        self.file
+        match self
+            .file
             .write_all(buf.as_bytes())
             .and_then(|()| self.file.flush())
-            .map_err(|e| write_error(&self.path, &e))
+        {
+            Ok(()) => {
+                self.len += buf.len() as u64;
+                Ok(())
+            }
+            Err(e) => {
+                // A full disk may have taken part of the line: cut the file back to its
+                // whole lines.
+                let _ = self.file.set_len(self.len);
+                Err(write_error(&self.path, &e))
+            }
+        }
     }
 }

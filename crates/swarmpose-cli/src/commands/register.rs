@@ -1,7 +1,6 @@
 //! `swarmpose register`: estimate the rigid motion of one correspondence CSV and print
 //! it as one JSON object.
 
-use std::io::Write;
 use std::path::PathBuf;
 
 use clap::Args;
@@ -24,7 +23,8 @@ the 12 covariance columns and the method is pso: Mahalanobis inlier test and fit
 final_cost (m^2), \
 residual_rms_m, iterations, cost_evaluations, elapsed_ms, ambiguous (a second motion \
 with at least half the support was found: pso only) and runner_up (its rotation_wxyz, \
-translation, n_inliers; null when none).
+translation, n_inliers; null when none), points_checksum (of the input's coordinates, \
+checked by `correspondences --inliers`).
 
 Exit status: 0 on success; 1 when the estimator found no pose with enough support; \
 2 for bad options or bad input (unreadable file, malformed CSV, too few or degenerate \
@@ -74,6 +74,10 @@ struct Report<'a> {
     ambiguous: bool,
     /// That second motion, or null.
     runner_up: Option<RunnerUpReport>,
+    /// The checksum of the input's coordinates
+    /// ([`swarmpose_data::register_report::points_checksum`]): `correspondences
+    /// --inliers` checks it before drawing.
+    points_checksum: String,
     inliers: &'a [usize],
 }
 
@@ -125,6 +129,7 @@ impl<'a> Report<'a> {
                     n_inliers: r.inliers.len(),
                 }
             }),
+            points_checksum: swarmpose_data::register_report::points_checksum(data),
             inliers: &e.inliers,
         }
     }
@@ -163,12 +168,7 @@ pub fn run(args: &RegisterArgs) -> Result<(), CliError> {
         .estimate_seeded(&data, args.seed)
         .map_err(|e| estimation_error(&name, args.method, &e))?;
     let report = Report::new(estimator.name(), &name, args.seed, &data, &estimate);
-    let mut line = serde_json::to_string(&report)
+    let line = serde_json::to_string(&report)
         .map_err(|e| CliError::failure(format!("cannot encode the result as JSON: {e}")))?;
-    line.push('\n');
-    let mut stdout = std::io::stdout().lock();
-    stdout
-        .write_all(line.as_bytes())
-        .and_then(|()| stdout.flush())
-        .map_err(|e| CliError::failure(format!("cannot write to standard output: {e}")))
+    crate::streams::out(&line)
 }

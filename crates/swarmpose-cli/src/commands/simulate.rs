@@ -1,7 +1,6 @@
 //! `swarmpose simulate`: the paper's simulation (section 6, figures 6 and 7), the main
 //! job on a built-in default.
 
-use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use clap::{Args, ValueEnum};
@@ -123,9 +122,5 @@ pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
     for f in &outcome.files {
         text.push_str(&format!("wrote {}\n", f.display()));
     }
-    let mut stdout = std::io::stdout().lock();
-    stdout
-        .write_all(text.as_bytes())
-        .and_then(|()| stdout.flush())
-        .map_err(|e| CliError::failure(format!("cannot write to standard output: {e}")))
+    crate::streams::out_text(&text)
 }

@@ -9,6 +9,12 @@ use swarmpose_vision::frontend::{Detector, DisparityCorrection};
 
 use crate::error::CliError;
 
+/// Largest magnitude of a fixed disparity correction term, pixels: real corrections are
+/// fractions of a pixel to a few pixels; beyond this the points would be placed at depths
+/// that have nothing to do with the images (an offset of 1e9 px puts every point at the
+/// camera and every motion at the identity).
+pub const MAX_CORRECTION_PX: f64 = 100.0;
+
 fn parse_detector(s: &str) -> Result<Detector, String> {
     s.parse::<Detector>().map_err(|e| e.to_string())
 }
@@ -33,13 +39,13 @@ pub struct StereoOptions {
     pub detector: Detector,
 
     /// A fixed disparity correction instead of self-calibration: its constant term,
-    /// pixels (added to every measured disparity).
+    /// pixels (added to every measured disparity; at most 100 in magnitude).
     #[arg(long, value_name = "PX", allow_negative_numbers = true)]
     pub disparity_offset: Option<f64>,
 
     /// A fixed disparity correction: its term in x², pixels, with x = (u - d - cx) / f
     /// the right image column (a yaw of the right camera); with --disparity-offset
-    /// (default 0).
+    /// (default 0); at most 100 in magnitude.
     #[arg(long, value_name = "PX", allow_negative_numbers = true)]
     pub disparity_quadratic: Option<f64>,
 
@@ -80,6 +86,12 @@ impl StereoOptions {
             if v.is_some_and(|d| !d.is_finite()) {
                 return Err(CliError::usage(format!(
                     "{flag} must be a finite number of pixels"
+                )));
+            }
+            if let Some(d) = v.filter(|d| d.abs() > MAX_CORRECTION_PX) {
+                return Err(CliError::usage(format!(
+                    "{flag} {d:e} px is outside -{MAX_CORRECTION_PX}..{MAX_CORRECTION_PX} px: \
+                     a disparity correction is a few pixels at most"
                 )));
             }
         }

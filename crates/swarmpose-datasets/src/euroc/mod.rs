@@ -17,10 +17,11 @@ use swarmpose_vision::rectify::{
 };
 
 use crate::error::DatasetError;
-use crate::text::{numbers, parse_error, read_text};
-use crate::{RectifiedStereo, StereoPair, StereoSequence, check_counts, load_indexed_pair};
+use crate::frames::check_pairs;
+use crate::text::{check_baseline, numbers, parse_error, read_text};
+use crate::{RectifiedStereo, StereoPair, StereoSequence, load_indexed_pair};
 
-pub use yaml::{SensorYaml, read_sensor_yaml};
+pub use yaml::{SensorYaml, parse_sensor_yaml, read_sensor_yaml};
 
 /// The `mav0` directory of `dir` (`dir` itself when it is one).
 fn mav0(dir: &Path) -> PathBuf {
@@ -42,6 +43,21 @@ pub fn detect(dir: &Path) -> bool {
 fn read_image_list(cam_dir: &Path) -> Result<Vec<(i64, PathBuf)>, DatasetError> {
     let path = cam_dir.join("data.csv");
     let text = read_text(&path, "EuRoC image list data.csv")?;
+    parse_image_list(&text, &path, cam_dir)
+}
+
+/// The `(timestamp ns, image path)` rows of the text of a camera's `data.csv` at `path`
+/// (`timestamp [ns], filename` per line, `#` comments); the images are in
+/// `cam_dir/data/`.
+///
+/// # Errors
+/// [`DatasetError::Parse`] naming `path` and the line.
+pub fn parse_image_list(
+    text: &str,
+    path: &Path,
+    cam_dir: &Path,
+) -> Result<Vec<(i64, PathBuf)>, DatasetError> {
+    let path = path.to_owned();
     let mut out = Vec::new();
     for (k, line) in text.lines().enumerate() {
         let line = line.trim();
@@ -62,6 +78,18 @@ fn read_image_list(cam_dir: &Path) -> Result<Vec<(i64, PathBuf)>, DatasetError> 
 /// Body poses `(timestamp ns, world_from_body)` of a EuRoC ground-truth `data.csv`.
 fn read_groundtruth(path: &Path) -> Result<Vec<(i64, Isometry3<f64>)>, DatasetError> {
     let text = read_text(path, "EuRoC ground truth data.csv")?;
+    parse_groundtruth(&text, path)
+}
+
+/// Body poses `(timestamp ns, world_from_body)` of the text of a EuRoC ground-truth
+/// `data.csv` (`timestamp, p_x, p_y, p_z [m], q_w, q_x, q_y, q_z, ...` per line).
+///
+/// # Errors
+/// [`DatasetError::Parse`] naming `path` and the line.
+pub fn parse_groundtruth(
+    text: &str,
+    path: &Path,
+) -> Result<Vec<(i64, Isometry3<f64>)>, DatasetError> {
     let mut out = Vec::new();
     for (k, line) in text.lines().enumerate() {
         let line = line.trim();
@@ -95,6 +123,48 @@ fn read_groundtruth(path: &Path) -> Result<Vec<(i64, Isometry3<f64>)>, DatasetEr
     Ok(out)
 }
 
+/// Checks the timestamps of a camera list: strictly increasing, and no interval longer
+/// than 1.5 times the median (a frame missing from the list: the odometry numbers frames
+/// by their order, so a gap would shift every later frame in time).
+fn check_timestamps(rows: &[(i64, PathBuf)], list: &Path) -> Result<(), DatasetError> {
+    let frames_error = |k: usize, message: String| DatasetError::Frames {
+        path: list.to_owned(),
+        message: format!("row {} ({}): {message}", k + 1, rows[k].1.display()),
+    };
+    for (k, w) in rows.windows(2).enumerate() {
+        if w[1].0 <= w[0].0 {
+            return Err(frames_error(
+                k + 1,
+                format!(
+                    "timestamp {} does not follow {}: timestamps must increase",
+                    w[1].0, w[0].0
+                ),
+            ));
+        }
+    }
+    let mut steps: Vec<i64> = rows.windows(2).map(|w| w[1].0 - w[0].0).collect();
+    steps.sort_unstable();
+    let Some(&median) = steps.get(steps.len() / 2) else {
+        return Ok(());
+    };
+    if let Some(k) = rows
+        .windows(2)
+        .position(|w| (w[1].0 - w[0].0) as f64 > 1.5 * median as f64)
+    {
+        return Err(frames_error(
+            k + 1,
+            format!(
+                "{} ns after the previous frame, {:.1} times the usual {median} ns: a \
+                 frame is missing before it (frames are taken in order, so a gap would \
+                 shift every later frame in time)",
+                rows[k + 1].0 - rows[k].0,
+                (rows[k + 1].0 - rows[k].0) as f64 / median as f64
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// A EuRoC sequence, rectified on load.
 #[derive(Debug, Clone)]
 pub struct EurocSequence {
@@ -107,6 +177,7 @@ pub struct EurocSequence {
     left_map: RemapTable,
     right_map: RemapTable,
     poses: Option<Vec<Isometry3<f64>>>,
+    notes: Vec<String>,
 }
 
 /// Largest time gap between a frame and its ground-truth row, nanoseconds.
@@ -123,27 +194,16 @@ impl EurocSequence {
         let (c0, c1) = (m.join("cam0"), m.join("cam1"));
         let l = read_image_list(&c0)?;
         let r = read_image_list(&c1)?;
+        let (list0, list1) = (c0.join("data.csv"), c1.join("data.csv"));
+        check_pairs(dir, &l, &list0, &r, &list1)?;
+        check_timestamps(&l, &list0)?;
+        check_timestamps(&r, &list1)?;
         let left: Vec<PathBuf> = l.iter().map(|x| x.1.clone()).collect();
         let right: Vec<PathBuf> = r.iter().map(|x| x.1.clone()).collect();
-        check_counts(
-            dir,
-            &left,
-            &c0.join("data.csv"),
-            &right,
-            &c1.join("data.csv"),
-        )?;
-        if let Some(k) = l.iter().zip(&r).position(|(a, b)| a.0 != b.0) {
-            return Err(parse_error(
-                &c1.join("data.csv"),
-                0,
-                format!(
-                    "row {} has timestamp {} but cam0 has {}",
-                    k + 1,
-                    r[k].0,
-                    l[k].0
-                ),
-            ));
-        }
+        let notes = match left.first() {
+            Some(first) => crate::first_image(first)?.1,
+            None => Vec::new(),
+        };
         let s0 = read_sensor_yaml(&c0.join("sensor.yaml"))?;
         let s1 = read_sensor_yaml(&c1.join("sensor.yaml"))?;
         if (s0.camera.width, s0.camera.height) != (s1.camera.width, s1.camera.height) {
@@ -163,6 +223,12 @@ impl EurocSequence {
             &right_from_left.translation.vector,
         )
         .map_err(|e| parse_error(&c1.join("sensor.yaml"), 0, e.to_string()))?;
+        check_baseline(
+            &c1.join("sensor.yaml"),
+            0,
+            rectification.rig.baseline_m,
+            "T_BS of cam0 and cam1",
+        )?;
         let (w, h) = (rectification.width, rectification.height);
         let left_map = rectify_map(
             &s0.camera,
@@ -212,6 +278,7 @@ impl EurocSequence {
             left_map,
             right_map,
             poses,
+            notes,
         })
     }
 
@@ -270,6 +337,10 @@ impl StereoSequence for EurocSequence {
             left: remap(raw.left.view(), &self.left_map),
             right: remap(raw.right.view(), &self.right_map),
         })
+    }
+
+    fn notes(&self) -> &[String] {
+        &self.notes
     }
 
     fn ground_truth(&self) -> Option<&[Isometry3<f64>]> {

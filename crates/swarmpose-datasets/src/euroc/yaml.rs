@@ -7,7 +7,7 @@ use nalgebra::{Isometry3, Matrix3, Translation3};
 use swarmpose_vision::rectify::RadTanCamera;
 
 use crate::error::DatasetError;
-use crate::text::{numbers, parse_error, read_text};
+use crate::text::{KeyLines, numbers, parse_error, read_text, strip_bom};
 
 /// The numbers of the `[...]` array following `key:` (searched from byte `from`), with
 /// the 1-based line where the key is.
@@ -55,6 +55,28 @@ pub struct SensorYaml {
 /// [`DatasetError::Parse`] naming the file (and line) of a missing or malformed entry.
 pub fn read_sensor_yaml(path: &Path) -> Result<SensorYaml, DatasetError> {
     let text = read_text(path, "EuRoC camera sensor.yaml")?;
+    parse_sensor_yaml(&text, path)
+}
+
+/// [`read_sensor_yaml`] of text already read; messages name `path`.
+///
+/// # Errors
+/// As [`read_sensor_yaml`].
+pub fn parse_sensor_yaml(text: &str, path: &Path) -> Result<SensorYaml, DatasetError> {
+    let text = strip_bom(text);
+    // A key given twice would be read from its first place silently.
+    let mut keys = KeyLines::default();
+    for (k, line) in text.lines().enumerate() {
+        let key = line.split('#').next().unwrap_or("").trim_start();
+        if let Some((name, _)) = key.split_once(':')
+            && matches!(
+                name.trim(),
+                "intrinsics" | "distortion_coefficients" | "resolution" | "T_BS"
+            )
+        {
+            keys.first(name.trim(), k + 1, path)?;
+        }
+    }
     let check = |v: &[f64], n: usize, key: &str, line: usize| {
         if v.len() == n {
             Ok(())
@@ -66,16 +88,16 @@ pub fn read_sensor_yaml(path: &Path) -> Result<SensorYaml, DatasetError> {
             ))
         }
     };
-    let (k, lk) = array_after(&text, "intrinsics", 0, path)?;
+    let (k, lk) = array_after(text, "intrinsics", 0, path)?;
     check(&k, 4, "intrinsics", lk)?;
-    let (d, ld) = array_after(&text, "distortion_coefficients", 0, path)?;
+    let (d, ld) = array_after(text, "distortion_coefficients", 0, path)?;
     check(&d, 4, "distortion_coefficients", ld)?;
-    let (res, lr) = array_after(&text, "resolution", 0, path)?;
+    let (res, lr) = array_after(text, "resolution", 0, path)?;
     check(&res, 2, "resolution", lr)?;
     let tbs_at = text
         .find("T_BS:")
         .ok_or_else(|| parse_error(path, 0, "no 'T_BS' transform"))?;
-    let (t, lt) = array_after(&text, "data", tbs_at, path)?;
+    let (t, lt) = array_after(text, "data", tbs_at, path)?;
     check(&t, 16, "T_BS data", lt)?;
     if !(k[0] > 0.0 && k[1] > 0.0 && res[0] >= 1.0 && res[1] >= 1.0) {
         return Err(parse_error(
@@ -85,6 +107,24 @@ pub fn read_sensor_yaml(path: &Path) -> Result<SensorYaml, DatasetError> {
         ));
     }
     let r = Matrix3::new(t[0], t[1], t[2], t[4], t[5], t[6], t[8], t[9], t[10]);
+    let det = r.determinant();
+    let off = (r * r.transpose() - Matrix3::identity()).norm();
+    if det < 0.0 {
+        return Err(parse_error(
+            path,
+            lt,
+            format!("the T_BS rotation has determinant {det:.3} (a reflection): a rotation has +1"),
+        ));
+    }
+    if off.is_nan() || off > 1e-2 {
+        return Err(parse_error(
+            path,
+            lt,
+            format!(
+                "the T_BS 3x3 part is not a rotation (|R Rᵀ - I| = {off:.3e}, at most 1e-2 accepted)"
+            ),
+        ));
+    }
     let rot = crate::nearest_rotation(&r);
     Ok(SensorYaml {
         camera: RadTanCamera {

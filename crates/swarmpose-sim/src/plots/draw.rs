@@ -309,18 +309,13 @@ pub fn render_png(fig: &Figure, path: &Path, size: (u32, u32)) -> Result<(), Sim
         let root = BitMapBackend::with_buffer(&mut buf, size).into_drawing_area();
         draw(&root, fig)?;
     }
-    let file = std::fs::File::create(path).map_err(|e| SimError::io(path, e))?;
-    let encoder = PngEncoder::new_with_quality(
-        std::io::BufWriter::new(file),
-        CompressionType::Best,
-        FilterType::Adaptive,
-    );
+    let mut png = Vec::new();
+    let encoder =
+        PngEncoder::new_with_quality(&mut png, CompressionType::Best, FilterType::Adaptive);
     encoder
         .write_image(&buf, size.0, size.1, ExtendedColorType::Rgb8)
-        .map_err(|e| match e {
-            image::ImageError::IoError(io) => SimError::io(path, io),
-            other => plot_err(fig, other),
-        })
+        .map_err(|e| plot_err(fig, e))?;
+    crate::output::write_file(path, png)
 }
 
 /// Renders `fig` as an SVG file.

@@ -5,6 +5,10 @@ use std::path::{Path, PathBuf};
 
 use crate::features::GrayView;
 
+pub mod depth;
+
+pub use depth::{Depth, DepthSource};
+
 /// Why an image could not be loaded. Every variant names the file.
 #[derive(Debug, thiserror::Error)]
 pub enum ImageError {
@@ -67,18 +71,66 @@ impl GrayImage {
             path: path.to_owned(),
             source,
         })?;
-        let decoded = image::load_from_memory_with_format(&bytes, image::ImageFormat::Png)
-            .map_err(|e| ImageError::Decode {
-                path: path.to_owned(),
-                message: e.to_string(),
+        Self::decode_png(&bytes, path)
+    }
+
+    /// Decodes the bytes of a PNG (any colour type; converted to 8-bit luma); messages
+    /// name `path`.
+    ///
+    /// # Errors
+    /// [`ImageError::Decode`] naming `path`.
+    pub fn decode_png(bytes: &[u8], path: &Path) -> Result<Self, ImageError> {
+        Self::decode_png_with_depth(bytes, path).map(|(img, _)| img)
+    }
+
+    /// [`GrayImage::decode_png`], with the depth its data was read with: 16-bit images
+    /// are scaled to 8 bits by the depth their data uses ([`depth`]: the `sBIT` chunk
+    /// where present; 12 bits when every value fits and nothing says so; else 16), not
+    /// by 16 bits regardless (which turns 12-bit data near-black).
+    ///
+    /// # Errors
+    /// [`ImageError::Decode`] naming `path`.
+    pub fn decode_png_with_depth(bytes: &[u8], path: &Path) -> Result<(Self, Depth), ImageError> {
+        let decoded =
+            image::load_from_memory_with_format(bytes, image::ImageFormat::Png).map_err(|e| {
+                ImageError::Decode {
+                    path: path.to_owned(),
+                    message: e.to_string(),
+                }
             })?;
+        let (w, h) = (decoded.width() as usize, decoded.height() as usize);
+        let sixteen = matches!(
+            decoded.color(),
+            image::ColorType::L16
+                | image::ColorType::La16
+                | image::ColorType::Rgb16
+                | image::ColorType::Rgba16
+        );
+        if sixteen {
+            let luma = decoded.into_luma16().into_raw();
+            let d = depth::of_16bit(&luma, depth::sbit(bytes));
+            let data = depth::to_8bit(&luma, d.bits);
+            return Ok((
+                Self {
+                    width: w,
+                    height: h,
+                    data,
+                },
+                d,
+            ));
+        }
         let luma = decoded.into_luma8();
-        let (w, h) = (luma.width() as usize, luma.height() as usize);
-        Ok(Self {
-            width: w,
-            height: h,
-            data: luma.into_raw(),
-        })
+        Ok((
+            Self {
+                width: w,
+                height: h,
+                data: luma.into_raw(),
+            },
+            Depth {
+                bits: 8,
+                source: DepthSource::Eight,
+            },
+        ))
     }
 
     /// Saves as an 8-bit grayscale PNG.
