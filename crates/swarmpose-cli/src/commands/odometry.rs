@@ -12,7 +12,9 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use nalgebra::Isometry3;
 use swarmpose_datasets::{StereoSequence, open};
-use swarmpose_odometry::batch::{RunEnd, camera_of, run_rgbd_sequence, run_sequence};
+use swarmpose_odometry::batch::{
+    RunEnd, camera_of, run_rgbd_sequence, run_sequence, run_sequence_two_threads,
+};
 use swarmpose_odometry::frontend::RgbdNoise;
 use swarmpose_odometry::output::{
     COVARIANCE_HEADER, FRAMES_HEADER, Summary, calibration_json, covariance_row, frames_row,
@@ -92,6 +94,12 @@ pub struct OdometryArgs {
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
+
+    /// Threads: 1, or 2 to load and run the front end of the next frame while the back
+    /// end works on this one (the same trajectory; stereo sequences only).
+    #[arg(long, value_name = "N", default_value_t = 1,
+          value_parser = clap::value_parser!(u8).range(1..=2))]
+    pub threads: u8,
 
     #[command(flatten)]
     pub stereo: StereoOptions,
@@ -176,6 +184,11 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
             Source::Stereo(Box::new(seq), "built-in synthetic sequence".into(), gt)
         }
         Some(dir) if swarmpose_odometry::rgbd::detect(dir) => {
+            if args.threads != 1 {
+                return Err(CliError::usage(
+                    "--threads 2 is for stereo sequences; a TUM RGB-D directory runs on one thread",
+                ));
+            }
             let seq = RgbdSequence::open(dir).map_err(odometry_error)?;
             Source::Rgbd(seq, format!("{} (TUM RGB-D)", dir.display()))
         }
@@ -252,6 +265,12 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
         ControlFlow::Continue(())
     };
     let ended = match &source {
+        Source::Stereo(seq, ..) if args.threads == 2 => run_sequence_two_threads(
+            seq.as_ref(),
+            &mut odometry,
+            args.frame_period,
+            &mut on_frame,
+        ),
         Source::Stereo(seq, ..) => run_sequence(
             seq.as_ref(),
             &mut odometry,
