@@ -10,6 +10,7 @@ mod pso_robust;
 mod svd;
 #[cfg(test)]
 mod test_scenes;
+mod wls;
 
 use std::time::Duration;
 
@@ -28,6 +29,7 @@ pub use msac::{MsacConfig, MsacEstimator};
 pub use pso_paper::{PsoPaperConfig, PsoPaperEstimator};
 pub use pso_robust::{PsoEstimator, PsoEstimatorConfig, Threshold};
 pub use svd::SvdEstimator;
+pub use wls::WlsEstimator;
 
 /// Counters and timings of one estimation.
 #[derive(Debug, Clone, PartialEq, Default)]

@@ -1,0 +1,55 @@
+//! `pso` on the stereo-noise generator: success tables (ignored: run with
+//! `cargo test --release -p swarmpose-sim --test stereo_sweep -- --ignored --nocapture`).
+#![allow(clippy::unwrap_used)]
+
+use swarmpose_core::{Estimator, PsoEstimator, WlsEstimator};
+use swarmpose_sim::StereoSpec;
+
+/// (right, wrong plain successes, errors) over `runs` seeds.
+fn count(spec: &StereoSpec, runs: u64, covariances: bool) -> (usize, usize, usize, usize) {
+    let (mut ok, mut wrong, mut err, mut oracle) = (0, 0, 0, 0);
+    for seed in 0..runs {
+        let s = spec.scenario(1000 + seed).unwrap();
+        let data = if covariances {
+            s.data.clone()
+        } else {
+            s.plain().unwrap()
+        };
+        match PsoEstimator::default().estimate_seeded(&data, seed) {
+            Ok(e) if s.is_success(&e.transform) => ok += 1,
+            Ok(_) => wrong += 1,
+            Err(_) => err += 1,
+        }
+        let sel = s.data.select(&s.inlier_indices());
+        oracle += usize::from(
+            WlsEstimator
+                .estimate_seeded(&sel, 0)
+                .is_ok_and(|e| s.is_success(&e.transform)),
+        );
+    }
+    (ok, wrong, err, oracle)
+}
+
+#[test]
+#[ignore = "a sweep: minutes in the dev profile"]
+fn stereo_sweep() {
+    let runs: u64 = std::env::var("RUNS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(20);
+    for (name, spec) in [
+        ("street", StereoSpec::street()),
+        ("room", StereoSpec::room()),
+        ("tabletop", StereoSpec::tabletop()),
+        ("street mm", StereoSpec::street().with_unit(1000.0)),
+    ] {
+        for f in [0.9, 0.95, 0.97] {
+            let spec = spec.clone().with_outliers(f);
+            let (a, aw, ae, o) = count(&spec, runs, false);
+            let (b, bw, be, _) = count(&spec, runs, true);
+            println!(
+                "{name:10} {f:.2}: plain {a}/{runs} (wrong {aw}, err {ae}) | cov {b}/{runs} (wrong {bw}, err {be}) | oracle-weighted {o}/{runs}"
+            );
+        }
+    }
+}
