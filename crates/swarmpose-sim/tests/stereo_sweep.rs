@@ -53,3 +53,34 @@ fn stereo_sweep() {
         }
     }
 }
+
+#[test]
+#[ignore = "diagnostics"]
+fn stereo_debug() {
+    let f: f64 = std::env::var("FRAC")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(0.95);
+    let spec = StereoSpec::street().with_outliers(f);
+    for seed in 0..8u64 {
+        let s = spec.scenario(1000 + seed).unwrap();
+        let ninl = s.inlier.iter().filter(|&&b| b).count();
+        eprintln!(
+            "seed {seed}: truth {:?} {:?} true inliers {ninl}",
+            s.truth.rotation.scaled_axis(),
+            s.truth.translation.vector
+        );
+        let r = PsoEstimator::default().estimate_seeded(&s.data, seed);
+        match r {
+            Ok(e) => {
+                let good = e.inliers.iter().filter(|&&i| s.inlier[i]).count();
+                eprintln!(
+                    "  ok={} inliers {} (true {good})",
+                    s.is_success(&e.transform),
+                    e.inliers.len()
+                );
+            }
+            Err(e) => eprintln!("  err {e}"),
+        }
+    }
+}
