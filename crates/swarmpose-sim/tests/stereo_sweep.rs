@@ -70,14 +70,21 @@ fn stereo_debug() {
             s.truth.rotation.scaled_axis(),
             s.truth.translation.vector
         );
-        let r = PsoEstimator::default().estimate_seeded(&s.data, seed);
+        let r = PsoEstimator::default().estimate_seeded(&s.plain().unwrap(), seed);
         match r {
             Ok(e) => {
                 let good = e.inliers.iter().filter(|&&i| s.inlier[i]).count();
                 eprintln!(
-                    "  ok={} inliers {} (true {good})",
+                    "  ok={} inliers {} (true {good}) rot {:.2} tr {:.3} thr {:?}",
                     s.is_success(&e.transform),
-                    e.inliers.len()
+                    e.inliers.len(),
+                    swarmpose_core::geometry::rotation_angle_between(
+                        &e.transform.rotation,
+                        &s.truth.rotation
+                    )
+                    .to_degrees(),
+                    (e.transform.translation.vector - s.truth.translation.vector).norm(),
+                    e.diagnostics.threshold_m
                 );
             }
             Err(e) => eprintln!("  err {e}"),

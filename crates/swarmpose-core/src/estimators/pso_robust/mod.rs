@@ -479,13 +479,8 @@ impl Estimator for PsoEstimator {
         // Degeneracy is judged on the inliers the estimate rests on (a single point at
         // 1e10 m must not make a good set look collinear).
         data.require(MIN_CORRESPONDENCES)?;
-        let scene = scale::scene_scale(data.src());
-        if !(scene > 0.0 && scene.is_finite()) {
-            return Err(PoseError::Degenerate {
-                set: "source",
-                kind: crate::error::DegeneracyKind::Coincident,
-            });
-        }
+        let scene = scale::check_core(data.src(), "source")?;
+        scale::check_core(data.dst(), "destination")?;
         // With covariances, the search runs on the points' positions (as without a noise
         // model) and the Mahalanobis refinement of step 6 takes the covariances: an
         // isotropic bound as wide as a far point's depth noise would let wrong far

@@ -23,6 +23,41 @@ pub(super) fn scene_scale(points: &[Point3<f64>]) -> f64 {
     median(&mut column)
 }
 
+/// Points farther than this many scene scales from the centre are left out of the
+/// degeneracy test of [`check_core`].
+const CORE_RADIUS: f64 = 20.0;
+
+/// Fails when the core of the set (the points within [`CORE_RADIUS`] scene scales of
+/// its median) is coincident or collinear: a few wild points (a stereo point at
+/// near-zero disparity, 1e10 m away) neither make a good set degenerate nor hide a
+/// degenerate one. Returns the scene scale.
+pub(super) fn check_core(
+    points: &[Point3<f64>],
+    set: &'static str,
+) -> Result<f64, crate::error::PoseError> {
+    let scale = scene_scale(points);
+    let coincident = crate::error::PoseError::Degenerate {
+        set,
+        kind: crate::error::DegeneracyKind::Coincident,
+    };
+    if !(scale > 0.0 && scale.is_finite()) {
+        return Err(coincident);
+    }
+    let mut column: Vec<f64> = Vec::with_capacity(points.len());
+    let mut centre = [0.0; 3];
+    for (k, c) in centre.iter_mut().enumerate() {
+        column.clear();
+        column.extend(points.iter().map(|p| p[k]));
+        *c = median(&mut column);
+    }
+    let centre = Point3::from(centre);
+    let core = points
+        .iter()
+        .filter(|p| (*p - centre).norm() <= CORE_RADIUS * scale);
+    crate::geometry::check_spread(core, set)?;
+    Ok(scale)
+}
+
 /// The median of `v` (upper median for even lengths); 0 when empty. Reorders `v`.
 pub(super) fn median(v: &mut [f64]) -> f64 {
     if v.is_empty() {
