@@ -70,7 +70,21 @@ fn stereo_debug() {
             s.truth.rotation.scaled_axis(),
             s.truth.translation.vector
         );
-        let r = PsoEstimator::default().estimate_seeded(&s.plain().unwrap(), seed);
+        let n: usize = std::env::var("N")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(600);
+        let s = if n == 600 {
+            s
+        } else {
+            spec.clone().with_n(n).scenario(3000 + seed).unwrap()
+        };
+        let data = if std::env::var("COV").is_ok() {
+            s.data.clone()
+        } else {
+            s.plain().unwrap()
+        };
+        let r = PsoEstimator::default().estimate_seeded(&data, seed);
         match r {
             Ok(e) => {
                 let good = e.inliers.iter().filter(|&&i| s.inlier[i]).count();
@@ -88,6 +102,42 @@ fn stereo_debug() {
                 );
             }
             Err(e) => eprintln!("  err {e}"),
+        }
+    }
+}
+
+#[test]
+#[ignore = "a sweep: 20 000 rows"]
+fn large_sweep() {
+    let runs: u64 = std::env::var("RUNS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(20);
+    for f in [0.9, 0.98, 0.99] {
+        for covariances in [false, true] {
+            let spec = StereoSpec::street().with_n(20_000).with_outliers(f);
+            let (mut ok, mut wrong, mut err) = (0, 0, 0);
+            let mut ms = Vec::new();
+            for seed in 0..runs {
+                let s = spec.scenario(3000 + seed).unwrap();
+                let data = if covariances {
+                    s.data.clone()
+                } else {
+                    s.plain().unwrap()
+                };
+                let t0 = std::time::Instant::now();
+                match PsoEstimator::default().estimate_seeded(&data, seed) {
+                    Ok(e) if s.is_success(&e.transform) => ok += 1,
+                    Ok(_) => wrong += 1,
+                    Err(_) => err += 1,
+                }
+                ms.push(t0.elapsed().as_secs_f64() * 1e3);
+            }
+            ms.sort_by(f64::total_cmp);
+            println!(
+                "20000 rows {f:.2} cov={covariances}: {ok}/{runs} right, {wrong} wrong, {err} errors, median {:.1} ms",
+                ms[ms.len() / 2]
+            );
         }
     }
 }

@@ -7,11 +7,14 @@
 //! it holds for wrong matches that land on real scene structure, not only uniform ones.
 //! A search that tries many motions can find one agreeing with 3 matches by
 //! construction (a rigid triangle) plus chance agreements: the number of chance
-//! agreements is Poisson with mean `λ = n p`, and a search over `C(n, 3)` triangles can
-//! reach its upper tail. The consensus is accepted when `k - 3` agreements have Poisson
-//! tail probability below `α / C(n, 3)` (Bonferroni over the triangles, `α` =
-//! [`FALSE_ALARM`]): a consensus that chance could have produced is
-//! [`PoseError::InsufficientSupport`] with the support needed, never a plain success.
+//! agreements is Poisson with mean `λ = n p`, and a search over `H` triangles can reach
+//! its upper tail. `H` is the number of triangles whose three pairs keep their lengths
+//! (only those define a motion three matches agree with), counted in the consistency
+//! graph and scaled from its sample to all `n` rows, at most `C(n, 3)`. The consensus is
+//! accepted when `k - 3` agreements have Poisson tail probability below `α / H`
+//! (Bonferroni over the triangles, `α` = [`FALSE_ALARM`]): a consensus that chance could
+//! have produced is [`PoseError::InsufficientSupport`] with the support needed, never a
+//! plain success.
 
 use nalgebra::Isometry3;
 use rand::RngExt;
@@ -24,16 +27,17 @@ use crate::rng::SeededRng;
 pub(super) const FALSE_ALARM: f64 = 0.01;
 
 /// Source rows sampled to measure the chance agreement rate.
-const ROWS: usize = 256;
+const ROWS: usize = 128;
 /// Destination rows each sampled source row is tested against.
-const PARTNERS: usize = 256;
+const PARTNERS: usize = 128;
 
 /// The least support a consensus among `n` correspondences needs when a wrong match
-/// passes its test with probability `p`.
-pub(super) fn needed_support(n: usize, p: f64) -> usize {
+/// passes its test with probability `p` and the search could start from `triangles`
+/// rigid triples (at most `C(n, 3)` count).
+pub(super) fn needed_support(n: usize, p: f64, triangles: f64) -> usize {
     let lambda = n as f64 * p.clamp(0.0, 1.0);
-    let triangles = ln_choose(n as f64, 3.0);
-    let limit = FALSE_ALARM.ln() - triangles;
+    let ln_h = triangles.max(1.0).ln().min(ln_choose(n as f64, 3.0));
+    let limit = FALSE_ALARM.ln() - ln_h;
     // ln P(X >= j) for X ~ Poisson(λ), j = 0, 1, ...: sum the terms from j upwards
     // (they fall fast beyond λ), in log space.
     let mut j = 0usize;
@@ -110,12 +114,13 @@ pub(super) fn check_chance(
     data: &Correspondences,
     pose: &Isometry3<f64>,
     support: usize,
+    triangles: f64,
     rng: &mut SeededRng,
     passes: impl Fn(&Isometry3<f64>, usize, usize) -> bool,
 ) -> Result<(), PoseError> {
     let n = data.len();
     let p = chance_rate(n, rng, |i, j| passes(pose, i, j));
-    let needed = needed_support(n, p);
+    let needed = needed_support(n, p, triangles);
     if support < needed {
         return Err(PoseError::InsufficientSupport { support, needed });
     }
@@ -129,15 +134,18 @@ mod tests {
     #[test]
     fn more_chance_needs_more_support() {
         // 600 rows: no chance agreement still needs a few beyond the triangle.
-        let low = needed_support(600, 1e-6);
-        let mid = needed_support(600, 1e-3);
-        let high = needed_support(600, 1e-2);
+        let all = 600.0 * 599.0 * 598.0 / 6.0;
+        let low = needed_support(600, 1e-6, all);
+        let mid = needed_support(600, 1e-3, all);
+        let high = needed_support(600, 1e-2, all);
         assert!(low >= 4 && low < mid && mid < high, "{low} {mid} {high}");
         // λ = 6 expected chance agreements: the winner needs far more than 6.
         assert!(high > 15, "{high}");
         // 20 000 rows at λ = 20: a few inliers are not enough, 200 are.
-        let big = needed_support(20_000, 1e-3);
+        let big = needed_support(20_000, 1e-3, 1e12);
         assert!(big > 30 && big < 200, "{big}");
+        // Fewer rigid triples to start from: less to fear from chance.
+        assert!(needed_support(600, 1e-3, 1e4) < mid);
     }
 
     #[test]

@@ -102,6 +102,11 @@ const AUTO_STEP: f64 = 2.0;
 /// Most re-estimates of the automatic δ.
 const AUTO_ROUNDS: usize = 8;
 
+/// The automatic δ does not grow to where wrong matches would agree by chance with more
+/// than this share of the consensus (at the current pose, measured as in [`check`]):
+/// without it a weak consensus could widen its band until it swallows the scene.
+const CHANCE_SHARE: f64 = 0.25;
+
 /// A runner-up is a distinct motion when, at its own inliers, it moves the points by
 /// more than this many tolerances δ_i from where the winner puts them (median).
 const DISTINCT_MOTION: f64 = 2.0;
@@ -215,7 +220,14 @@ impl PsoEstimator {
     /// median inlier residual, corrected for the band's truncation and for the 6 degrees
     /// of freedom the fit takes, then `δ = sigma_multiplier · σ̂`, at most doubling per
     /// round and within `[auto_min_fraction, auto_max_fraction]` of the scene scale.
-    fn auto_refit(&self, data: &Correspondences, found: &mut Found, first: f64, scene: f64) -> f64 {
+    fn auto_refit(
+        &self,
+        data: &Correspondences,
+        found: &mut Found,
+        first: f64,
+        scene: f64,
+        rng: &mut SeededRng,
+    ) -> f64 {
         let cfg = &self.config;
         let (lo, hi) = (cfg.auto_min_fraction * scene, cfg.auto_max_fraction * scene);
         let mut delta = first;
@@ -235,6 +247,15 @@ impl PsoEstimator {
                 .map_or(AUTO_STEP * delta, |s| cfg.sigma_multiplier * s)
                 .min(AUTO_STEP * delta)
                 .clamp(lo, hi);
+            if next > delta {
+                let (src, dst, pose) = (data.src(), data.dst(), found.pose);
+                let p = check::chance_rate(data.len(), rng, |i, j| {
+                    (dst[j] - pose * src[i]).norm() < next
+                });
+                if data.len() as f64 * p > CHANCE_SHARE * found.inliers.len() as f64 {
+                    break;
+                }
+            }
             let mut inliers = Vec::with_capacity(data.len());
             match refine_within(
                 data,
@@ -283,12 +304,12 @@ impl PsoEstimator {
                 attempt = self.find(data, Tolerance::Uniform(d), max_points, rng);
             }
             let (mut found, graph) = attempt?;
-            let delta = self.auto_refit(data, &mut found, d, scene);
-            self.checked(data, &mut found, Tolerance::Uniform(delta), rng)?;
+            let delta = self.auto_refit(data, &mut found, d, scene, rng);
+            self.checked(data, &mut found, &graph, Tolerance::Uniform(delta), rng)?;
             return Ok((found, graph, Some(delta)));
         }
         let (mut found, graph) = attempt?;
-        self.checked(data, &mut found, first, rng)?;
+        self.checked(data, &mut found, &graph, first, rng)?;
         Ok((found, graph, None))
     }
 
@@ -299,11 +320,13 @@ impl PsoEstimator {
         &self,
         data: &Correspondences,
         found: &mut Found,
+        graph: &PairGraph,
         tol: Tolerance<'_>,
         rng: &mut SeededRng,
     ) -> Result<(), PoseError> {
+        let triangles = triangles(data.len(), graph);
         let Some((src_cov, dst_cov)) = data.noise_covariance() else {
-            return self.check(data, found, tol, rng);
+            return self.check(data, found, tol, triangles, rng);
         };
         let gate = self.config.sigma_multiplier.powi(2);
         if let Ok((pose, inliers)) =
@@ -313,12 +336,19 @@ impl PsoEstimator {
             found.inliers = inliers;
         }
         let (src, dst) = (data.src(), data.dst());
-        check::check_chance(data, &found.pose, found.inliers.len(), rng, |pose, i, j| {
-            let r = pose.rotation.to_rotation_matrix();
-            let cov = r.matrix() * src_cov[i] * r.matrix().transpose() + dst_cov[j];
-            let e = dst[j] - pose * src[i];
-            cov.try_inverse().is_some_and(|w| e.dot(&(w * e)) < gate)
-        })
+        check::check_chance(
+            data,
+            &found.pose,
+            found.inliers.len(),
+            triangles,
+            rng,
+            |pose, i, j| {
+                let r = pose.rotation.to_rotation_matrix();
+                let cov = r.matrix() * src_cov[i] * r.matrix().transpose() + dst_cov[j];
+                let e = dst[j] - pose * src[i];
+                cov.try_inverse().is_some_and(|w| e.dot(&(w * e)) < gate)
+            },
+        )
     }
 
     /// The self-check of [`check`] on the isotropic test at `tol`.
@@ -327,12 +357,18 @@ impl PsoEstimator {
         data: &Correspondences,
         found: &Found,
         tol: Tolerance<'_>,
+        triangles: f64,
         rng: &mut SeededRng,
     ) -> Result<(), PoseError> {
         let (src, dst) = (data.src(), data.dst());
-        check::check_chance(data, &found.pose, found.inliers.len(), rng, |pose, i, j| {
-            (dst[j] - pose * src[i]).norm_squared() < tol.at(i).powi(2)
-        })
+        check::check_chance(
+            data,
+            &found.pose,
+            found.inliers.len(),
+            triangles,
+            rng,
+            |pose, i, j| (dst[j] - pose * src[i]).norm_squared() < tol.at(i).powi(2),
+        )
     }
 
     /// When the runner-up holds more inliers than the winner (the swarm settled on a
@@ -427,12 +463,13 @@ impl PsoEstimator {
         let sub = data.select(&rest);
         let sub_tol: Vec<f64> = rest.iter().map(|&i| tol.at(i)).collect();
         let sub_tol = Tolerance::PerPoint(&sub_tol);
-        let (found, _) = self.find(&sub, sub_tol, cfg.max_points, rng).ok()?;
+        let (found, sub_graph) = self.find(&sub, sub_tol, cfg.max_points, rng).ok()?;
         if found.inliers.len() < needed {
             return None;
         }
         // A second motion, not chance agreement among the left-overs ...
-        self.check(&sub, &found, sub_tol, rng).ok()?;
+        let sub_triangles = triangles(sub.len(), &sub_graph);
+        self.check(&sub, &found, sub_tol, sub_triangles, rng).ok()?;
         // ... nor the winner's motion again on points it left out (far, noisy inliers):
         // at the runner-up's inliers the two motions must differ by several tolerances.
         let mut moved: Vec<f64> = found
@@ -456,6 +493,12 @@ fn no_support() -> PoseError {
         support: 0,
         needed: MIN_CORRESPONDENCES,
     }
+}
+
+/// The rigid triples among `n` rows, estimated from those of `graph`'s sample.
+fn triangles(n: usize, graph: &PairGraph) -> f64 {
+    let m = graph.points().max(1) as f64;
+    graph.triangles() as f64 * (n as f64 / m).powi(3)
 }
 
 /// Fraction of the points that the graph holds.
