@@ -141,3 +141,39 @@ fn large_sweep() {
         }
     }
 }
+
+#[test]
+#[ignore = "a sweep: isotropic noise of 0.3 and 1 m"]
+fn noisy_sweep() {
+    use swarmpose_core::SvdEstimator;
+    use swarmpose_core::geometry::rotation_angle_between;
+    use swarmpose_sim::{OutlierMode, SceneSpec};
+    let runs: u64 = std::env::var("RUNS").ok().and_then(|v| v.parse().ok()).unwrap_or(20);
+    for noise in [0.02, 0.3, 1.0] {
+        let (mut ok, mut wrong, mut err, mut ceiling, mut gross) = (0, 0, 0, 0, 0);
+        for seed in 0..runs {
+            let s = SceneSpec::default().scenario(seed, noise, 0.8, OutlierMode::Random).unwrap();
+            let good = |p: &nalgebra::Isometry3<f64>| {
+                rotation_angle_between(&p.rotation, &s.truth.rotation).to_degrees() < 2.0
+                    && (p.translation.vector - s.truth.translation.vector).norm() < 0.2
+            };
+            match PsoEstimator::default().estimate_seeded(&s.data, seed) {
+                Ok(e) if good(&e.transform) => ok += 1,
+                Ok(e) => {
+                    let r = rotation_angle_between(&e.transform.rotation, &s.truth.rotation);
+                    let t = (e.transform.translation.vector - s.truth.translation.vector).norm();
+                    wrong += 1;
+                    gross += usize::from(r.to_degrees() > 5.0 || t > 1.0);
+                }
+                Err(_) => err += 1,
+            }
+            let idx: Vec<usize> = (0..s.inlier.len()).filter(|&i| s.inlier[i]).collect();
+            ceiling += usize::from(
+                SvdEstimator
+                    .estimate_seeded(&s.data.select(&idx), 0)
+                    .is_ok_and(|e| good(&e.transform)),
+            );
+        }
+        println!("noise {noise} m, 80 %: {ok}/{runs} right, {wrong} wrong ({gross} by > 5 deg or > 1 m), {err} errors; ceiling {ceiling}/{runs}");
+    }
+}
