@@ -44,7 +44,7 @@ pub mod synthetic;
 pub use arun::{arun, arun_weighted};
 pub use error::{DegeneracyKind, PoseError};
 pub use estimators::{
-    CHI2_3_99, Diagnostics, Estimate, Estimator, MsacConfig, MsacEstimator, PsoEstimator,
+    CHI2_3_99, Diagnostics, Estimate, Estimator, Method, MsacConfig, MsacEstimator, PsoEstimator,
     PsoEstimatorConfig, PsoPaperConfig, PsoPaperEstimator, RunnerUp, SvdEstimator, Threshold,
     WlsEstimator, refine_mahalanobis,
 };

@@ -148,11 +148,16 @@ fn noisy_sweep() {
     use swarmpose_core::SvdEstimator;
     use swarmpose_core::geometry::rotation_angle_between;
     use swarmpose_sim::{OutlierMode, SceneSpec};
-    let runs: u64 = std::env::var("RUNS").ok().and_then(|v| v.parse().ok()).unwrap_or(20);
+    let runs: u64 = std::env::var("RUNS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(20);
     for noise in [0.02, 0.3, 1.0] {
         let (mut ok, mut wrong, mut err, mut ceiling, mut gross) = (0, 0, 0, 0, 0);
         for seed in 0..runs {
-            let s = SceneSpec::default().scenario(seed, noise, 0.8, OutlierMode::Random).unwrap();
+            let s = SceneSpec::default()
+                .scenario(seed, noise, 0.8, OutlierMode::Random)
+                .unwrap();
             let good = |p: &nalgebra::Isometry3<f64>| {
                 rotation_angle_between(&p.rotation, &s.truth.rotation).to_degrees() < 2.0
                     && (p.translation.vector - s.truth.translation.vector).norm() < 0.2
@@ -174,6 +179,8 @@ fn noisy_sweep() {
                     .is_ok_and(|e| good(&e.transform)),
             );
         }
-        println!("noise {noise} m, 80 %: {ok}/{runs} right, {wrong} wrong ({gross} by > 5 deg or > 1 m), {err} errors; ceiling {ceiling}/{runs}");
+        println!(
+            "noise {noise} m, 80 %: {ok}/{runs} right, {wrong} wrong ({gross} by > 5 deg or > 1 m), {err} errors; ceiling {ceiling}/{runs}"
+        );
     }
 }

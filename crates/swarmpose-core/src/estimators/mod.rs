@@ -7,6 +7,7 @@ mod mixture;
 mod msac;
 mod pso_paper;
 mod pso_robust;
+pub mod registry;
 mod svd;
 #[cfg(test)]
 mod test_scenes;
@@ -28,6 +29,7 @@ pub use mahalanobis::{CHI2_3_99, refine_mahalanobis};
 pub use msac::{MsacConfig, MsacEstimator};
 pub use pso_paper::{PsoPaperConfig, PsoPaperEstimator};
 pub use pso_robust::{PsoEstimator, PsoEstimatorConfig, Threshold};
+pub use registry::Method;
 pub use svd::SvdEstimator;
 pub use wls::WlsEstimator;
 
