@@ -184,3 +184,30 @@ fn noisy_sweep() {
         );
     }
 }
+
+#[test]
+#[ignore = "writes timing inputs to $STEREO_OUT"]
+fn write_timing_inputs() {
+    let Ok(dir) = std::env::var("STEREO_OUT") else {
+        return;
+    };
+    let dir = std::path::PathBuf::from(dir);
+    for (n, f) in [(600, 0.9), (600, 0.97), (20_000, 0.9)] {
+        let s = StereoSpec::street()
+            .with_n(n)
+            .with_outliers(f)
+            .scenario(42)
+            .unwrap();
+        let name = format!("n{n}_o{f:.2}");
+        swarmpose_data::correspondence_csv::write_path(
+            dir.join(format!("{name}_cov.csv")),
+            &s.data,
+        )
+        .unwrap();
+        swarmpose_data::correspondence_csv::write_path(
+            dir.join(format!("{name}_plain.csv")),
+            &s.plain().unwrap(),
+        )
+        .unwrap();
+    }
+}

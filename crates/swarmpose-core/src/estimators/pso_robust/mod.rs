@@ -463,7 +463,13 @@ impl PsoEstimator {
         let sub = data.select(&rest);
         let sub_tol: Vec<f64> = rest.iter().map(|&i| tol.at(i)).collect();
         let sub_tol = Tolerance::PerPoint(&sub_tol);
-        let (found, sub_graph) = self.find(&sub, sub_tol, cfg.max_points, rng).ok()?;
+        // One swarm search: a second motion with comparable support is found without
+        // the restarts that a small consensus needs.
+        let quick = PsoEstimator::new(PsoEstimatorConfig {
+            restarts: 0,
+            ..cfg.clone()
+        });
+        let (found, sub_graph) = quick.find(&sub, sub_tol, cfg.max_points, rng).ok()?;
         if found.inliers.len() < needed {
             return None;
         }
@@ -563,23 +569,7 @@ impl Estimator for PsoEstimator {
         if let Some(r) = runner_up.take() {
             runner_up = self.larger_consensus_wins(data, &mut found, r, tol);
         }
-        if std::env::var("SWDBG").is_ok() {
-            eprintln!(
-                "DBG before polish {:?} {:?} n_in {}",
-                found.pose.rotation.scaled_axis(),
-                found.pose.translation.vector,
-                found.inliers.len()
-            );
-        }
         self.polish(data, &mut found, tol);
-        if std::env::var("SWDBG").is_ok() {
-            eprintln!(
-                "DBG after polish {:?} {:?} n_in {}",
-                found.pose.rotation.scaled_axis(),
-                found.pose.translation.vector,
-                found.inliers.len()
-            );
-        }
         Ok(Estimate {
             diagnostics: Diagnostics {
                 iterations: found.iterations,
