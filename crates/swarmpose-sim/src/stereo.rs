@@ -313,7 +313,6 @@ pub struct StereoScenario {
 
 impl StereoScenario {
     /// The same points without the noise model (plain coordinates).
-    #[must_use]
     ///
     /// # Errors
     /// None in practice: the points were valid with the noise model.

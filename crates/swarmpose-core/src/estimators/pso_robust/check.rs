@@ -19,7 +19,11 @@
 use nalgebra::Isometry3;
 use rand::RngExt;
 
+use super::graph::PairGraph;
+use super::{Found, PsoEstimator};
 use crate::error::PoseError;
+use crate::estimators::consensus::Tolerance;
+use crate::estimators::mahalanobis::refine_mahalanobis;
 use crate::geometry::{Correspondences, MIN_CORRESPONDENCES};
 use crate::rng::SeededRng;
 
@@ -125,6 +129,72 @@ pub(super) fn check_chance(
         return Err(PoseError::InsufficientSupport { support, needed });
     }
     Ok(())
+}
+
+impl PsoEstimator {
+    /// The self-check on `found`; with covariances, after the Mahalanobis refinement
+    /// (step 6, which then counts far points by their precise lateral position) and on
+    /// its test.
+    pub(super) fn checked(
+        &self,
+        data: &Correspondences,
+        found: &mut Found,
+        graph: &PairGraph,
+        tol: Tolerance<'_>,
+        rng: &mut SeededRng,
+    ) -> Result<(), PoseError> {
+        let triangles = triangles(data.len(), graph);
+        let Some((src_cov, dst_cov)) = data.noise_covariance() else {
+            return self.check(data, found, tol, triangles, rng);
+        };
+        let gate = self.config.sigma_multiplier.powi(2);
+        if let Ok((pose, inliers)) =
+            refine_mahalanobis(data, &found.pose, gate, self.config.refine_rounds.max(3))
+        {
+            found.pose = pose;
+            found.inliers = inliers;
+        }
+        let (src, dst) = (data.src(), data.dst());
+        check_chance(
+            data,
+            &found.pose,
+            found.inliers.len(),
+            triangles,
+            rng,
+            |pose, i, j| {
+                let r = pose.rotation.to_rotation_matrix();
+                let cov = r.matrix() * src_cov[i] * r.matrix().transpose() + dst_cov[j];
+                let e = dst[j] - pose * src[i];
+                cov.try_inverse().is_some_and(|w| e.dot(&(w * e)) < gate)
+            },
+        )
+    }
+
+    /// The self-check of [`check`] on the isotropic test at `tol`.
+    pub(super) fn check(
+        &self,
+        data: &Correspondences,
+        found: &Found,
+        tol: Tolerance<'_>,
+        triangles: f64,
+        rng: &mut SeededRng,
+    ) -> Result<(), PoseError> {
+        let (src, dst) = (data.src(), data.dst());
+        check_chance(
+            data,
+            &found.pose,
+            found.inliers.len(),
+            triangles,
+            rng,
+            |pose, i, j| (dst[j] - pose * src[i]).norm_squared() < tol.at(i).powi(2),
+        )
+    }
+}
+
+/// The rigid triples among `n` rows, estimated from those of `graph`'s sample.
+pub(super) fn triangles(n: usize, graph: &PairGraph) -> f64 {
+    let m = graph.points().max(1) as f64;
+    graph.triangles() as f64 * (n as f64 / m).powi(3)
 }
 
 #[cfg(test)]

@@ -10,7 +10,8 @@
 //!
 //! For two correct matches `|e_k(R_true)| < δ_i + δ_j` whatever `t` is. The steps:
 //!
-//! 1. **Consistency graph.** On at most `max_points` hypothesis points, keep the pairs whose
+//! 1. **Consistency graph.** On at most `max_points` hypothesis points (a random sample of
+//!    larger sets), keep the pairs whose
 //!    lengths agree, `| |b_k| - |a_k| | < δ_i + δ_j` (a rigid motion keeps lengths; a wrong
 //!    match rarely does) and whose source length is at least `min(5δ, extent/10)`. Rank the
 //!    pairs by their number of common neighbours (correct matches form a dense cluster) and
@@ -28,25 +29,46 @@
 //! 4. **SVD refinement.** Inliers are the points with `|d_i - (R s_i + t)| < δ_i`; Arun's
 //!    SVD refits them until the set is stable. Fewer than 4 is
 //!    [`PoseError::InsufficientSupport`].
-//! 5. **Ambiguity.** If the points left over could hold a second motion with at least
-//!    `ambiguity_ratio` of the winner's support (a moving object), steps 1-4 run on them and
-//!    the runner-up is reported ([`Diagnostics::runner_up`]). A runner-up with more
-//!    inliers than the winner (the swarm settled on the smaller motion) becomes the
-//!    winner.
-//! 6. **Final refinement.** Without covariances, the final pose maximises the likelihood
+//! 5. **Self-check** ([`check`]). The consensus must be more than what wrong matches agree
+//!    on by chance at this threshold: with `p` the rate at which a row's source passes the
+//!    test against another row's destination (measured on the data at the pose found) and
+//!    `H` the rigid triangles of the graph, `k` inliers pass when `k - 3` Poisson(`n p`)
+//!    chance agreements have tail probability below `0.01 / H`. Otherwise, while the
+//!    graph held a sample, the sample doubles (up to `max_sample_growth` times
+//!    `max_points`) and steps 1-5 run again; then the answer is
+//!    [`PoseError::InsufficientSupport`] with the support needed, never a plain success.
+//! 6. **Ambiguity.** If the points left over could hold a second motion with at least
+//!    `ambiguity_ratio` of the winner's support (a moving object), steps 1-4 run on them
+//!    (one swarm). The runner-up is reported ([`Diagnostics::runner_up`]) only when it
+//!    passes the self-check and is a distinct motion: at its own inliers it moves the
+//!    points by a median of more than 2 tolerances from where the winner puts them (far,
+//!    noisy inliers the winner's band left out are the winner's motion again). A
+//!    runner-up with more inliers than the winner becomes the winner.
+//! 7. **Final refinement.** Without covariances, the final pose maximises the likelihood
 //!    of a Gaussian (inliers) plus uniform (wrong matches) model of the residuals, by a
 //!    few EM rounds of weighted SVD ([`super::mixture`]): inliers in the noise's tail
 //!    count, wrong matches do not; the reported inliers are those within δ_i of that pose.
 //!    With per-point covariances ([`Correspondences::with_noise_covariance`], anisotropic
 //!    noise such as stereo's), a Gauss-Newton fit of the Mahalanobis residuals, gated at
-//!    `sigma_multiplier²` in χ²(3) units ([`super::mahalanobis`]).
+//!    `sigma_multiplier²` in χ²(3) units ([`super::mahalanobis`]); with covariances this
+//!    fit comes before the self-check, which then uses the Mahalanobis test.
 //!
 //! The tolerance δ_i is `sigma_multiplier · σ_i` when the correspondences carry a noise
-//! level per point ([`Correspondences::with_noise_sigma`]), else the fixed threshold, else
-//! (the default, [`Threshold::Auto`]) it is estimated: a first pass at
-//! `auto_initial_threshold_m` (halved up to three times while it finds no support), then
-//! `δ = sigma_multiplier · σ̂` with σ̂ from the median inlier residual (corrected for the
-//! 6 degrees of freedom the fit takes), refitted; δ may grow to twice the first pass.
+//! level per point without covariances ([`Correspondences::with_noise_sigma`]), else the
+//! fixed threshold, else (the default, [`Threshold::Auto`], also with covariances: the
+//! search runs on the positions, as an isotropic bound as wide as a far stereo point's
+//! depth noise would let wrong far matches outvote the consensus) it is estimated from
+//! the data, in its own unit: a first pass at `auto_initial_fraction` of the scene scale
+//! (the median distance of the source points from their coordinate-wise median; halved
+//! up to three times while it finds no support), then `δ = sigma_multiplier · σ̂` with σ̂
+//! from the median inlier residual, corrected for the band's truncation and for the 6
+//! degrees of freedom the fit takes, refitted, at most doubling per round, never where
+//! chance agreements would exceed a quarter of the consensus. Scaling every coordinate
+//! by `k` scales δ by `k` and leaves the inliers unchanged.
+//!
+//! Degeneracy (coincident or collinear points) is judged on the core of each set (points
+//! within 20 scene scales of its median) and on the inliers, so a single wild point (a
+//! stereo point at near-zero disparity) neither spoils nor hides it.
 
 mod check;
 mod config;
@@ -66,7 +88,7 @@ use super::consensus::{
     Tolerance, check_support, check_threshold, collect_inliers_within, refine_within, residual_rms,
     truncated_cost_within,
 };
-use super::mahalanobis::refine_mahalanobis;
+
 use super::mixture::{Mixture, refine_mixture};
 use super::{Diagnostics, Estimate, Estimator, RunnerUp};
 use crate::error::PoseError;
@@ -313,64 +335,6 @@ impl PsoEstimator {
         Ok((found, graph, None))
     }
 
-    /// The self-check on `found`; with covariances, after the Mahalanobis refinement
-    /// (step 6, which then counts far points by their precise lateral position) and on
-    /// its test.
-    fn checked(
-        &self,
-        data: &Correspondences,
-        found: &mut Found,
-        graph: &PairGraph,
-        tol: Tolerance<'_>,
-        rng: &mut SeededRng,
-    ) -> Result<(), PoseError> {
-        let triangles = triangles(data.len(), graph);
-        let Some((src_cov, dst_cov)) = data.noise_covariance() else {
-            return self.check(data, found, tol, triangles, rng);
-        };
-        let gate = self.config.sigma_multiplier.powi(2);
-        if let Ok((pose, inliers)) =
-            refine_mahalanobis(data, &found.pose, gate, self.config.refine_rounds.max(3))
-        {
-            found.pose = pose;
-            found.inliers = inliers;
-        }
-        let (src, dst) = (data.src(), data.dst());
-        check::check_chance(
-            data,
-            &found.pose,
-            found.inliers.len(),
-            triangles,
-            rng,
-            |pose, i, j| {
-                let r = pose.rotation.to_rotation_matrix();
-                let cov = r.matrix() * src_cov[i] * r.matrix().transpose() + dst_cov[j];
-                let e = dst[j] - pose * src[i];
-                cov.try_inverse().is_some_and(|w| e.dot(&(w * e)) < gate)
-            },
-        )
-    }
-
-    /// The self-check of [`check`] on the isotropic test at `tol`.
-    fn check(
-        &self,
-        data: &Correspondences,
-        found: &Found,
-        tol: Tolerance<'_>,
-        triangles: f64,
-        rng: &mut SeededRng,
-    ) -> Result<(), PoseError> {
-        let (src, dst) = (data.src(), data.dst());
-        check::check_chance(
-            data,
-            &found.pose,
-            found.inliers.len(),
-            triangles,
-            rng,
-            |pose, i, j| (dst[j] - pose * src[i]).norm_squared() < tol.at(i).powi(2),
-        )
-    }
-
     /// When the runner-up holds more inliers than the winner (the swarm settled on a
     /// smaller motion, such as a moving object), it becomes the winner, refitted on all
     /// the data; the old winner is then the runner-up if its support still reaches
@@ -474,7 +438,7 @@ impl PsoEstimator {
             return None;
         }
         // A second motion, not chance agreement among the left-overs ...
-        let sub_triangles = triangles(sub.len(), &sub_graph);
+        let sub_triangles = check::triangles(sub.len(), &sub_graph);
         self.check(&sub, &found, sub_tol, sub_triangles, rng).ok()?;
         // ... nor the winner's motion again on points it left out (far, noisy inliers):
         // at the runner-up's inliers the two motions must differ by several tolerances.
@@ -499,12 +463,6 @@ fn no_support() -> PoseError {
         support: 0,
         needed: MIN_CORRESPONDENCES,
     }
-}
-
-/// The rigid triples among `n` rows, estimated from those of `graph`'s sample.
-fn triangles(n: usize, graph: &PairGraph) -> f64 {
-    let m = graph.points().max(1) as f64;
-    graph.triangles() as f64 * (n as f64 / m).powi(3)
 }
 
 /// Fraction of the points that the graph holds.
