@@ -62,7 +62,11 @@ fn stereo_debug() {
         .and_then(|v| v.parse().ok())
         .unwrap_or(0.95);
     let spec = StereoSpec::street().with_outliers(f);
-    for seed in 0..8u64 {
+    let runs: u64 = std::env::var("RUNS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(8);
+    for seed in 0..runs {
         let s = spec.scenario(1000 + seed).unwrap();
         let ninl = s.inlier.iter().filter(|&&b| b).count();
         eprintln!(

@@ -16,7 +16,6 @@
 //! have produced is [`PoseError::InsufficientSupport`] with the support needed, never a
 //! plain success.
 
-use nalgebra::Isometry3;
 use rand::RngExt;
 
 use super::graph::PairGraph;
@@ -85,13 +84,15 @@ fn ln_poisson_tail(lambda: f64, j: usize) -> f64 {
     (first + sum.ln()).min(0.0)
 }
 
-/// The rate at which wrong matches pass `passes(i, j)` (source row `i` against
-/// destination row `j`), measured on random pairs of different rows; a Bayesian estimate
-/// `(hits + 1) / (trials + 2)` so that no hit does not mean "impossible".
-pub(super) fn chance_rate(
+/// The rate at which wrong matches pass `passes(&row(i), j)` (source row `i`, prepared
+/// once by `row`, against destination row `j`), measured on random pairs of different
+/// rows; a Bayesian estimate `(hits + 1) / (trials + 2)` so that no hit does not mean
+/// "impossible".
+pub(super) fn chance_rate<R>(
     n: usize,
     rng: &mut SeededRng,
-    passes: impl Fn(usize, usize) -> bool,
+    row: impl Fn(usize) -> R,
+    passes: impl Fn(&R, usize) -> bool,
 ) -> f64 {
     if n < 2 {
         return 1.0;
@@ -99,31 +100,31 @@ pub(super) fn chance_rate(
     let (mut hits, mut trials) = (0u64, 0u64);
     for a in 0..ROWS.min(n) {
         let i = if n <= ROWS { a } else { rng.random_range(0..n) };
+        let prepared = row(i);
         for _ in 0..PARTNERS.min(n - 1) {
             let mut j = rng.random_range(0..n - 1);
             if j >= i {
                 j += 1;
             }
-            hits += u64::from(passes(i, j));
+            hits += u64::from(passes(&prepared, j));
             trials += 1;
         }
     }
     (hits as f64 + 1.0) / (trials as f64 + 2.0)
 }
 
-/// Fails with [`PoseError::InsufficientSupport`] when `support` agreements at `pose`
-/// could be chance (see the module documentation); `passes(pose, i, j)` is the inlier
-/// test of source row `i` against destination row `j`.
-pub(super) fn check_chance(
-    data: &Correspondences,
-    pose: &Isometry3<f64>,
+/// Fails with [`PoseError::InsufficientSupport`] when `support` agreements could be
+/// chance (see the module documentation); `passes(&row(i), j)` is the inlier test of
+/// source row `i` against destination row `j` at the pose found.
+pub(super) fn check_chance<R>(
+    n: usize,
     support: usize,
     triangles: f64,
     rng: &mut SeededRng,
-    passes: impl Fn(&Isometry3<f64>, usize, usize) -> bool,
+    row: impl Fn(usize) -> R,
+    passes: impl Fn(&R, usize) -> bool,
 ) -> Result<(), PoseError> {
-    let n = data.len();
-    let p = chance_rate(n, rng, |i, j| passes(pose, i, j));
+    let p = chance_rate(n, rng, row, passes);
     let needed = needed_support(n, p, triangles);
     if support < needed {
         return Err(PoseError::InsufficientSupport { support, needed });
@@ -154,18 +155,19 @@ impl PsoEstimator {
             found.pose = pose;
             found.inliers = inliers;
         }
-        let (src, dst) = (data.src(), data.dst());
+        let (src, dst, pose) = (data.src(), data.dst(), found.pose);
+        let r = pose.rotation.to_rotation_matrix().into_inner();
         check_chance(
-            data,
-            &found.pose,
+            data.len(),
             found.inliers.len(),
             triangles,
             rng,
-            |pose, i, j| {
-                let r = pose.rotation.to_rotation_matrix();
-                let cov = r.matrix() * src_cov[i] * r.matrix().transpose() + dst_cov[j];
-                let e = dst[j] - pose * src[i];
-                cov.try_inverse().is_some_and(|w| e.dot(&(w * e)) < gate)
+            |i| (pose * src[i], r * src_cov[i] * r.transpose()),
+            |(q, c), j| {
+                let e = dst[j] - q;
+                (c + dst_cov[j])
+                    .try_inverse()
+                    .is_some_and(|w| e.dot(&(w * e)) < gate)
             },
         )
     }
@@ -179,14 +181,14 @@ impl PsoEstimator {
         triangles: f64,
         rng: &mut SeededRng,
     ) -> Result<(), PoseError> {
-        let (src, dst) = (data.src(), data.dst());
+        let (src, dst, pose) = (data.src(), data.dst(), found.pose);
         check_chance(
-            data,
-            &found.pose,
+            data.len(),
             found.inliers.len(),
             triangles,
             rng,
-            |pose, i, j| (dst[j] - pose * src[i]).norm_squared() < tol.at(i).powi(2),
+            |i| (pose * src[i], tol.at(i).powi(2)),
+            |(q, t2), j| (dst[j] - q).norm_squared() < *t2,
         )
     }
 }

@@ -271,9 +271,12 @@ impl PsoEstimator {
                 .clamp(lo, hi);
             if next > delta {
                 let (src, dst, pose) = (data.src(), data.dst(), found.pose);
-                let p = check::chance_rate(data.len(), rng, |i, j| {
-                    (dst[j] - pose * src[i]).norm() < next
-                });
+                let p = check::chance_rate(
+                    data.len(),
+                    rng,
+                    |i| pose * src[i],
+                    |q, j| (dst[j] - q).norm_squared() < next * next,
+                );
                 if data.len() as f64 * p > CHANCE_SHARE * found.inliers.len() as f64 {
                     break;
                 }
