@@ -11,7 +11,7 @@ use clap::{Args, ValueEnum};
 use swarmpose_core::pso::PsoConfig;
 use swarmpose_core::{
     Estimator, MsacConfig, MsacEstimator, PsoEstimator, PsoEstimatorConfig, PsoPaperConfig,
-    PsoPaperEstimator, SvdEstimator, Threshold,
+    PsoPaperEstimator, Threshold,
 };
 
 use crate::error::CliError;
@@ -27,17 +27,26 @@ pub enum Method {
     Svd,
     /// MSAC with 3-point samples and a final SVD refit.
     Msac,
+    /// Weighted least squares on all points (Mahalanobis with covariances), no outlier
+    /// rejection.
+    Wls,
 }
 
 impl Method {
+    /// The core's registry entry ([`swarmpose_core::Method`], the one list of names).
+    pub fn core(self) -> swarmpose_core::Method {
+        match self {
+            Method::Pso => swarmpose_core::Method::Pso,
+            Method::PsoPaper => swarmpose_core::Method::PsoPaper,
+            Method::Svd => swarmpose_core::Method::Svd,
+            Method::Msac => swarmpose_core::Method::Msac,
+            Method::Wls => swarmpose_core::Method::Wls,
+        }
+    }
+
     /// The command-line name, equal to the estimator's [`Estimator::name`].
     pub fn name(self) -> &'static str {
-        match self {
-            Method::Pso => "pso",
-            Method::PsoPaper => "pso-paper",
-            Method::Svd => "svd",
-            Method::Msac => "msac",
-        }
+        self.core().name()
     }
 }
 
@@ -278,11 +287,11 @@ pub fn build(method: Method, options: &EstimatorOptions) -> Result<Box<dyn Estim
             config.pso = options.apply_pso(config.pso);
             Box::new(PsoPaperEstimator::new(config))
         }
-        Method::Svd => {
+        Method::Svd | Method::Wls => {
             let threshold = options.threshold.map(|_| "--threshold");
             let not_used: Vec<_> = threshold.into_iter().chain(pso).chain(msac).collect();
             reject(method, &not_used)?;
-            Box::new(SvdEstimator)
+            method.core().build(None)
         }
         Method::Msac => {
             reject(method, &pso)?;
@@ -301,6 +310,11 @@ mod tests {
 
     #[test]
     fn names_match_the_estimators() {
+        // One list: every registry entry is a --method value and the other way round.
+        assert_eq!(
+            Method::value_variants().len(),
+            swarmpose_core::Method::ALL.len()
+        );
         for &m in Method::value_variants() {
             let e = build(m, &EstimatorOptions::default()).expect("defaults build");
             assert_eq!(e.name(), m.name());

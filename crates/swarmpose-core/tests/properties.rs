@@ -121,3 +121,45 @@ proptest! {
         }
     }
 }
+
+/// `data` with every coordinate multiplied by `k`.
+fn scaled(data: &Correspondences, k: f64) -> Correspondences {
+    let s = |v: &[Point3<f64>]| v.iter().map(|p| p * k).collect::<Vec<_>>();
+    Correspondences::new(s(data.src()), s(data.dst())).expect("finite")
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(24))]
+
+    /// The default `pso` does not depend on the unit: on data scaled by k its estimate is
+    /// the original's scaled by k (rotation within 1e-4 rad, translation within 1e-4 k,
+    /// inlier sets differing by at most 1 %).
+    #[test]
+    fn pso_is_scale_invariant(
+        seed in 0u64..1000,
+        log_k in -3.0f64..3.0,
+        outliers in 0.0f64..0.9,
+    ) {
+        let k = 10f64.powf(log_k);
+        let spec = SyntheticSpec { outlier_fraction: outliers, ..SyntheticSpec::default() };
+        let s = spec.generate(seed).expect("valid");
+        let a = PsoEstimator::default().estimate_seeded(&s.data, seed);
+        let b = PsoEstimator::default().estimate_seeded(&scaled(&s.data, k), seed);
+        match (a, b) {
+            (Ok(a), Ok(b)) => {
+                let r = a.transform.rotation.angle_to(&b.transform.rotation);
+                let t = (a.transform.translation.vector * k - b.transform.translation.vector).norm();
+                prop_assert!(r < 1e-4, "rotation differs by {r} rad at k = {k}");
+                prop_assert!(t < 1e-4 * k, "translation differs by {t} at k = {k}");
+                let sa: std::collections::BTreeSet<usize> = a.inliers.iter().copied().collect();
+                let sb: std::collections::BTreeSet<usize> = b.inliers.iter().copied().collect();
+                let differ = sa.symmetric_difference(&sb).count();
+                prop_assert!(differ * 100 <= sa.len().max(sb.len()), "{differ} inliers differ at k = {k}");
+                let (da, db) = (a.diagnostics.threshold_m, b.diagnostics.threshold_m);
+                prop_assert!(da.zip(db).is_some_and(|(x, y)| (y / (x * k) - 1.0).abs() < 1e-3));
+            }
+            (Err(_), Err(_)) => {}
+            (a, b) => prop_assert!(false, "one failed at k = {k}: {:?} / {:?}", a.err(), b.err()),
+        }
+    }
+}

@@ -1,10 +1,7 @@
 //! The estimators an experiment compares, as name + factory pairs: a new estimator joins
 //! by adding an entry here (or passing its own list), never by touching the runner.
 
-use swarmpose_core::{
-    Estimator, MsacConfig, MsacEstimator, PsoEstimator, PsoEstimatorConfig, PsoPaperConfig,
-    PsoPaperEstimator, SvdEstimator,
-};
+use swarmpose_core::{Estimator, Method, MsacConfig, MsacEstimator};
 
 /// Builds an estimator for an inlier threshold δ (metres).
 pub type Factory = Box<dyn Fn(f64) -> Box<dyn Estimator> + Send + Sync>;
@@ -54,28 +51,26 @@ pub fn oracle_threshold(sigma: f64) -> f64 {
 /// 7000; the cap only bounds hopeless cases).
 pub const MSAC_MAX_ITERATIONS: usize = 20_000;
 
-/// Every estimator of the project: `pso`, `pso-paper`, `svd`, `msac`, each with its
-/// default settings and the given threshold.
+/// The methods of the core's registry ([`Method`]) that the simulation compares, in
+/// table order (`wls` is `svd` on data without a noise model).
+pub const SIMULATED: [Method; 4] = [Method::Pso, Method::PsoPaper, Method::Svd, Method::Msac];
+
+/// Every simulated estimator: `pso`, `pso-paper`, `svd`, `msac`, each from the core's
+/// registry with its default settings and the given threshold (MSAC's samples capped
+/// at [`MSAC_MAX_ITERATIONS`]).
 #[must_use]
 pub fn default_estimators() -> Vec<EstimatorEntry> {
-    vec![
-        EstimatorEntry::new("pso", |thr| {
-            Box::new(PsoEstimator::new(
-                PsoEstimatorConfig::default().with_threshold(thr),
-            ))
-        }),
-        EstimatorEntry::new("pso-paper", |thr| {
-            Box::new(PsoPaperEstimator::new(
-                PsoPaperConfig::default().with_threshold(thr),
-            ))
-        }),
-        EstimatorEntry::new("svd", |_| Box::new(SvdEstimator)),
-        EstimatorEntry::new("msac", |thr| {
-            Box::new(MsacEstimator::new(
-                MsacConfig::default()
-                    .with_threshold(thr)
-                    .with_max_iterations(MSAC_MAX_ITERATIONS),
-            ))
-        }),
-    ]
+    SIMULATED
+        .into_iter()
+        .map(|m| {
+            EstimatorEntry::new(m.name(), move |thr| match m {
+                Method::Msac => Box::new(MsacEstimator::new(
+                    MsacConfig::default()
+                        .with_threshold(thr)
+                        .with_max_iterations(MSAC_MAX_ITERATIONS),
+                )) as Box<dyn Estimator>,
+                m => m.build(m.uses_threshold().then_some(thr)),
+            })
+        })
+        .collect()
 }

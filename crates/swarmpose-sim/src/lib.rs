@@ -28,11 +28,13 @@ pub mod error;
 pub mod outliers;
 pub mod plots;
 pub mod scenario;
+pub mod stereo;
 
 pub use camera::Pinhole;
 pub use error::SimError;
 pub use outliers::{OutlierMode, Scenario};
 pub use scenario::{Geometry, SceneSpec};
+pub use stereo::{StereoScenario, StereoSpec};
 pub mod estimators;
 pub mod experiment;
 pub mod export;

@@ -7,12 +7,11 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use clap::Args;
+use nalgebra::Isometry3;
 use swarmpose_core::geometry::rotation_angle_between;
-use swarmpose_core::{
-    Estimator, MsacConfig, MsacEstimator, PsoEstimator, PsoEstimatorConfig, PsoPaperConfig,
-    PsoPaperEstimator, SvdEstimator,
-};
+use swarmpose_core::{Correspondences, Estimator, Method};
 use swarmpose_data::{correspondence_csv, truth};
+use swarmpose_sim::StereoSpec;
 
 use crate::error::CliError;
 
@@ -20,15 +19,19 @@ use crate::error::CliError;
 const SUCCESS_ROTATION_DEG: f64 = 2.0;
 /// Largest translation error of a success, metres (as the peers).
 const SUCCESS_TRANSLATION_M: f64 = 0.2;
-/// Every estimator the bench knows, in table order.
-const ALL_METHODS: [&str; 6] = [
-    "pso",
-    "pso-auto",
-    "msac",
-    "pso-paper",
-    "svd",
-    "oracle-inliers",
-];
+/// The bench's own entries beside the core's registry ([`Method`]): `pso-auto` (`pso`
+/// with its automatic threshold), `oracle-inliers` (`svd` on the true inliers) and
+/// `oracle-weighted` (`wls` on the true inliers).
+const BENCH_ONLY: [&str; 3] = ["pso-auto", "oracle-inliers", "oracle-weighted"];
+
+/// Every name the bench knows: the registry's, then its own.
+fn all_methods() -> Vec<&'static str> {
+    Method::ALL
+        .iter()
+        .map(|m| m.name())
+        .chain(BENCH_ONLY)
+        .collect()
+}
 
 /// Arguments of `swarmpose bench`.
 #[derive(Debug, Args)]
@@ -37,16 +40,24 @@ Each NAME.csv in SUITE_DIR needs its truth NAME.json beside it (gen_scenarios.py
 both). Estimators run one at a time on one thread; the time is that of the estimation call \
 only. Thresholds: the peers' oracle max(3.368 sigma, 0.01) m from the truth's noise_sigma, \
 except pso-auto, which estimates its own; oracle-inliers is SVD on the truth's inlier \
-labels, the ceiling of any method that ends with a least-squares fit. Success: rotation error < 2 deg and translation \
+labels, the ceiling of any method that ends with a least-squares fit; oracle-weighted is \
+wls (weighted by the CSV's noise model, Mahalanobis with covariances) on them. Success: rotation error < 2 deg and translation \
 error < 0.2 m. Prints Markdown tables per outlier mode and noise level: success rate, \
 median and 90th-percentile rotation error, median translation error, median time.")]
 pub struct BenchArgs {
     /// Folder of scenario CSV + truth JSON files.
-    #[arg(value_name = "SUITE_DIR")]
-    pub suite: PathBuf,
+    #[arg(value_name = "SUITE_DIR", required_unless_present = "stereo")]
+    pub suite: Option<PathBuf>,
 
-    /// Estimators, comma separated, from pso, pso-auto, msac, pso-paper, svd and
-    /// oracle-inliers (SVD on the truth's inliers only: the least-squares ceiling).
+    /// Instead of a folder: N generated stereo-noise scenarios per outlier fraction
+    /// (0.9, 0.95, 0.97; street scene, 600 correspondences with their covariances,
+    /// wrong matches onto other scene points; swarmpose-sim's `StereoSpec`).
+    #[arg(long, value_name = "N", conflicts_with = "suite")]
+    pub stereo: Option<u64>,
+
+    /// Estimators, comma separated, from pso, pso-paper, svd, msac, wls, pso-auto,
+    /// oracle-inliers (SVD on the truth's inliers only: the least-squares ceiling) and
+    /// oracle-weighted (wls on them: the weighted ceiling).
     #[arg(long, value_delimiter = ',', default_value = "pso,pso-auto,msac")]
     pub methods: Vec<String>,
 
@@ -120,20 +131,13 @@ fn oracle_threshold(sigma: f64) -> f64 {
 
 fn estimator(name: &str, sigma: f64) -> Option<Box<dyn Estimator>> {
     let thr = oracle_threshold(sigma);
-    Some(match name {
-        "pso" => Box::new(PsoEstimator::new(
-            PsoEstimatorConfig::default().with_threshold(thr),
-        )),
-        "pso-auto" => Box::new(PsoEstimator::default()),
-        "msac" => Box::new(MsacEstimator::new(
-            MsacConfig::default().with_threshold(thr),
-        )),
-        "pso-paper" => Box::new(PsoPaperEstimator::new(
-            PsoPaperConfig::default().with_threshold(thr),
-        )),
-        "svd" | "oracle-inliers" => Box::new(SvdEstimator),
-        _ => return None,
-    })
+    let method = match name {
+        "pso-auto" => return Some(Method::Pso.build(None)),
+        "oracle-inliers" => Method::Svd,
+        "oracle-weighted" => Method::Wls,
+        other => Method::from_name(other)?,
+    };
+    Some(method.build(method.uses_threshold().then_some(thr)))
 }
 
 fn scenario_files(dir: &Path, filter: &str) -> Result<Vec<PathBuf>, CliError> {
@@ -179,92 +183,166 @@ type CellKey = (String, u64); // (mode, noise in µm)
 /// # Errors
 /// An unknown method, an unreadable folder or scenario file.
 pub fn run(args: &BenchArgs) -> Result<(), CliError> {
+    let known = all_methods();
     for m in &args.methods {
-        if !ALL_METHODS.contains(&m.as_str()) {
+        if !known.contains(&m.as_str()) {
             return Err(CliError::usage(format!(
                 "unknown method \"{m}\": use {}",
-                ALL_METHODS.join(", ")
+                known.join(", ")
             )));
         }
     }
-    let files = scenario_files(&args.suite, &args.filter)?;
     // results[(mode, noise)][fraction in ppm][method] = outcomes
     let mut results: BTreeMap<CellKey, BTreeMap<u64, BTreeMap<String, Vec<Outcome>>>> =
         BTreeMap::new();
     let started = Instant::now();
-    for csv in &files {
-        let scenario = csv
-            .file_stem()
-            .map_or_else(String::new, |s| s.to_string_lossy().into_owned());
-        let seed = args.seed.wrapping_add(stable_hash(&scenario));
-        let data =
-            correspondence_csv::read_path(csv).map_err(|e| CliError::usage(e.to_string()))?;
-        let truth_path = truth::path_for_csv(csv);
-        let t = truth::read(&truth_path).map_err(|e| CliError::usage(e.to_string()))?;
-        let true_pose = t
-            .isometry()
-            .map_err(|e| CliError::usage(format!("{}: {e}", truth_path.display())))?;
-        let cell = (t.mode.clone(), (t.noise_sigma * 1e6).round() as u64);
-        let fraction = (t.outlier_fraction * 1e6).round() as u64;
-        let true_inliers = data.select(&t.inlier_indices());
-        for name in &args.methods {
-            let Some(est) = estimator(name, t.noise_sigma) else {
-                continue;
-            };
-            // The reference: least squares on exactly the true inliers, the best any
-            // method that ends with a least-squares fit can do.
-            let input = if name == "oracle-inliers" {
-                &true_inliers
-            } else {
-                &data
-            };
-            let t0 = Instant::now();
-            let result = est.estimate_seeded(input, seed);
-            let outer_ms = t0.elapsed().as_secs_f64() * 1e3;
-            let outcome = match result {
-                Ok(e) => {
-                    let r = rotation_angle_between(&e.transform.rotation, &true_pose.rotation)
-                        .to_degrees();
-                    let tr = (e.transform.translation.vector - true_pose.translation.vector).norm();
-                    Outcome {
-                        scenario: scenario.clone(),
-                        inliers: Some(e.inliers.len()),
-                        success: r < SUCCESS_ROTATION_DEG && tr < SUCCESS_TRANSLATION_M,
-                        rotation_deg: r,
-                        translation_m: tr,
-                        elapsed_ms: e.diagnostics.elapsed.as_secs_f64() * 1e3,
+    let (source, count) = match (&args.suite, args.stereo) {
+        (Some(dir), _) => {
+            let files = scenario_files(dir, &args.filter)?;
+            for csv in &files {
+                bench_case(&read_case(csv)?, args, &mut results);
+            }
+            (dir.display().to_string(), files.len())
+        }
+        (None, Some(runs)) => {
+            let mut count = 0;
+            for fraction in STEREO_FRACTIONS {
+                for run in 0..runs {
+                    let case = stereo_case(fraction, run)?;
+                    if case.scenario.contains(&args.filter) {
+                        bench_case(&case, args, &mut results);
+                        count += 1;
                     }
                 }
-                Err(_) => Outcome {
-                    scenario: scenario.clone(),
-                    inliers: None,
-                    success: false,
-                    rotation_deg: f64::NAN,
-                    translation_m: f64::NAN,
-                    elapsed_ms: outer_ms,
-                },
-            };
-            results
-                .entry(cell.clone())
-                .or_default()
-                .entry(fraction)
-                .or_default()
-                .entry(name.clone())
-                .or_default()
-                .push(outcome);
+            }
+            ("the stereo-noise generator".to_owned(), count)
         }
-    }
+        (None, None) => return Err(CliError::usage("give SUITE_DIR or --stereo N")),
+    };
     if let Some(path) = &args.runs_csv {
         crate::output_file::write_bytes(path, runs_csv(&results).as_bytes())?;
     }
     crate::streams::out_text(&tables(&results, &args.methods))?;
     crate::streams::out(&format!(
-        "\n{} scenarios from {}, {} estimators, {:.1} s wall time.",
-        files.len(),
-        args.suite.display(),
+        "\n{count} scenarios from {source}, {} estimators, {:.1} s wall time.",
         args.methods.len(),
         started.elapsed().as_secs_f64()
     ))
+}
+
+/// Outlier fractions of `--stereo`.
+const STEREO_FRACTIONS: [f64; 3] = [0.9, 0.95, 0.97];
+
+/// One scenario with its truth.
+struct Case {
+    scenario: String,
+    data: Correspondences,
+    true_pose: Isometry3<f64>,
+    /// The true inliers only.
+    true_inliers: Correspondences,
+    cell: CellKey,
+    /// Outlier fraction, ppm.
+    fraction: u64,
+    noise_sigma: f64,
+}
+
+/// A scenario file and its truth beside it.
+fn read_case(csv: &Path) -> Result<Case, CliError> {
+    let scenario = csv
+        .file_stem()
+        .map_or_else(String::new, |s| s.to_string_lossy().into_owned());
+    let data = correspondence_csv::read_path(csv).map_err(|e| CliError::usage(e.to_string()))?;
+    let truth_path = truth::path_for_csv(csv);
+    let t = truth::read(&truth_path).map_err(|e| CliError::usage(e.to_string()))?;
+    let true_pose = t
+        .isometry()
+        .map_err(|e| CliError::usage(format!("{}: {e}", truth_path.display())))?;
+    Ok(Case {
+        scenario,
+        true_inliers: data.select(&t.inlier_indices()),
+        data,
+        true_pose,
+        cell: (t.mode.clone(), (t.noise_sigma * 1e6).round() as u64),
+        fraction: (t.outlier_fraction * 1e6).round() as u64,
+        noise_sigma: t.noise_sigma,
+    })
+}
+
+/// Run `run` of the stereo-noise generator at `fraction` (seed `run`, street scene).
+fn stereo_case(fraction: f64, run: u64) -> Result<Case, CliError> {
+    let spec = StereoSpec::street().with_outliers(fraction);
+    let s = spec
+        .scenario(run)
+        .map_err(|e| CliError::failure(format!("stereo scenario {run}: {e}")))?;
+    Ok(Case {
+        scenario: format!("stereo_o{fraction:.2}_r{run:03}"),
+        true_inliers: s.data.select(&s.inlier_indices()),
+        data: s.data,
+        true_pose: s.truth,
+        cell: ("stereo".to_owned(), 0),
+        fraction: (fraction * 1e6).round() as u64,
+        // No single σ: threshold-taking methods get the smallest oracle threshold.
+        noise_sigma: 0.0,
+    })
+}
+
+/// Every method of `args` on one scenario, into `results`.
+fn bench_case(case: &Case, args: &BenchArgs, results: &mut Results) {
+    let seed = args.seed.wrapping_add(stable_hash(&case.scenario));
+    let (scenario, data, true_pose, true_inliers, cell, fraction) = (
+        &case.scenario,
+        &case.data,
+        &case.true_pose,
+        &case.true_inliers,
+        &case.cell,
+        case.fraction,
+    );
+    for name in &args.methods {
+        let Some(est) = estimator(name, case.noise_sigma) else {
+            continue;
+        };
+        // The reference: least squares on exactly the true inliers, the best any
+        // method that ends with a least-squares fit can do.
+        let input = if name.starts_with("oracle-") {
+            true_inliers
+        } else {
+            data
+        };
+        let t0 = Instant::now();
+        let result = est.estimate_seeded(input, seed);
+        let outer_ms = t0.elapsed().as_secs_f64() * 1e3;
+        let outcome = match result {
+            Ok(e) => {
+                let r =
+                    rotation_angle_between(&e.transform.rotation, &true_pose.rotation).to_degrees();
+                let tr = (e.transform.translation.vector - true_pose.translation.vector).norm();
+                Outcome {
+                    scenario: scenario.clone(),
+                    inliers: Some(e.inliers.len()),
+                    success: r < SUCCESS_ROTATION_DEG && tr < SUCCESS_TRANSLATION_M,
+                    rotation_deg: r,
+                    translation_m: tr,
+                    elapsed_ms: e.diagnostics.elapsed.as_secs_f64() * 1e3,
+                }
+            }
+            Err(_) => Outcome {
+                scenario: scenario.clone(),
+                inliers: None,
+                success: false,
+                rotation_deg: f64::NAN,
+                translation_m: f64::NAN,
+                elapsed_ms: outer_ms,
+            },
+        };
+        results
+            .entry(cell.clone())
+            .or_default()
+            .entry(fraction)
+            .or_default()
+            .entry(name.clone())
+            .or_default()
+            .push(outcome);
+    }
 }
 
 type Results = BTreeMap<CellKey, BTreeMap<u64, BTreeMap<String, Vec<Outcome>>>>;

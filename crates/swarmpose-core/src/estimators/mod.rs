@@ -7,9 +7,11 @@ mod mixture;
 mod msac;
 mod pso_paper;
 mod pso_robust;
+pub mod registry;
 mod svd;
 #[cfg(test)]
 mod test_scenes;
+mod wls;
 
 use std::time::Duration;
 
@@ -27,7 +29,9 @@ pub use mahalanobis::{CHI2_3_99, refine_mahalanobis};
 pub use msac::{MsacConfig, MsacEstimator};
 pub use pso_paper::{PsoPaperConfig, PsoPaperEstimator};
 pub use pso_robust::{PsoEstimator, PsoEstimatorConfig, Threshold};
+pub use registry::Method;
 pub use svd::SvdEstimator;
+pub use wls::WlsEstimator;
 
 /// Counters and timings of one estimation.
 #[derive(Debug, Clone, PartialEq, Default)]

@@ -30,10 +30,16 @@ pub struct PsoEstimatorConfig {
     /// `3.4 σ` suits isotropic Gaussian noise of σ per axis. Ignored when the data carry a
     /// noise level per point.
     pub threshold: Threshold,
-    /// First-pass δ of [`Threshold::Auto`], metres [0.3]: must exceed the true `3.4 σ`.
-    pub auto_initial_threshold_m: f64,
-    /// Smallest δ [`Threshold::Auto`] may choose, metres [1e-4].
-    pub auto_min_threshold_m: f64,
+    /// First-pass δ of [`Threshold::Auto`] as a fraction of the scene scale (the median
+    /// distance of the source points from their coordinate-wise median) \[0.04\]: the
+    /// threshold scales with the data, whatever its unit.
+    pub auto_initial_fraction: f64,
+    /// Smallest δ [`Threshold::Auto`] may choose, as a fraction of the scene scale
+    /// \[1e-5\].
+    pub auto_min_fraction: f64,
+    /// Largest δ [`Threshold::Auto`] may choose, as a fraction of the scene scale \[1\]
+    /// (beyond, a motion is not identifiable from the points).
+    pub auto_max_fraction: f64,
     /// δ_i = this · σ_i for per-point noise, and δ = this · σ̂ under
     /// [`Threshold::Auto`] [3.368 = sqrt of the 99 % quantile of χ²(3)].
     pub sigma_multiplier: f64,
@@ -42,8 +48,12 @@ pub struct PsoEstimatorConfig {
     pub pso: PsoConfig,
     /// Particles started from graph triangles; the rest start uniformly \[8\].
     pub seeded_particles: usize,
-    /// Most points in the consistency graph; larger sets are sampled \[400\].
+    /// Points in the consistency graph; larger sets are sampled \[400\]. When the
+    /// consensus found in a sample is not supported (see the module documentation), the
+    /// sample doubles, up to `max_sample_growth` times this.
     pub max_points: usize,
+    /// See `max_points` \[8\].
+    pub max_sample_growth: usize,
     /// Most pairs scored per fitness evaluation \[256\].
     pub max_pairs: usize,
     /// Rounds of (inliers, SVD refit) at the end \[5\].
@@ -66,8 +76,9 @@ impl Default for PsoEstimatorConfig {
     fn default() -> Self {
         Self {
             threshold: Threshold::Auto,
-            auto_initial_threshold_m: 0.3,
-            auto_min_threshold_m: 1e-4,
+            auto_initial_fraction: 0.04,
+            auto_min_fraction: 1e-5,
+            auto_max_fraction: 1.0,
             sigma_multiplier: 3.368,
             pso: PsoConfig::default()
                 .with_swarm_size(16)
@@ -75,6 +86,7 @@ impl Default for PsoEstimatorConfig {
                 .with_stall_iterations(Some(5)),
             seeded_particles: 8,
             max_points: 400,
+            max_sample_growth: 8,
             max_pairs: 256,
             refine_rounds: 5,
             ambiguity_ratio: 0.5,
@@ -132,8 +144,15 @@ impl PsoEstimatorConfig {
         if let Threshold::Fixed(d) = self.threshold {
             check_threshold(d)?;
         }
-        check_threshold(self.auto_initial_threshold_m)?;
-        check_threshold(self.auto_min_threshold_m)?;
+        check_threshold(self.auto_initial_fraction)?;
+        check_threshold(self.auto_min_fraction)?;
+        check_threshold(self.auto_max_fraction)?;
+        if self.auto_min_fraction > self.auto_max_fraction || self.max_sample_growth == 0 {
+            return Err(PoseError::InvalidConfig(
+                "auto_min_fraction must not exceed auto_max_fraction; max_sample_growth >= 1"
+                    .into(),
+            ));
+        }
         check_threshold(self.sigma_multiplier)?;
         self.pso.validate()?;
         if self.max_points < MIN_CORRESPONDENCES || self.max_pairs == 0 || self.refine_rounds == 0 {

@@ -144,6 +144,17 @@ impl PairGraph {
         (self.points[i as usize], self.points[j as usize])
     }
 
+    /// Number of points in the graph.
+    pub(super) fn points(&self) -> usize {
+        self.points.len()
+    }
+
+    /// Number of triangles of consistent pairs (three points whose three pairs all keep
+    /// their lengths): the rigid triples a search could start a motion from.
+    pub(super) fn triangles(&self) -> u64 {
+        self.pairs.iter().map(|p| u64::from(p.2)).sum::<u64>() / 3
+    }
+
     /// Number of scored pairs.
     pub(super) fn scored(&self) -> usize {
         self.inv_tol2.len() - self.padding

@@ -10,7 +10,8 @@
 //!
 //! For two correct matches `|e_k(R_true)| < δ_i + δ_j` whatever `t` is. The steps:
 //!
-//! 1. **Consistency graph.** On at most `max_points` hypothesis points, keep the pairs whose
+//! 1. **Consistency graph.** On at most `max_points` hypothesis points (a random sample of
+//!    larger sets), keep the pairs whose
 //!    lengths agree, `| |b_k| - |a_k| | < δ_i + δ_j` (a rigid motion keeps lengths; a wrong
 //!    match rarely does) and whose source length is at least `min(5δ, extent/10)`. Rank the
 //!    pairs by their number of common neighbours (correct matches form a dense cluster) and
@@ -28,28 +29,51 @@
 //! 4. **SVD refinement.** Inliers are the points with `|d_i - (R s_i + t)| < δ_i`; Arun's
 //!    SVD refits them until the set is stable. Fewer than 4 is
 //!    [`PoseError::InsufficientSupport`].
-//! 5. **Ambiguity.** If the points left over could hold a second motion with at least
-//!    `ambiguity_ratio` of the winner's support (a moving object), steps 1-4 run on them and
-//!    the runner-up is reported ([`Diagnostics::runner_up`]). A runner-up with more
-//!    inliers than the winner (the swarm settled on the smaller motion) becomes the
-//!    winner.
-//! 6. **Final refinement.** Without covariances, the final pose maximises the likelihood
+//! 5. **Self-check** ([`check`]). The consensus must be more than what wrong matches agree
+//!    on by chance at this threshold: with `p` the rate at which a row's source passes the
+//!    test against another row's destination (measured on the data at the pose found) and
+//!    `H` the rigid triangles of the graph, `k` inliers pass when `k - 3` Poisson(`n p`)
+//!    chance agreements have tail probability below `0.01 / H`. Otherwise, while the
+//!    graph held a sample, the sample doubles (up to `max_sample_growth` times
+//!    `max_points`) and steps 1-5 run again; then the answer is
+//!    [`PoseError::InsufficientSupport`] with the support needed, never a plain success.
+//! 6. **Ambiguity.** If the points left over could hold a second motion with at least
+//!    `ambiguity_ratio` of the winner's support (a moving object), steps 1-4 run on them
+//!    (one swarm). The runner-up is reported ([`Diagnostics::runner_up`]) only when it
+//!    passes the self-check and is a distinct motion: at its own inliers it moves the
+//!    points by a median of more than 2 tolerances from where the winner puts them (far,
+//!    noisy inliers the winner's band left out are the winner's motion again). A
+//!    runner-up with more inliers than the winner becomes the winner.
+//! 7. **Final refinement.** Without covariances, the final pose maximises the likelihood
 //!    of a Gaussian (inliers) plus uniform (wrong matches) model of the residuals, by a
 //!    few EM rounds of weighted SVD ([`super::mixture`]): inliers in the noise's tail
 //!    count, wrong matches do not; the reported inliers are those within δ_i of that pose.
 //!    With per-point covariances ([`Correspondences::with_noise_covariance`], anisotropic
 //!    noise such as stereo's), a Gauss-Newton fit of the Mahalanobis residuals, gated at
-//!    `sigma_multiplier²` in χ²(3) units ([`super::mahalanobis`]).
+//!    `sigma_multiplier²` in χ²(3) units ([`super::mahalanobis`]); with covariances this
+//!    fit comes before the self-check, which then uses the Mahalanobis test.
 //!
 //! The tolerance δ_i is `sigma_multiplier · σ_i` when the correspondences carry a noise
-//! level per point ([`Correspondences::with_noise_sigma`]), else the fixed threshold, else
-//! (the default, [`Threshold::Auto`]) it is estimated: a first pass at
-//! `auto_initial_threshold_m` (halved up to three times while it finds no support), then
-//! `δ = sigma_multiplier · σ̂` with σ̂ from the median inlier residual (corrected for the
-//! 6 degrees of freedom the fit takes), refitted; δ may grow to twice the first pass.
+//! level per point without covariances ([`Correspondences::with_noise_sigma`]), else the
+//! fixed threshold, else (the default, [`Threshold::Auto`], also with covariances: the
+//! search runs on the positions, as an isotropic bound as wide as a far stereo point's
+//! depth noise would let wrong far matches outvote the consensus) it is estimated from
+//! the data, in its own unit: a first pass at `auto_initial_fraction` of the scene scale
+//! (the median distance of the source points from their coordinate-wise median; halved
+//! up to three times while it finds no support), then `δ = sigma_multiplier · σ̂` with σ̂
+//! from the median inlier residual, corrected for the band's truncation and for the 6
+//! degrees of freedom the fit takes, refitted, at most doubling per round, never where
+//! chance agreements would exceed a quarter of the consensus. Scaling every coordinate
+//! by `k` scales δ by `k` and leaves the inliers unchanged.
+//!
+//! Degeneracy (coincident or collinear points) is judged on the core of each set (points
+//! within 20 scene scales of its median) and on the inliers, so a single wild point (a
+//! stereo point at near-zero disparity) neither spoils nor hides it.
 
+mod check;
 mod config;
 mod graph;
+mod scale;
 mod vote;
 
 pub use config::{PsoEstimatorConfig, Threshold};
@@ -61,10 +85,10 @@ use nalgebra::{Isometry3, Translation3};
 use rand::seq::index::sample;
 
 use super::consensus::{
-    Tolerance, check_input, check_support, check_threshold, collect_inliers_within, refine_within,
-    residual_rms, truncated_cost_within,
+    Tolerance, check_support, check_threshold, collect_inliers_within, refine_within, residual_rms,
+    truncated_cost_within,
 };
-use super::mahalanobis::refine_mahalanobis;
+
 use super::mixture::{Mixture, refine_mixture};
 use super::{Diagnostics, Estimate, Estimator, RunnerUp};
 use crate::error::PoseError;
@@ -93,12 +117,21 @@ impl PsoEstimator {
 /// Halvings of the first-pass δ tried by [`Threshold::Auto`] when a pass finds no support.
 const AUTO_RETRIES: usize = 3;
 
-/// The automatic δ may grow to this multiple of the first pass's (noise larger than the
-/// first pass assumed).
-const AUTO_GROWTH: f64 = 2.0;
+/// One re-estimate of the automatic δ may at most multiply it by this (the residuals
+/// within a tight band say little about how wide the noise is).
+const AUTO_STEP: f64 = 2.0;
 
-/// Median of the norm of a 3D isotropic Gaussian of unit σ per axis.
-const CHI3_MEDIAN: f64 = 1.538;
+/// Most re-estimates of the automatic δ.
+const AUTO_ROUNDS: usize = 8;
+
+/// The automatic δ does not grow to where wrong matches would agree by chance with more
+/// than this share of the consensus (at the current pose, measured as in [`check`]):
+/// without it a weak consensus could widen its band until it swallows the scene.
+const CHANCE_SHARE: f64 = 0.25;
+
+/// A runner-up is a distinct motion when, at its own inliers, it moves the points by
+/// more than this many tolerances δ_i from where the winner puts them (median).
+const DISTINCT_MOTION: f64 = 2.0;
 
 /// A motion with its inliers and the work it took.
 struct Found {
@@ -115,12 +148,13 @@ impl PsoEstimator {
         &self,
         data: &Correspondences,
         tol: Tolerance<'_>,
+        max_points: usize,
         rng: &mut SeededRng,
     ) -> Result<(Found, PairGraph), PoseError> {
         let cfg = &self.config;
         let n = data.len();
-        let points: Vec<usize> = if n > cfg.max_points {
-            let mut p = sample(rng, n, cfg.max_points).into_vec();
+        let points: Vec<usize> = if n > max_points {
+            let mut p = sample(rng, n, max_points).into_vec();
             p.sort_unstable();
             p
         } else {
@@ -204,26 +238,49 @@ impl PsoEstimator {
         })
     }
 
-    /// Re-estimates δ from the inlier residuals and refits (Threshold::Auto).
-    fn auto_refit(&self, data: &Correspondences, found: &mut Found) -> Result<f64, PoseError> {
+    /// Re-estimates δ from the inlier residuals and refits (Threshold::Auto): σ̂ from the
+    /// median inlier residual, corrected for the band's truncation and for the 6 degrees
+    /// of freedom the fit takes, then `δ = sigma_multiplier · σ̂`, at most doubling per
+    /// round and within `[auto_min_fraction, auto_max_fraction]` of the scene scale.
+    fn auto_refit(
+        &self,
+        data: &Correspondences,
+        found: &mut Found,
+        first: f64,
+        scene: f64,
+        rng: &mut SeededRng,
+    ) -> f64 {
         let cfg = &self.config;
-        let mut delta = cfg.auto_initial_threshold_m;
-        // (The first pass may have used a smaller δ; the loop only needs a starting value.)
-        for _ in 0..3 {
+        let (lo, hi) = (cfg.auto_min_fraction * scene, cfg.auto_max_fraction * scene);
+        let mut delta = first;
+        for _ in 0..AUTO_ROUNDS {
             let mut r: Vec<f64> = found
                 .inliers
                 .iter()
                 .map(|&i| (data.dst()[i] - found.pose * data.src()[i]).norm())
                 .collect();
-            let mid = r.len() / 2;
-            let median = *r.select_nth_unstable_by(mid, f64::total_cmp).1;
+            let median = scale::median(&mut r);
             // Fitted residuals are smaller than the noise: the fit took 6 of the 3n
             // degrees of freedom.
             let components = 3.0 * r.len() as f64;
             let dof = (components / (components - 6.0).max(1.0)).sqrt();
-            let next = (cfg.sigma_multiplier * median * dof / CHI3_MEDIAN)
-                .max(cfg.auto_min_threshold_m)
-                .min(AUTO_GROWTH * cfg.auto_initial_threshold_m);
+            let sigma = scale::truncated_sigma(median * dof, delta);
+            let next = sigma
+                .map_or(AUTO_STEP * delta, |s| cfg.sigma_multiplier * s)
+                .min(AUTO_STEP * delta)
+                .clamp(lo, hi);
+            if next > delta {
+                let (src, dst, pose) = (data.src(), data.dst(), found.pose);
+                let p = check::chance_rate(
+                    data.len(),
+                    rng,
+                    |i| pose * src[i],
+                    |q, j| (dst[j] - q).norm_squared() < next * next,
+                );
+                if data.len() as f64 * p > CHANCE_SHARE * found.inliers.len() as f64 {
+                    break;
+                }
+            }
             let mut inliers = Vec::with_capacity(data.len());
             match refine_within(
                 data,
@@ -245,7 +302,40 @@ impl PsoEstimator {
                 Err(_) => break,
             }
         }
-        Ok(delta)
+        delta
+    }
+
+    /// Steps 1-4 with the first-pass tolerance, then (Threshold::Auto) the re-estimated
+    /// δ, on a sample of `max_points`; the consensus must pass the self-check
+    /// ([`check`]). Returns the motion, its graph and the tolerance.
+    fn consensus(
+        &self,
+        data: &Correspondences,
+        first: Tolerance<'_>,
+        auto_scene: Option<f64>,
+        max_points: usize,
+        rng: &mut SeededRng,
+    ) -> Result<(Found, PairGraph, Option<f64>), PoseError> {
+        let cfg = &self.config;
+        let mut attempt = self.find(data, first, max_points, rng);
+        if let (Some(scene), Tolerance::Uniform(mut d)) = (auto_scene, first) {
+            // A generous first pass can drown very few inliers in chance agreements:
+            // retry with smaller δ before giving up.
+            for _ in 0..AUTO_RETRIES {
+                if attempt.is_ok() || d / 2.0 < cfg.auto_min_fraction * scene {
+                    break;
+                }
+                d /= 2.0;
+                attempt = self.find(data, Tolerance::Uniform(d), max_points, rng);
+            }
+            let (mut found, graph) = attempt?;
+            let delta = self.auto_refit(data, &mut found, d, scene, rng);
+            self.checked(data, &mut found, &graph, Tolerance::Uniform(delta), rng)?;
+            return Ok((found, graph, Some(delta)));
+        }
+        let (mut found, graph) = attempt?;
+        self.checked(data, &mut found, &graph, first, rng)?;
+        Ok((found, graph, None))
     }
 
     /// When the runner-up holds more inliers than the winner (the swarm settled on a
@@ -288,13 +378,7 @@ impl PsoEstimator {
     fn polish(&self, data: &Correspondences, found: &mut Found, tol: Tolerance<'_>) {
         let cfg = &self.config;
         if data.noise_covariance().is_some() {
-            let gate = cfg.sigma_multiplier * cfg.sigma_multiplier;
-            if let Ok((pose, inliers)) =
-                refine_mahalanobis(data, &found.pose, gate, cfg.refine_rounds.max(3))
-            {
-                found.pose = pose;
-                found.inliers = inliers;
-            }
+            // Done with the self-check (`checked`).
             return;
         }
         if cfg.mixture_rounds == 0 {
@@ -345,8 +429,31 @@ impl PsoEstimator {
         }
         let sub = data.select(&rest);
         let sub_tol: Vec<f64> = rest.iter().map(|&i| tol.at(i)).collect();
-        let (found, _) = self.find(&sub, Tolerance::PerPoint(&sub_tol), rng).ok()?;
-        (found.inliers.len() >= needed).then(|| RunnerUp {
+        let sub_tol = Tolerance::PerPoint(&sub_tol);
+        // One swarm search: a second motion with comparable support is found without
+        // the restarts that a small consensus needs.
+        let quick = PsoEstimator::new(PsoEstimatorConfig {
+            restarts: 0,
+            ..cfg.clone()
+        });
+        let (found, sub_graph) = quick.find(&sub, sub_tol, cfg.max_points, rng).ok()?;
+        if found.inliers.len() < needed {
+            return None;
+        }
+        // A second motion, not chance agreement among the left-overs ...
+        let sub_triangles = check::triangles(sub.len(), &sub_graph);
+        self.check(&sub, &found, sub_tol, sub_triangles, rng).ok()?;
+        // ... nor the winner's motion again on points it left out (far, noisy inliers):
+        // at the runner-up's inliers the two motions must differ by several tolerances.
+        let mut moved: Vec<f64> = found
+            .inliers
+            .iter()
+            .map(|&k| {
+                let s = &sub.src()[k];
+                (winner.pose * s - found.pose * s).norm() / sub_tol.at(k)
+            })
+            .collect();
+        (scale::median(&mut moved) > DISTINCT_MOTION).then(|| RunnerUp {
             transform: found.pose,
             inliers: found.inliers.iter().map(|&k| rest[k]).collect(),
         })
@@ -379,36 +486,45 @@ impl Estimator for PsoEstimator {
         let start = Instant::now();
         let cfg = &self.config;
         cfg.validate()?;
-        check_input(data)?;
-        let per_point: Option<Vec<f64>> = data
-            .noise_sigma()
-            .map(|s| s.iter().map(|v| cfg.sigma_multiplier * v).collect());
-        let first_tol = match (&per_point, cfg.threshold) {
-            (Some(v), _) => Tolerance::PerPoint(v),
-            (None, Threshold::Fixed(d)) => Tolerance::Uniform(d),
-            (None, Threshold::Auto) => Tolerance::Uniform(cfg.auto_initial_threshold_m),
+        // Degeneracy is judged on the inliers the estimate rests on (a single point at
+        // 1e10 m must not make a good set look collinear).
+        data.require(MIN_CORRESPONDENCES)?;
+        let scene = scale::check_core(data.src(), "source")?;
+        scale::check_core(data.dst(), "destination")?;
+        // With covariances, the search runs on the points' positions (as without a noise
+        // model) and the Mahalanobis refinement of step 6 takes the covariances: an
+        // isotropic bound as wide as a far point's depth noise would let wrong far
+        // matches outvote the consensus.
+        let per_point: Option<Vec<f64>> = match (data.noise_covariance(), data.noise_sigma()) {
+            (None, Some(s)) => Some(s.iter().map(|v| cfg.sigma_multiplier * v).collect()),
+            _ => None,
         };
-        let mut attempt = self.find(data, first_tol, rng);
-        if let (None, Threshold::Auto) = (&per_point, cfg.threshold) {
-            // A generous first pass can drown very few inliers in chance agreements:
-            // retry with smaller δ before giving up.
-            let mut d = cfg.auto_initial_threshold_m;
-            for _ in 0..AUTO_RETRIES {
-                if attempt.is_ok() || d / 2.0 < cfg.auto_min_threshold_m {
-                    break;
+        let (first_tol, auto_scene) = match (&per_point, cfg.threshold) {
+            (Some(v), _) => (Tolerance::PerPoint(v), None),
+            (None, Threshold::Fixed(d)) => (Tolerance::Uniform(d), None),
+            (None, Threshold::Auto) => (
+                Tolerance::Uniform(cfg.auto_initial_fraction * scene),
+                Some(scene),
+            ),
+        };
+        // Grow the sample while its consensus is not supported.
+        let n = data.len();
+        let mut max_points = cfg.max_points;
+        let (mut found, graph, auto_delta) = loop {
+            match self.consensus(data, first_tol, auto_scene, max_points, rng) {
+                Ok(ok) => break ok,
+                Err(e)
+                    if max_points >= n || max_points >= cfg.max_points * cfg.max_sample_growth =>
+                {
+                    return Err(e);
                 }
-                d /= 2.0;
-                attempt = self.find(data, Tolerance::Uniform(d), rng);
+                Err(_) => max_points = (2 * max_points).min(n),
             }
-        }
-        let (mut found, graph) = attempt?;
-        let (tol, threshold_m) = match (&per_point, cfg.threshold) {
-            (None, Threshold::Auto) => {
-                let d = self.auto_refit(data, &mut found)?;
-                (Tolerance::Uniform(d), Some(d))
-            }
-            (None, Threshold::Fixed(d)) => (first_tol, Some(d)),
-            (Some(_), _) => (first_tol, None),
+        };
+        let (tol, threshold_m) = match (auto_delta, cfg.threshold) {
+            (Some(d), _) => (Tolerance::Uniform(d), Some(d)),
+            (None, Threshold::Fixed(d)) if per_point.is_none() => (first_tol, Some(d)),
+            (None, _) => (first_tol, None),
         };
         let mut runner_up = self.runner_up(data, &found, &graph, tol, rng);
         if let Some(r) = runner_up.take() {

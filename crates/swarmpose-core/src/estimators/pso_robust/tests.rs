@@ -284,3 +284,47 @@ fn heavy_tailed_stereo_noise_without_covariances_keeps_the_consensus() {
         worst.1
     );
 }
+
+#[test]
+fn one_point_at_1e10_metres_does_not_make_the_set_degenerate() {
+    // 59 good correspondences and one wild one (a stereo point at near-zero disparity).
+    let s = SyntheticSpec {
+        n: 59,
+        outlier_fraction: 0.0,
+        ..SyntheticSpec::default()
+    }
+    .generate(4)
+    .expect("valid");
+    let mut src = s.data.src().to_vec();
+    let mut dst = s.data.dst().to_vec();
+    src.push(Point3::new(1e10, 2.0, 3.0));
+    dst.push(Point3::new(-4.0, 1e10, 5.0));
+    let data = Correspondences::new(src, dst).expect("finite");
+    let out = PsoEstimator::default()
+        .estimate_seeded(&data, 1)
+        .expect("solvable");
+    let (r, t) = errors(&out.transform, &s.truth);
+    assert!(r < 0.5 && t < 0.1, "{r} deg, {t} m");
+    assert!(!out.inliers.contains(&59));
+    assert!(out.inliers.len() >= 55);
+}
+
+#[test]
+fn chance_consensus_is_an_error_not_a_pose() {
+    // Every match wrong: whatever the search settles on is chance agreement.
+    for seed in 0..10 {
+        let s = SyntheticSpec {
+            n: 600,
+            outlier_fraction: 1.0,
+            ..SyntheticSpec::default()
+        }
+        .generate(100 + seed)
+        .expect("valid");
+        let r = PsoEstimator::default().estimate_seeded(&s.data, seed);
+        assert!(
+            matches!(r, Err(PoseError::InsufficientSupport { .. })),
+            "seed {seed}: {:?}",
+            r.map(|e| e.inliers.len())
+        );
+    }
+}

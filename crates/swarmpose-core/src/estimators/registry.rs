@@ -1,0 +1,105 @@
+//! The one list of estimators by name, used by `register`, `bench` and the simulation:
+//! a new estimator joins by adding a [`Method`] here.
+
+use super::{
+    Estimator, MsacConfig, MsacEstimator, PsoEstimator, PsoEstimatorConfig, PsoPaperConfig,
+    PsoPaperEstimator, SvdEstimator, WlsEstimator,
+};
+
+/// An estimator of the project, by its command-line name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Method {
+    /// `pso`: robust PSO over unit quaternions on translation-free pairs, then SVD
+    /// refinement ([`PsoEstimator`]).
+    Pso,
+    /// `pso-paper`: the paper's PSO/SVD, literally ([`PsoPaperEstimator`]).
+    PsoPaper,
+    /// `svd`: Arun's SVD on all points ([`SvdEstimator`]).
+    Svd,
+    /// `msac`: MSAC with 3-point samples ([`MsacEstimator`]).
+    Msac,
+    /// `wls`: weighted least squares on all points, Mahalanobis with covariances
+    /// ([`WlsEstimator`]).
+    Wls,
+}
+
+impl Method {
+    /// Every method, in table order.
+    pub const ALL: [Method; 5] = [
+        Method::Pso,
+        Method::PsoPaper,
+        Method::Svd,
+        Method::Msac,
+        Method::Wls,
+    ];
+
+    /// The command-line name, equal to the estimator's [`Estimator::name`].
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Pso => "pso",
+            Method::PsoPaper => "pso-paper",
+            Method::Svd => "svd",
+            Method::Msac => "msac",
+            Method::Wls => "wls",
+        }
+    }
+
+    /// The method of a command-line name.
+    #[must_use]
+    pub fn from_name(name: &str) -> Option<Method> {
+        Method::ALL.into_iter().find(|m| m.name() == name)
+    }
+
+    /// Whether the method takes an inlier threshold (`svd` and `wls` fit every point).
+    #[must_use]
+    pub fn uses_threshold(self) -> bool {
+        matches!(self, Method::Pso | Method::PsoPaper | Method::Msac)
+    }
+
+    /// The estimator with its default settings and, for methods that take one, the
+    /// threshold δ (metres; `None` keeps the default: automatic for `pso`).
+    #[must_use]
+    pub fn build(self, threshold_m: Option<f64>) -> Box<dyn Estimator> {
+        match self {
+            Method::Pso => {
+                let mut c = PsoEstimatorConfig::default();
+                if let Some(d) = threshold_m {
+                    c = c.with_threshold(d);
+                }
+                Box::new(PsoEstimator::new(c))
+            }
+            Method::PsoPaper => {
+                let mut c = PsoPaperConfig::default();
+                if let Some(d) = threshold_m {
+                    c = c.with_threshold(d);
+                }
+                Box::new(PsoPaperEstimator::new(c))
+            }
+            Method::Svd => Box::new(SvdEstimator),
+            Method::Msac => {
+                let mut c = MsacConfig::default();
+                if let Some(d) = threshold_m {
+                    c = c.with_threshold(d);
+                }
+                Box::new(MsacEstimator::new(c))
+            }
+            Method::Wls => Box::new(WlsEstimator),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_round_trip_and_match_the_estimators() {
+        for m in Method::ALL {
+            assert_eq!(Method::from_name(m.name()), Some(m));
+            assert_eq!(m.build(None).name(), m.name());
+            assert_eq!(m.build(Some(0.1)).name(), m.name());
+        }
+        assert_eq!(Method::from_name("nope"), None);
+    }
+}
