@@ -48,6 +48,6 @@ fn _swarmpose(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<odometry_run::OdometryRun>()?;
     m.add_class::<frame::Frame>()?;
     m.add_class::<sequence::Sequence>()?;
-    m.add("METHODS", methods::NAMES.to_vec())?;
+    m.add("METHODS", methods::names())?;
     Ok(())
 }

@@ -4,21 +4,21 @@
 
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use swarmpose_core::{
-    Estimator, MsacConfig, MsacEstimator, PsoEstimator, PsoEstimatorConfig, PsoPaperConfig,
-    PsoPaperEstimator, SvdEstimator, Threshold,
-};
+use swarmpose_core::{Estimator, Method};
 
-/// The names `method=` accepts, as on the command line (`swarmpose register --method`).
-pub(crate) const NAMES: [&str; 4] = ["pso", "pso-paper", "svd", "msac"];
+/// The names `method=` accepts: the workspace's one registry
+/// ([`swarmpose_core::Method`]), as on the command line (`swarmpose register --method`).
+pub(crate) fn names() -> Vec<&'static str> {
+    Method::ALL.iter().map(|m| m.name()).collect()
+}
 
 /// The estimator called `method` with its default configuration, and the inlier
 /// threshold `threshold_m` (metres) when given: `pso` estimates it from the data
-/// otherwise; `svd` has none.
+/// otherwise; `svd` and `wls` have none.
 ///
 /// # Errors
 /// `ValueError` for an unknown name, a threshold that is not finite and positive, or a
-/// threshold for `svd`.
+/// threshold for a method without one.
 pub(crate) fn estimator(method: &str, threshold_m: Option<f64>) -> PyResult<Box<dyn Estimator>> {
     if let Some(d) = threshold_m
         && !(d.is_finite() && d > 0.0)
@@ -27,35 +27,16 @@ pub(crate) fn estimator(method: &str, threshold_m: Option<f64>) -> PyResult<Box<
             "threshold {d}: it must be a positive, finite number of metres"
         )));
     }
-    Ok(match method {
-        "pso" => {
-            let mut c = PsoEstimatorConfig::default();
-            if let Some(d) = threshold_m {
-                c.threshold = Threshold::Fixed(d);
-            }
-            Box::new(PsoEstimator::new(c))
-        }
-        "pso-paper" => {
-            let mut c = PsoPaperConfig::default();
-            c.threshold_m = threshold_m.unwrap_or(c.threshold_m);
-            Box::new(PsoPaperEstimator::new(c))
-        }
-        "msac" => {
-            let mut c = MsacConfig::default();
-            c.threshold_m = threshold_m.unwrap_or(c.threshold_m);
-            Box::new(MsacEstimator::new(c))
-        }
-        "svd" if threshold_m.is_some() => {
-            return Err(PyValueError::new_err(
-                "threshold does not apply to method svd",
-            ));
-        }
-        "svd" => Box::new(SvdEstimator),
-        other => {
-            return Err(PyValueError::new_err(format!(
-                "unknown method {other:?}: one of {}",
-                NAMES.join(", ")
-            )));
-        }
-    })
+    let Some(m) = Method::from_name(method) else {
+        return Err(PyValueError::new_err(format!(
+            "unknown method {method:?}: one of {}",
+            names().join(", ")
+        )));
+    };
+    if threshold_m.is_some() && !m.uses_threshold() {
+        return Err(PyValueError::new_err(format!(
+            "threshold does not apply to method {method}"
+        )));
+    }
+    Ok(m.build(threshold_m))
 }

@@ -91,7 +91,7 @@ def test_bad_camera():
     assert "sift" in str(e.value)
     with pytest.raises(ValueError) as e:
         swarmpose.Odometry(**KITTI_CAMERA, method="icp")
-    assert str(e.value) == 'unknown method "icp": one of pso, pso-paper, svd, msac'
+    assert str(e.value) == 'unknown method "icp": one of pso, pso-paper, svd, msac, wls'
 
 
 def test_bad_frames_leave_the_engine_usable():

@@ -75,7 +75,7 @@ def test_recovers_a_known_motion(dtype, order, covariance):
 
 @pytest.mark.parametrize("method", swarmpose.METHODS)
 def test_every_method_runs(method):
-    src, dst, good = scene(outliers=0.0 if method in ("svd", "pso-paper") else 0.25)
+    src, dst, good = scene(outliers=0.0 if method in ("svd", "pso-paper", "wls") else 0.25)
     r = swarmpose.register(src, dst, method=method, seed=3)
     check_motion(r, good)
     assert r.method == method
@@ -176,7 +176,7 @@ def test_bad_options():
     src, dst, _ = scene(n=10)
     with pytest.raises(ValueError) as e:
         swarmpose.register(src, dst, method="icp")
-    assert message(e) == 'unknown method "icp": one of pso, pso-paper, svd, msac'
+    assert message(e) == 'unknown method "icp": one of pso, pso-paper, svd, msac, wls'
     with pytest.raises(ValueError) as e:
         swarmpose.register(src, dst, method="svd", threshold=0.1)
     assert message(e) == "threshold does not apply to method svd"

@@ -9,7 +9,7 @@ import numpy.typing as npt
 
 __version__: str
 METHODS: List[str]
-"""Estimator names for ``method=``: ``pso``, ``pso-paper``, ``svd``, ``msac``."""
+"""Estimator names for ``method=``: ``pso``, ``pso-paper``, ``svd``, ``msac``, ``wls``."""
 
 _Points = Union[npt.NDArray[np.float32], npt.NDArray[np.float64], Seq[Seq[float]]]
 _Path = Union[str, "os.PathLike[str]"]
