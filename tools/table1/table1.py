@@ -50,7 +50,7 @@ def run(binary, seq, out, extra):
     m = re.search(r"ATE ([\d.]+) m \(([\d.]+) % of the path\), final position error ([\d.]+) m \(([\d.]+) %\)", text)
     if m:
         r.update(ins_ate_m=float(m.group(1)), ins_ate=float(m.group(2)), ins_final=float(m.group(4)))
-    m = re.search(r"disparity correction: (.*) \(([^;]*);", text)
+    m = re.search(r"disparity correction: (.*?) \(([^;]*);", text)
     if m:
         r.update(correction=m.group(1), model=m.group(2))
     m = re.search(r"\(([\d.]+) frames/s\)", text)
