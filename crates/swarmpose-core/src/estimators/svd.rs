@@ -27,24 +27,34 @@ impl Estimator for SvdEstimator {
         check_input(data)?;
         let inliers: Vec<usize> = (0..data.len()).collect();
         let transform = arun_on(data, &inliers)?;
-        let cost: f64 = data
-            .src()
-            .iter()
-            .zip(data.dst())
-            .map(|(s, d)| residual_sq(&transform, s, d))
-            .sum();
-        Ok(Estimate {
-            transform,
-            diagnostics: Diagnostics {
-                iterations: 1,
-                cost_evaluations: 1,
-                final_cost: cost,
-                residual_rms_m: (cost / data.len() as f64).sqrt(),
-                threshold_m: None,
-                elapsed: start.elapsed(),
-                runner_up: None,
-            },
-            inliers,
-        })
+        Ok(fit_of_all_points(data, transform, start))
+    }
+}
+
+/// The estimate of a fit to every correspondence (no rejection): all points are inliers,
+/// the cost is the sum of squared residuals, m², and the time runs from `start`.
+pub(crate) fn fit_of_all_points(
+    data: &Correspondences,
+    transform: nalgebra::Isometry3<f64>,
+    start: Instant,
+) -> Estimate {
+    let cost: f64 = data
+        .src()
+        .iter()
+        .zip(data.dst())
+        .map(|(s, d)| residual_sq(&transform, s, d))
+        .sum();
+    Estimate {
+        transform,
+        diagnostics: Diagnostics {
+            iterations: 1,
+            cost_evaluations: 1,
+            final_cost: cost,
+            residual_rms_m: (cost / data.len() as f64).sqrt(),
+            threshold_m: None,
+            elapsed: start.elapsed(),
+            runner_up: None,
+        },
+        inliers: (0..data.len()).collect(),
     }
 }

@@ -10,9 +10,10 @@
 
 use std::time::Instant;
 
-use super::consensus::{Tolerance, arun_within, check_input, residual_sq};
+use super::consensus::{Tolerance, arun_within, check_input};
 use super::mahalanobis::refine_mahalanobis;
-use super::{Diagnostics, Estimate, Estimator};
+use super::svd::fit_of_all_points;
+use super::{Estimate, Estimator};
 use crate::error::PoseError;
 use crate::geometry::Correspondences;
 use crate::rng::SeededRng;
@@ -46,25 +47,7 @@ impl Estimator for WlsEstimator {
             // No gate: every point counts.
             transform = refine_mahalanobis(data, &transform, f64::MAX, ROUNDS)?.0;
         }
-        let cost: f64 = data
-            .src()
-            .iter()
-            .zip(data.dst())
-            .map(|(s, d)| residual_sq(&transform, s, d))
-            .sum();
-        Ok(Estimate {
-            transform,
-            diagnostics: Diagnostics {
-                iterations: 1,
-                cost_evaluations: 1,
-                final_cost: cost,
-                residual_rms_m: (cost / data.len() as f64).sqrt(),
-                threshold_m: None,
-                elapsed: start.elapsed(),
-                runner_up: None,
-            },
-            inliers,
-        })
+        Ok(fit_of_all_points(data, transform, start))
     }
 }
 
