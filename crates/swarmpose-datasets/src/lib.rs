@@ -87,6 +87,13 @@ pub trait StereoSequence: Send + Sync {
     /// frame 0, when the sequence has camera ground truth.
     fn ground_truth(&self) -> Option<&[Isometry3<f64>]>;
 
+    /// Time of frame `i`, seconds since the first frame, when the layout records it
+    /// (EuRoC); `None` otherwise, and the caller assumes a frame period.
+    fn timestamp_s(&self, i: usize) -> Option<f64> {
+        let _ = i;
+        None
+    }
+
     /// Ground-truth motion mapping frame-`j` camera coordinates into frame `i`:
     /// `pose_i⁻¹ · pose_j`, i.e. `dst = R src + t` with src in frame `j`, dst in frame `i`.
     fn relative_ground_truth(&self, i: usize, j: usize) -> Option<Isometry3<f64>> {

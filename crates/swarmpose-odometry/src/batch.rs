@@ -24,6 +24,12 @@ pub fn camera_of(seq: &dyn StereoSequence) -> StereoCamera {
     }
 }
 
+/// The time of frame `i` of `seq`, seconds: the sequence's own, or `i × frame_period_s`.
+#[must_use]
+pub fn time_of(seq: &dyn StereoSequence, i: usize, frame_period_s: f64) -> f64 {
+    seq.timestamp_s(i).unwrap_or(i as f64 * frame_period_s)
+}
+
 /// How a run ended.
 #[derive(Debug)]
 pub enum RunEnd {
@@ -33,8 +39,9 @@ pub enum RunEnd {
     Stopped(usize),
 }
 
-/// Feeds the frames of `seq` to `odometry` in order, frame `i` at the time
-/// `i × frame_period_s`, and calls `on_frame` with each result as soon as it exists; it
+/// Feeds the frames of `seq` to `odometry` in order, frame `i` at the time the sequence
+/// records for it ([`StereoSequence::timestamp_s`]) or else `i × frame_period_s`, and
+/// calls `on_frame` with each result as soon as it exists; it
 /// may stop the run by returning [`ControlFlow::Break`].
 ///
 /// # Errors
@@ -57,7 +64,7 @@ pub fn run_sequence(
         let input = StereoInput {
             left: pair.left.view(),
             right: pair.right.view(),
-            timestamp_s: i as f64 * frame_period_s,
+            timestamp_s: time_of(seq, i, frame_period_s),
         };
         let r = odometry.track_timed(input, load_ms).map_err(at)?;
         if on_frame(&r).is_break() {
@@ -86,7 +93,7 @@ pub fn run_sequence_two_threads(
             load_ms: ms(t),
             left: pair.left,
             right: pair.right,
-            timestamp_s: i as f64 * frame_period_s,
+            timestamp_s: time_of(seq, i, frame_period_s),
         })
     });
     odometry.run_two_threads(frames, on_frame)

@@ -343,6 +343,11 @@ impl StereoSequence for EurocSequence {
         &self.notes
     }
 
+    fn timestamp_s(&self, i: usize) -> Option<f64> {
+        let first = *self.timestamps_ns.first()?;
+        Some((*self.timestamps_ns.get(i)? - first) as f64 * 1e-9)
+    }
+
     fn ground_truth(&self) -> Option<&[Isometry3<f64>]> {
         self.poses.as_deref()
     }
