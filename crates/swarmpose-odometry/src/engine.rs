@@ -217,6 +217,19 @@ impl Odometry {
         with_inner!(&self.inner, _f, t => t.calibration())
     }
 
+    /// The disparity correction applied to the next frame (pixels) and where it comes
+    /// from: the self-calibration's current decision ([`Odometry::calibration`]),
+    /// [`crate::CorrectionModel::GIVEN`] for a fixed correction, or none.
+    #[must_use]
+    pub fn correction(
+        &self,
+    ) -> (
+        swarmpose_vision::frontend::DisparityCorrection,
+        crate::CorrectionModel,
+    ) {
+        with_inner!(&self.inner, _f, t => t.correction())
+    }
+
     /// Heap bytes of the engine's per-frame state (the reference frame's features): it
     /// does not grow with the number of frames.
     #[must_use]

@@ -164,8 +164,10 @@ impl<D: Descriptor> Tracker<D> {
         })
     }
 
-    /// The correction and its model to apply now.
-    fn correction(&self) -> (DisparityCorrection, CorrectionModel) {
+    /// The disparity correction applied to the next frame and where it comes from: the
+    /// self-calibration's decision, [`CorrectionModel::GIVEN`] for a fixed one, or none.
+    #[must_use]
+    pub fn correction(&self) -> (DisparityCorrection, CorrectionModel) {
         match self.config.calibration {
             Calibration::Auto => {
                 let d = self.selfcal.decision();

@@ -23,7 +23,9 @@ use swarmpose_odometry::output::{
 use swarmpose_odometry::plots::{PlotTrack, render_plots};
 use swarmpose_odometry::rgbd::RgbdSequence;
 use swarmpose_odometry::synthetic::SyntheticSequence;
-use swarmpose_odometry::{FrameResult, Odometry, OdometryConfig, OdometryError};
+use swarmpose_odometry::{
+    CorrectionModel, Decision, FrameResult, Odometry, OdometryConfig, OdometryError,
+};
 
 use super::odometry_output::{OutputDir, StreamFile};
 use super::stereo_options::StereoOptions;
@@ -371,7 +373,19 @@ fn finish(
         }
         None => None,
     };
-    let decision = odometry.calibration();
+    // A fixed correction (--disparity-offset) is reported as given, not as the unused
+    // self-calibration's "none".
+    let (applied, source) = odometry.correction();
+    let given = Decision {
+        model: source,
+        correction: applied,
+        ..Decision::default()
+    };
+    let decision = if source == CorrectionModel::GIVEN {
+        &given
+    } else {
+        odometry.calibration()
+    };
     let calibration = serde_json::to_string_pretty(&calibration_json(decision))
         .map_err(|e| CliError::failure(format!("calibration.json: {e}")))?;
     dir.write("calibration.json", calibration.as_bytes())?;
@@ -411,22 +425,26 @@ fn finish(
         odometry.estimator(),
         odometry.detector()
     ))?;
-    out(&format!(
-        "disparity correction: {} ({}; rows: yaw f*psi {:.3} px{}, roll f*theta {:.3} px, from {} \
-         row offsets; rigidity: {} pairs, held-out score {:.1})",
-        decision.correction,
-        decision.model,
-        decision.rows.rotation_px[0],
-        if decision.rows.yaw {
-            " (used)"
-        } else {
-            " (not used)"
-        },
-        decision.rows.rotation_px[1],
-        decision.rows.measurements,
-        decision.pairs,
-        decision.rigidity_score
-    ))?;
+    if source == CorrectionModel::GIVEN {
+        out(&format!("disparity correction: {applied} (given)"))?;
+    } else {
+        out(&format!(
+            "disparity correction: {} ({}; rows: yaw f*psi {:.3} px{}, roll f*theta {:.3} px, from {} \
+             row offsets; rigidity: {} pairs, held-out score {:.1})",
+            decision.correction,
+            decision.model,
+            decision.rows.rotation_px[0],
+            if decision.rows.yaw {
+                " (used)"
+            } else {
+                " (not used)"
+            },
+            decision.rows.rotation_px[1],
+            decision.rows.measurements,
+            decision.pairs,
+            decision.rigidity_score
+        ))?;
+    }
     out(&format!(
         "time per frame: {total:.1} ms ({:.1} frames/s): load {:.1}, features {:.1}, stereo {:.1}, \
          match {:.1}, estimate {:.1}, refine {:.1}, calibrate {:.1} ms",
