@@ -1,8 +1,8 @@
 //! The estimate stage: matches with the reference frame, the robust estimator's motion
 //! on their 3D points, and the stereo measurements the refinement takes.
 
-use nalgebra::Isometry3;
-use swarmpose_core::Estimator;
+use nalgebra::{Isometry3, Point3};
+use swarmpose_core::{Correspondences, Estimator};
 use swarmpose_vision::frontend::{DisparityCorrection, FrameMatches};
 
 use crate::refine::model::StereoObservation;
@@ -48,11 +48,14 @@ pub(crate) fn observations(m: &FrameMatches, stripe_px: f64) -> Observations {
 }
 
 /// The estimator's motion (pose of B in A) on the matches' 3D points with `correction`
-/// applied (a rig of baseline `baseline_m`), and its number of inliers; the reason when
-/// there is none.
+/// applied (a rig of baseline `baseline_m`) and depths stretched by `focal_scale` (the
+/// ratio of the focal length applied to the calibration's: depth is `f b / d`, the other
+/// coordinates `(u − c) b / d` do not depend on `f`), and its number of inliers; the
+/// reason when there is none.
 pub(crate) fn initial_motion(
     m: &FrameMatches,
     correction: &DisparityCorrection,
+    focal_scale: f64,
     baseline_m: f64,
     estimator: &dyn Estimator,
     seed: u64,
@@ -66,6 +69,19 @@ pub(crate) fn initial_motion(
             .with_disparity_correction(*correction, baseline_m)
             .map_err(|e| format!("disparity correction {correction}: {e}"))?;
         &corrected.correspondences
+    };
+    let stretched;
+    let data = if focal_scale == 1.0 {
+        data
+    } else {
+        let z = |p: &[Point3<f64>]| -> Vec<Point3<f64>> {
+            p.iter()
+                .map(|p| Point3::new(p.x, p.y, p.z * focal_scale))
+                .collect()
+        };
+        stretched = Correspondences::new(z(data.src()), z(data.dst()))
+            .map_err(|e| format!("focal length x {focal_scale}: {e}"))?;
+        &stretched
     };
     let e = estimator
         .estimate_seeded(data, seed)

@@ -48,4 +48,4 @@ pub use engine::{Odometry, OdometryBuilder, OwnedStereoFrame};
 pub use error::OdometryError;
 pub use intake::{DepthView, RgbdInput, StereoCamera, StereoInput};
 pub use record::{Counts, FrameResult, StageTimes, Status};
-pub use selfcal::{CorrectionModel, Decision};
+pub use selfcal::{CorrectionModel, Decision, SelfCalConfig};

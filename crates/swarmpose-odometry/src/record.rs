@@ -128,6 +128,9 @@ pub struct FrameResult {
     pub times: StageTimes,
     /// The disparity correction applied to this frame.
     pub correction: DisparityCorrection,
+    /// The change of the rig's focal length applied to this frame, pixels of `fx` (`fy`
+    /// in proportion; 0 unless the self-calibration chose it).
+    pub focal_px: f64,
     /// The model of that correction.
     pub correction_model: CorrectionModel,
 }

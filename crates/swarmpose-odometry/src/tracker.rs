@@ -20,6 +20,7 @@ use swarmpose_core::Estimator;
 use swarmpose_vision::features::{Descriptor, GrayView};
 use swarmpose_vision::frontend::{DisparityCorrection, StereoFrame, match_frames};
 use swarmpose_vision::image::GrayImage;
+use swarmpose_vision::stereo::RectifiedStereo;
 use swarmpose_vision::temporal::TemporalConfig;
 use swarmpose_vision::temporal::subpixel::align_patch;
 
@@ -64,6 +65,7 @@ struct Measured {
     covariance: Option<Matrix6<f64>>,
     inliers: usize,
     correction: DisparityCorrection,
+    focal_px: f64,
     model: CorrectionModel,
     ref_pose: Isometry3<f64>,
     ref_timestamp_s: f64,
@@ -76,6 +78,14 @@ const CORRECTION_TOLERANCE_PX: f64 = 0.05;
 
 /// Most refinements of a pair again under the correction its own evidence leads to.
 const FIXED_POINT_ITERATIONS: usize = 4;
+
+/// `rig` with its focal length changed by `focal_px` pixels of `fx`, `fy` in proportion.
+fn focal_changed(rig: &RectifiedStereo, focal_px: f64) -> RectifiedStereo {
+    let mut r = *rig;
+    r.fy *= 1.0 + focal_px / r.fx;
+    r.fx += focal_px;
+    r
+}
 
 /// `m` scaled to `f` times its rotation angle and translation (constant velocity over
 /// a different time step).
@@ -178,16 +188,31 @@ impl<D: Descriptor> Tracker<D> {
         }
     }
 
-    fn model(&self, correction: DisparityCorrection) -> StereoModel {
+    /// The change of the rig's focal length applied to the next frame, pixels of `fx`
+    /// (`fy` in proportion): the self-calibration's, or 0 for a fixed or no correction.
+    #[must_use]
+    pub fn focal_px(&self) -> f64 {
+        match self.config.calibration {
+            Calibration::Auto => self.selfcal.decision().focal_px,
+            Calibration::Off | Calibration::Fixed(_) => 0.0,
+        }
+    }
+
+    fn model(&self, correction: DisparityCorrection, focal_px: f64) -> StereoModel {
         StereoModel {
-            rig: self.camera.rig,
+            rig: focal_changed(&self.camera.rig, focal_px),
             noise: self.noise,
             correction,
         }
     }
 
-    /// Largest change, pixels, of the correction over the image's columns.
-    fn correction_change(&self, a: &DisparityCorrection, b: &DisparityCorrection) -> f64 {
+    /// Largest change, pixels, of the correction and the focal length (`a` and `b`, each
+    /// with its focal length change) over the image's columns.
+    fn correction_change(
+        &self,
+        (a, fa): (&DisparityCorrection, f64),
+        (b, fb): (&DisparityCorrection, f64),
+    ) -> f64 {
         let r = &self.camera.rig;
         let (w, h) = (self.camera.width as f64, self.camera.height as f64);
         let mut diff = b.coefficients();
@@ -198,9 +223,13 @@ impl<D: Descriptor> Tracker<D> {
         // At the corners and edge midpoints of the image.
         let xs = [-r.cx / r.fx, 0.0, (w - r.cx) / r.fx];
         let ys = [-r.cy / r.fy, 0.0, (h - r.cy) / r.fy];
-        xs.iter()
+        let disparity = xs
+            .iter()
             .flat_map(|x| ys.iter().map(move |y| diff.at_normalised(*x, *y).abs()))
-            .fold(0.0, f64::max)
+            .fold(0.0, f64::max);
+        // A focal length change moves a pixel at normalised x by Δf x.
+        let focal = xs.iter().map(|x| x.abs()).fold(0.0, f64::max) * (fb - fa).abs();
+        disparity.max(focal)
     }
 
     /// The motion of `frame` from the reference, or why there is none.
@@ -228,11 +257,13 @@ impl<D: Descriptor> Tracker<D> {
             return Err(format!("{} matches, fewer than {min}", counts.matches));
         }
         let (correction, model) = self.correction();
+        let focal_px = self.focal_px();
         let t = Instant::now();
         let seed = self.config.seed.wrapping_add(index as u64);
         let est = initial_motion(
             &m,
             &correction,
+            1.0 + focal_px / self.camera.rig.fx,
             self.camera.rig.baseline_m,
             self.estimator.as_ref(),
             seed,
@@ -245,6 +276,7 @@ impl<D: Descriptor> Tracker<D> {
             covariance: None,
             inliers: est_inliers,
             correction,
+            focal_px,
             model,
             ref_pose,
             ref_timestamp_s,
@@ -289,7 +321,7 @@ impl<D: Descriptor> Tracker<D> {
             obs.source.truncate(keep);
         }
         let refined = refine(
-            &self.model(correction),
+            &self.model(correction, focal_px),
             &self.config.refinement,
             &obs.reference,
             &obs.current,
@@ -300,8 +332,8 @@ impl<D: Descriptor> Tracker<D> {
         .map_err(|e| format!("refinement: {e}"))?;
         times.refine_ms = ms(t);
         let t = Instant::now();
-        let mut best: (Refined, DisparityCorrection, CorrectionModel) =
-            (refined, correction, model);
+        let mut best: (Refined, DisparityCorrection, f64, CorrectionModel) =
+            (refined, correction, focal_px, model);
         if needs_evidence {
             // The row offsets of the current frame's confirmed matches.
             let rows = best.0.inliers.iter().map(|&k| {
@@ -322,14 +354,15 @@ impl<D: Descriptor> Tracker<D> {
             let dt_s = timestamp_s - ref_timestamp_s;
             let before = self.selfcal.clone();
             let mut cal = before.clone();
-            cal.add_pair(&best.0.reduced, &best.1, best.0.scale2, dt_s);
+            cal.add_pair(&best.0.reduced, &best.1, best.2, best.0.scale2, dt_s);
             for _ in 0..FIXED_POINT_ITERATIONS {
                 let d = *cal.decision();
-                if self.correction_change(&best.1, &d.correction) <= CORRECTION_TOLERANCE_PX {
+                let change = self.correction_change((&best.1, best.2), (&d.correction, d.focal_px));
+                if change <= CORRECTION_TOLERANCE_PX {
                     break;
                 }
                 let Ok(r) = refine(
-                    &self.model(d.correction),
+                    &self.model(d.correction, d.focal_px),
                     &self.config.refinement,
                     &obs.reference,
                     &obs.current,
@@ -339,9 +372,9 @@ impl<D: Descriptor> Tracker<D> {
                 ) else {
                     break;
                 };
-                best = (r, d.correction, d.model);
+                best = (r, d.correction, d.focal_px, d.model);
                 cal = before.clone();
-                cal.add_pair(&best.0.reduced, &best.1, best.0.scale2, dt_s);
+                cal.add_pair(&best.0.reduced, &best.1, best.2, best.0.scale2, dt_s);
             }
             self.selfcal = cal;
         }
@@ -349,11 +382,12 @@ impl<D: Descriptor> Tracker<D> {
         if self.config.refine {
             // Otherwise the estimator alone: its motion, on the points corrected as
             // decided before this pair.
-            let (refined, correction, model) = best;
+            let (refined, correction, focal_px, model) = best;
             measured.motion = refined.motion;
             measured.covariance = Some(refined.covariance);
             measured.inliers = refined.inliers.len();
             measured.correction = correction;
+            measured.focal_px = focal_px;
             measured.model = model;
         }
         Ok(measured)
@@ -387,6 +421,7 @@ impl<D: Descriptor> Tracker<D> {
 
         let too_few = || format!("{n_points} stereo points, fewer than {min}");
         let (correction, correction_model) = self.correction();
+        let focal_px = self.focal_px();
         let mut result = FrameResult {
             index,
             timestamp_s,
@@ -398,6 +433,7 @@ impl<D: Descriptor> Tracker<D> {
             counts,
             times,
             correction,
+            focal_px,
             correction_model,
         };
         let Some(last) = self.last else {
@@ -434,6 +470,7 @@ impl<D: Descriptor> Tracker<D> {
                 result.covariance = m.covariance;
                 result.status = Status::Tracked;
                 result.correction = m.correction;
+                result.focal_px = m.focal_px;
                 result.correction_model = m.model;
                 // Frame to frame: the tracked frame is the next reference.
                 self.set_reference(frame, left, pose, timestamp_s, index);

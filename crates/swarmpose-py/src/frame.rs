@@ -116,6 +116,13 @@ impl Frame {
         Ok(d)
     }
 
+    /// The change of the rig's focal length applied to this frame, pixels of ``fx``
+    /// (``fy`` in proportion; 0 unless self-calibration chose the ``focal-length`` cause).
+    #[getter]
+    fn focal_correction_px(&self) -> f64 {
+        self.result.focal_px
+    }
+
     /// The model of that correction (its causes, ``"none"`` for none).
     #[getter]
     fn correction_model(&self) -> String {

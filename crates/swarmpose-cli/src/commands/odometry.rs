@@ -428,8 +428,13 @@ fn finish(
     if source == CorrectionModel::GIVEN {
         out(&format!("disparity correction: {applied} (given)"))?;
     } else {
+        let focal = if decision.model.has(CorrectionModel::FOCAL_LENGTH) {
+            format!("; focal length {:+.3} px", decision.focal_px)
+        } else {
+            String::new()
+        };
         out(&format!(
-            "disparity correction: {} ({}; rows: yaw f*psi {:.3} px{}, roll f*theta {:.3} px, from {} \
+            "disparity correction: {}{focal} ({}; rows: yaw f*psi {:.3} px{}, roll f*theta {:.3} px, from {} \
              row offsets; rigidity: {} pairs, held-out score {:.1})",
             decision.correction,
             decision.model,

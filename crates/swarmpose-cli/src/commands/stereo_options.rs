@@ -52,7 +52,9 @@ pub struct StereoOptions {
     /// The causes of a disparity error that self-calibration may correct, when they have
     /// evidence: `none` (no correction), or some of principal-point (a constant, seen as
     /// a scene that is not rigid between frames), yaw, roll, pitch (seen in the rows of
-    /// each stereo pair) and focal, joined by '+'.
+    /// each stereo pair), focal (the right camera's) and focal-length (the rig's, both
+    /// cameras: seen when the camera turns; not a default, see docs/self-calibration.md),
+    /// joined by '+'.
     #[arg(long, value_name = "CAUSES", default_value = "principal-point+yaw",
           value_parser = parse_causes)]
     pub calibrate: CorrectionModel,

@@ -5,12 +5,11 @@
 //! (the *profile* cost).
 
 use nalgebra::{Matrix3, Matrix6, SMatrix, SVector, Vector3, Vector6};
-use swarmpose_vision::frontend::CORRECTION_TERMS;
 
-use super::model::{Matrix3x6, Matrix3xK};
+use super::model::{CALIBRATION_TERMS, Matrix3x6, Matrix3xK};
 
-/// K, the number of correction terms.
-const K: usize = CORRECTION_TERMS;
+/// K, the number of calibration terms.
+const K: usize = CALIBRATION_TERMS;
 /// 6xK matrix.
 pub type Matrix6xK = SMatrix<f64, 6, K>;
 /// KxK matrix.

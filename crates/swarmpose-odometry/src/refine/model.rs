@@ -64,8 +64,14 @@ pub struct StereoModel {
 
 /// 3x6 matrix.
 pub type Matrix3x6 = SMatrix<f64, 3, 6>;
-/// 3xK matrix, K the number of correction terms.
-pub type Matrix3xK = SMatrix<f64, 3, CORRECTION_TERMS>;
+/// Number of calibration terms the evidence is about: the [`CORRECTION_TERMS`]
+/// coefficients of the disparity correction, then the focal length of the rig.
+pub const CALIBRATION_TERMS: usize = CORRECTION_TERMS + 1;
+/// Index of the focal length among the calibration terms: a change `Δf` of `fx`, pixels,
+/// with `fy` changed in proportion (`fy (1 + Δf / fx)`) and the baseline unchanged.
+pub const FOCAL_TERM: usize = CORRECTION_TERMS;
+/// 3xK matrix, K the number of calibration terms.
+pub type Matrix3xK = SMatrix<f64, 3, CALIBRATION_TERMS>;
 
 /// Whitened residual and Jacobians of one measurement: `e = (z_pred − z) / σ`.
 #[derive(Debug, Clone, Copy)]
@@ -105,12 +111,18 @@ impl StereoModel {
         Vector3::new(x, y, rho)
     }
 
-    /// `∂e_d/∂c` before whitening: `−φ(x, y)`.
-    fn correction_row(x: f64, y: f64) -> Matrix3xK {
+    /// `∂e/∂c` before whitening: `−φ(x_r, y)` for the disparity's correction terms, and
+    /// for the focal length (`fx + Δf`, `fy (1 + Δf / fx)`) `(x, y fy / fx, b ρ / h_z)`
+    /// at the normalised point `(x, y)` of the left image and inverse depth over `h_z`
+    /// `rho_z` (`ρ` in A, `ρ / h_z` in B).
+    fn calibration_columns(&self, x: f64, y: f64, xr: f64, rho_z: f64) -> Matrix3xK {
         let mut m = Matrix3xK::zeros();
-        for (k, b) in DisparityCorrection::basis(x, y).iter().enumerate() {
+        for (k, b) in DisparityCorrection::basis(xr, y).iter().enumerate() {
             m[(2, k)] = -b;
         }
+        m[(0, FOCAL_TERM)] = x;
+        m[(1, FOCAL_TERM)] = y * self.rig.fy / self.rig.fx;
+        m[(2, FOCAL_TERM)] = self.rig.baseline_m * rho_z;
         m
     }
 
@@ -168,7 +180,7 @@ impl StereoModel {
         );
         let w = self.whiten();
         let d_point = Matrix3::new(r.fx, 0.0, 0.0, 0.0, r.fy, 0.0, -sx, -sy, self.fb() + sx * b);
-        let d_correction = Self::correction_row(xr, y);
+        let d_correction = self.calibration_columns(x, y, xr, rho);
         Linearized {
             residual: (pred - Vector3::new(z.u, z.v, z.d)).component_mul(&w),
             d_point: Matrix3::from_diagonal(&w) * d_point,
@@ -232,7 +244,7 @@ impl StereoModel {
         dh_dxi
             .fixed_view_mut::<3, 3>(0, 3)
             .copy_from(&(-h.cross_matrix()));
-        let d_correction = Self::correction_row(xr, yn);
+        let d_correction = self.calibration_columns(xn, yn, xr, rho * iz);
         let w = Matrix3::from_diagonal(&self.whiten());
         Some(Linearized {
             residual: w * (pred - Vector3::new(z.u, z.v, z.d)),
@@ -325,7 +337,23 @@ mod tests {
             let la = m.in_reference(&p, &z);
             assert!(((ap - am) / (2.0 * h) - la.d_correction.column(k)).norm() < 1e-4);
         }
+        // The focal length: fx + Δf and fy in proportion.
+        let focal = |s: f64| {
+            let mut rig = m.rig;
+            rig.fy *= 1.0 + s * h / rig.fx;
+            rig.fx += s * h;
+            let mm = StereoModel { rig, ..m };
+            (
+                mm.in_current(&rot, &trans, &p, &z).expect("front").residual,
+                mm.in_reference(&p, &z).residual,
+            )
+        };
+        let ((bp, ap), (bm, am)) = (focal(1.0), focal(-1.0));
         let la = m.in_reference(&p, &z);
+        let col = lin.d_correction.column(FOCAL_TERM);
+        assert!(((bp - bm) / (2.0 * h) - col).norm() < 1e-4, "focal in B");
+        let col = la.d_correction.column(FOCAL_TERM);
+        assert!(((ap - am) / (2.0 * h) - col).norm() < 1e-4, "focal in A");
         for k in 0..3 {
             let mut dp = Vector3::zeros();
             dp[k] = h;

@@ -51,9 +51,10 @@ use swarmpose_vision::frontend::{CORRECTION_TERMS, DisparityCorrection};
 use swarmpose_vision::stereo::RectifiedStereo;
 
 use crate::refine::evidence::{MatrixK, QuadraticCost, Reduced, VectorK};
+use crate::refine::model::FOCAL_TERM;
 use rows::{RowDecision, RowEvidence};
 
-const K: usize = CORRECTION_TERMS;
+const K: usize = crate::refine::model::CALIBRATION_TERMS;
 
 /// Settings of the self-calibration.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -72,6 +73,11 @@ pub struct SelfCalConfig {
     /// not move says nothing about a principal point, and a fit on nothing could pass
     /// any margin.
     pub max_sigma_px: f64,
+    /// Largest relative standard error with which each fold must determine the focal
+    /// length of the rig before [`CorrectionModel::FOCAL_LENGTH`] is considered
+    /// (default 0.005, 0.5 %: 3.5 px of a 700 px focal length; unit-free, so the
+    /// same for any image size).
+    pub max_focal_sigma: f64,
     /// Time constant, seconds, with which the rigidity evidence of past pairs fades
     /// (default 1.0; `f64::INFINITY` keeps all of it). A pair's evidence is computed
     /// under the correction in use when it arrived (its inliers are gated and weighted
@@ -92,6 +98,7 @@ impl Default for SelfCalConfig {
             stripes: 16,
             candidates: CorrectionModel::DEFAULT_CANDIDATES,
             max_sigma_px: 0.5,
+            max_focal_sigma: 0.005,
             memory_s: 1.0,
         }
     }
@@ -114,20 +121,24 @@ impl CorrectionModel {
     pub const PITCH: Self = Self(1 << 3);
     /// A focal length of the right camera: `f ε x` (rigidity).
     pub const FOCAL: Self = Self(1 << 4);
+    /// The focal length of the rectified rig, both cameras (rigidity, when the camera
+    /// turns: see [`crate::refine::model::FOCAL_TERM`]).
+    pub const FOCAL_LENGTH: Self = Self(1 << 5);
     /// The causes the default configuration may choose: principal point and yaw (a
     /// constant, and a constant plus a quadratic term).
     pub const DEFAULT_CANDIDATES: Self = Self(Self::PRINCIPAL_POINT.0 | Self::YAW.0);
     /// Every cause.
-    pub const ALL: Self = Self(0b1_1111);
+    pub const ALL: Self = Self(0b11_1111);
     /// A correction given by the user, not chosen by evidence.
     pub const GIVEN: Self = Self(1 << 7);
     /// The causes, in order, with their names.
-    pub const CAUSES: [(Self, &'static str); 5] = [
+    pub const CAUSES: [(Self, &'static str); 6] = [
         (Self::PRINCIPAL_POINT, "principal-point"),
         (Self::YAW, "yaw"),
         (Self::ROLL, "roll"),
         (Self::PITCH, "pitch"),
         (Self::FOCAL, "focal"),
+        (Self::FOCAL_LENGTH, "focal-length"),
     ];
 
     /// True when every cause of `other` is in `self`.
@@ -175,7 +186,7 @@ impl CorrectionModel {
                 .ok_or_else(|| {
                     format!(
                         "unknown cause '{part}': use none or causes joined by '+' among \
-                         principal-point, yaw, roll, pitch, focal"
+                         principal-point, yaw, roll, pitch, focal, focal-length"
                     )
                 })
         })
@@ -189,17 +200,19 @@ impl std::fmt::Display for CorrectionModel {
 }
 
 /// The horizontal causes, seen by rigidity, and their coefficient index.
-const RIGID_CAUSES: [(CorrectionModel, usize); 2] = [
+const RIGID_CAUSES: [(CorrectionModel, usize); 3] = [
     (CorrectionModel::PRINCIPAL_POINT, 0),
     (CorrectionModel::FOCAL, 2),
+    (CorrectionModel::FOCAL_LENGTH, FOCAL_TERM),
 ];
 
 /// The horizontal causes with the `x²` term fitted by rigidity alone (a yaw that the
 /// rows do not show, or something else that bends disparities towards the edges).
-const RIGID_CAUSES_WITH_YAW: [(CorrectionModel, usize); 3] = [
+const RIGID_CAUSES_WITH_YAW: [(CorrectionModel, usize); 4] = [
     (CorrectionModel::PRINCIPAL_POINT, 0),
     (CorrectionModel::YAW, 1),
     (CorrectionModel::FOCAL, 2),
+    (CorrectionModel::FOCAL_LENGTH, FOCAL_TERM),
 ];
 
 /// The minimiser of `q` over `base + Σ z_k e_k` for the coefficients `free`.
@@ -241,6 +254,9 @@ pub struct Decision {
     pub model: CorrectionModel,
     /// The correction applied: the chosen causes fitted on all the evidence so far.
     pub correction: DisparityCorrection,
+    /// The change of the rig's focal length applied, pixels of `fx` (`fy` in proportion;
+    /// 0 unless [`CorrectionModel::FOCAL_LENGTH`] is chosen).
+    pub focal_px: f64,
     /// What the rows say about the right camera's rotation.
     pub rows: RowDecision,
     /// Held-out rigidity score of the horizontal terms chosen, χ² units relative to the
@@ -256,9 +272,19 @@ pub struct Decision {
 }
 
 fn correction_of(c: &VectorK) -> DisparityCorrection {
-    let mut a = [0.0; K];
-    a.copy_from_slice(c.as_slice());
+    let mut a = [0.0; CORRECTION_TERMS];
+    a.copy_from_slice(&c.as_slice()[..CORRECTION_TERMS]);
     DisparityCorrection::from_coefficients(a)
+}
+
+/// The calibration vector of a disparity correction and a focal length change (pixels).
+fn vector_of(c: &DisparityCorrection, focal_px: f64) -> VectorK {
+    let mut v = VectorK::zeros();
+    for (k, a) in c.coefficients().iter().enumerate() {
+        v[k] = *a;
+    }
+    v[FOCAL_TERM] = focal_px;
+    v
 }
 
 /// The online self-calibration: evidence accumulated over frames and pairs (fixed size),
@@ -270,6 +296,8 @@ pub struct SelfCalibration {
     joint: QuadraticCost,
     folds: [QuadraticCost; 2],
     decision: Decision,
+    /// The calibration's focal length `fx`, pixels (from [`SelfCalibration::add_rows`]).
+    focal_px: f64,
 }
 
 impl SelfCalibration {
@@ -297,6 +325,7 @@ impl SelfCalibration {
         rig: &RectifiedStereo,
         image_width: usize,
     ) {
+        self.focal_px = rig.fx;
         let rotation = CorrectionModel::YAW
             .with(CorrectionModel::ROLL)
             .with(CorrectionModel::PITCH);
@@ -308,7 +337,7 @@ impl SelfCalibration {
     }
 
     /// Adds the evidence of one refined pair: its reduced normal equations per fold,
-    /// computed with the correction `at`, and its residual variance factor `scale2`;
+    /// computed with the correction `at` and the focal length changed by `focal_px`, and its residual variance factor `scale2`;
     /// `dt_s` (seconds since the previous pair) fades the evidence so far by
     /// `exp(−dt_s / memory_s)` ([`SelfCalConfig::memory_s`]). Returns the updated
     /// decision.
@@ -316,6 +345,7 @@ impl SelfCalibration {
         &mut self,
         reduced: &[Reduced; 2],
         at: &DisparityCorrection,
+        focal_px: f64,
         scale2: f64,
         dt_s: f64,
     ) -> &Decision {
@@ -328,7 +358,7 @@ impl SelfCalibration {
                 q.scale(keep);
             }
         }
-        let at = VectorK::from(at.coefficients());
+        let at = vector_of(at, focal_px);
         let mut both = reduced[0];
         both += &reduced[1];
         let Some((info, grad)) = both.profile() else {
@@ -370,9 +400,11 @@ impl SelfCalibration {
                 rows.yaw = false;
             }
         }
+        let fitted = fit_on_base(&self.joint, &chosen.base, &chosen.free);
         self.decision = Decision {
             model: chosen.model,
-            correction: correction_of(&fit_on_base(&self.joint, &chosen.base, &chosen.free)),
+            correction: correction_of(&fitted),
+            focal_px: fitted[FOCAL_TERM],
             rows,
             rigidity_score: chosen.relative,
             rigidity_next_score: chosen.next,
@@ -395,7 +427,7 @@ impl SelfCalibration {
                 model = model.with(flag);
             }
         }
-        let base = VectorK::from(rows.correction().coefficients());
+        let base = vector_of(&rows.correction(), 0.0);
         let [f0, f1] = &self.folds;
         let zero = VectorK::zeros();
         // Held-out score of the base itself, relative to no correction.
@@ -406,9 +438,15 @@ impl SelfCalibration {
                 - f1.value(&base)
         };
         let determined = |k: usize| {
+            // The focal length's standard error relative to the focal length.
+            let sigma = if k == FOCAL_TERM {
+                c.max_focal_sigma * self.focal_px
+            } else {
+                c.max_sigma_px
+            };
             self.folds
                 .iter()
-                .all(|f| f.a[(k, k)] * c.max_sigma_px * c.max_sigma_px >= 1.0)
+                .all(|f| f.a[(k, k)] * sigma * sigma >= 1.0)
         };
         let mut free: Vec<usize> = Vec::new();
         let mut best = 0.0;
@@ -477,7 +515,7 @@ mod tests {
         }
         q.a[(0, 1)] = 1.0;
         q.a[(1, 0)] = 1.0;
-        let base = VectorK::from([0.0, 0.5, 0.0, 0.0, 0.0]);
+        let base = VectorK::from([0.0, 0.5, 0.0, 0.0, 0.0, 0.0]);
         // Only the offset free: a00 z = b0 - (A base)_0.
         let c = fit_on_base(&q, &base, &[0]);
         assert!((c[0] - (1.0 - 0.5) / 2.0).abs() < 1e-9 && c[1] == 0.5);

@@ -35,6 +35,7 @@ pub struct SyntheticSequence {
     poses: Vec<Isometry3<f64>>,
     samples: usize,
     right_error: RightCameraError,
+    focal_scale: f64,
 }
 
 /// How the rendered right camera differs from the calibration the sequence reports
@@ -91,6 +92,7 @@ impl SyntheticSequence {
             poses,
             samples: 2,
             right_error: RightCameraError::default(),
+            focal_scale: 1.0,
         }
     }
 
@@ -98,6 +100,15 @@ impl SyntheticSequence {
     #[must_use]
     pub fn with_right_camera_error(mut self, error: RightCameraError) -> Self {
         self.right_error = error;
+        self
+    }
+
+    /// The same sequence rendered by cameras whose focal length (both cameras, `fx` and
+    /// `fy`) is `scale` times the calibration's, which stays [`RIG`]: to test the
+    /// self-calibration of the focal length.
+    #[must_use]
+    pub fn with_focal_error(mut self, scale: f64) -> Self {
+        self.focal_scale = scale;
         self
     }
 }
@@ -219,12 +230,17 @@ impl StereoSequence for SyntheticSequence {
         let right = pose
             * Isometry3::translation(RIG.baseline_m, 0.0, 0.0)
             * Isometry3::rotation(Vector3::new(e.pitch_rad, e.yaw_rad, e.roll_rad));
-        let right_rig = RectifiedStereo {
-            cx: RIG.cx + e.principal_point_px,
+        let left_rig = RectifiedStereo {
+            fx: RIG.fx * self.focal_scale,
+            fy: RIG.fy * self.focal_scale,
             ..RIG
         };
+        let right_rig = RectifiedStereo {
+            cx: RIG.cx + e.principal_point_px,
+            ..left_rig
+        };
         Ok(StereoPair {
-            left: render(&RIG, pose, SIZE.0, SIZE.1, &self.planes, self.samples),
+            left: render(&left_rig, pose, SIZE.0, SIZE.1, &self.planes, self.samples),
             right: render(
                 &right_rig,
                 &right,
