@@ -6,6 +6,7 @@ use swarmpose_vision::frontend::{Detector, DisparityCorrection};
 use crate::refine::RefineConfig;
 use crate::refine::model::PixelNoise;
 use crate::selfcal::SelfCalConfig;
+use crate::window::WindowConfig;
 
 /// How the disparity correction of the stereo calibration is obtained.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -46,6 +47,8 @@ pub struct OdometryConfig {
     pub refinement: RefineConfig,
     /// Settings of the self-calibration.
     pub selfcal: SelfCalConfig,
+    /// The sliding window of keyframes refined together (default: none).
+    pub window: WindowConfig,
 }
 
 impl Default for OdometryConfig {
@@ -60,6 +63,7 @@ impl Default for OdometryConfig {
             pixel_noise: None,
             refinement: RefineConfig::default(),
             selfcal: SelfCalConfig::default(),
+            window: WindowConfig::default(),
         }
     }
 }

@@ -42,6 +42,7 @@ pub mod rgbd;
 pub mod selfcal;
 pub mod synthetic;
 pub mod tracker;
+pub mod window;
 
 pub use config::{Calibration, OdometryConfig};
 pub use engine::{Odometry, OdometryBuilder, OwnedStereoFrame};

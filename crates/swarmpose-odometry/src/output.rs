@@ -23,7 +23,7 @@ use crate::selfcal::Decision;
 /// The header of `frames.csv`.
 pub const FRAMES_HEADER: &str = "frame,timestamp_s,status,reference,left_features,\
 right_features,stereo_points,matches,inliers,load_ms,features_ms,stereo_ms,match_ms,\
-estimate_ms,refine_ms,calibrate_ms,total_ms,tx,ty,tz,qw,qx,qy,qz,x,y,z,correction_model,\
+estimate_ms,refine_ms,calibrate_ms,window_ms,total_ms,tx,ty,tz,qw,qx,qy,qz,x,y,z,correction_model,\
 correction_offset_px,correction_quadratic_px,focal_correction_px";
 
 /// One row of `frames.csv` (no line end): the frame, its timestamp, status
@@ -41,7 +41,7 @@ pub fn frames_row(r: &FrameResult) -> String {
     let status = r.status.text().replace('"', "'");
     let reference = r.reference.map_or_else(String::new, |i| i.to_string());
     format!(
-        "{},{:.6},\"{status}\",{reference},{},{},{},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},\
+        "{},{:.6},\"{status}\",{reference},{},{},{},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},\
          {:.6},{:.6},{:.6},{:.9},{:.9},{:.9},{:.9},{:.6},{:.6},{:.6},{},{:.4},{:.4},{:.4}",
         r.index,
         r.timestamp_s,
@@ -57,6 +57,7 @@ pub fn frames_row(r: &FrameResult) -> String {
         tm.estimate_ms,
         tm.refine_ms,
         tm.calibrate_ms,
+        tm.window_ms,
         tm.total_ms(),
         t.x,
         t.y,

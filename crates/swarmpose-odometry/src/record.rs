@@ -56,6 +56,8 @@ pub struct StageTimes {
     /// Self-calibration (its decision and, when the correction moved, the second
     /// refinement).
     pub calibrate_ms: f64,
+    /// The sliding window's refinement ([`crate::window`]; 0 without a window).
+    pub window_ms: f64,
 }
 
 impl std::ops::AddAssign<&StageTimes> for StageTimes {
@@ -67,6 +69,7 @@ impl std::ops::AddAssign<&StageTimes> for StageTimes {
         self.estimate_ms += t.estimate_ms;
         self.refine_ms += t.refine_ms;
         self.calibrate_ms += t.calibrate_ms;
+        self.window_ms += t.window_ms;
     }
 }
 
@@ -81,6 +84,7 @@ impl StageTimes {
             + self.estimate_ms
             + self.refine_ms
             + self.calibrate_ms
+            + self.window_ms
     }
 }
 

@@ -30,9 +30,10 @@ use crate::estimate::{initial_motion, observations};
 use crate::frontend::ms;
 use crate::intake::{StereoCamera, check_timestamp};
 use crate::record::{Counts, FrameResult, StageTimes, Status};
-use crate::refine::model::{PixelNoise, StereoModel};
+use crate::refine::model::{PixelNoise, StereoModel, StereoObservation};
 use crate::refine::{Refined, refine};
 use crate::selfcal::{CorrectionModel, Decision, SelfCalibration};
+use crate::window::{Link, Window};
 
 /// The frame that the next one is matched to.
 #[derive(Debug, Clone)]
@@ -105,6 +106,7 @@ pub struct Tracker<D: Descriptor> {
     config: OdometryConfig,
     estimator: Box<dyn Estimator>,
     selfcal: SelfCalibration,
+    window: Window,
     reference: Option<Reference<D>>,
     last: Option<Last>,
     velocity: Option<Velocity>,
@@ -124,7 +126,9 @@ impl<D: Descriptor> Tracker<D> {
         estimator: Box<dyn Estimator>,
     ) -> Self {
         let selfcal = SelfCalibration::new(config.selfcal);
+        let window = Window::new(config.window);
         Self {
+            window,
             camera,
             noise,
             temporal,
@@ -157,21 +161,23 @@ impl<D: Descriptor> Tracker<D> {
         self.last.map(|l| l.timestamp_s)
     }
 
-    /// Heap bytes held by the state (the reference frame's features), for checks that
-    /// memory does not grow with the stream.
+    /// Heap bytes held by the state (the reference frame's features and the window's
+    /// keyframes), for checks that memory does not grow with the stream.
     #[must_use]
     pub fn state_bytes(&self) -> usize {
         use nalgebra::{Matrix3, Point3};
         use swarmpose_vision::features::Keypoint;
-        self.reference.as_ref().map_or(0, |r| {
-            let f = &r.frame;
-            (f.left_keypoints.capacity() + f.right_keypoints.capacity()) * size_of::<Keypoint>()
-                + (f.left_descriptors.capacity() + f.right_descriptors.capacity()) * size_of::<D>()
-                + f.points.capacity() * size_of::<Point3<f64>>()
-                + f.disparities_px.capacity() * size_of::<f32>()
-                + f.sigmas_m.capacity() * size_of::<f64>()
-                + f.covariances.capacity() * size_of::<Matrix3<f64>>()
-        })
+        self.window.heap_bytes()
+            + self.reference.as_ref().map_or(0, |r| {
+                let f = &r.frame;
+                (f.left_keypoints.capacity() + f.right_keypoints.capacity()) * size_of::<Keypoint>()
+                    + (f.left_descriptors.capacity() + f.right_descriptors.capacity())
+                        * size_of::<D>()
+                    + f.points.capacity() * size_of::<Point3<f64>>()
+                    + f.disparities_px.capacity() * size_of::<f32>()
+                    + f.sigmas_m.capacity() * size_of::<f64>()
+                    + f.covariances.capacity() * size_of::<Matrix3<f64>>()
+            })
     }
 
     /// The disparity correction applied to the next frame and where it comes from: the
@@ -305,7 +311,7 @@ impl<D: Descriptor> Tracker<D> {
                     2.0,
                 ) {
                     obs.reference[keep] = za;
-                    obs.current[keep] = crate::refine::model::StereoObservation {
+                    obs.current[keep] = StereoObservation {
                         u: f64::from(u),
                         v: f64::from(v),
                         d: zb.d,
@@ -389,6 +395,43 @@ impl<D: Descriptor> Tracker<D> {
             measured.correction = correction;
             measured.focal_px = focal_px;
             measured.model = model;
+            if self.window.enabled() {
+                let t = Instant::now();
+                let links: Vec<Link> = refined
+                    .inliers
+                    .iter()
+                    .map(|&k| {
+                        let s = obs.source[k];
+                        Link {
+                            reference_feature: m.dst_index[s],
+                            current_feature: m.src_index[s],
+                            reference: obs.reference[k],
+                            // The detected keypoint, not the patch-aligned position:
+                            // each frame's measurement of a track is then its own, not
+                            // one conditioned on the previous frame's keypoint.
+                            current: StereoObservation {
+                                u: f64::from(m.src_pixels[s].0),
+                                v: f64::from(m.src_pixels[s].1),
+                                d: m.src_disparities_px[s],
+                            },
+                        }
+                    })
+                    .collect();
+                let pose = ref_pose * measured.motion;
+                if let Some((pose, _)) = self.window.add(
+                    &self.model(correction, focal_px),
+                    (ref_index, &ref_pose),
+                    (index, &pose),
+                    &links,
+                ) {
+                    // Normalised: the inverse of a unit quaternion is its conjugate, so
+                    // rounding in the reference's norm would double with every frame.
+                    let mut motion = ref_pose.inverse() * pose;
+                    motion.rotation = UnitQuaternion::new_normalize(motion.rotation.into_inner());
+                    measured.motion = motion;
+                }
+                times.window_ms = ms(t);
+            }
         }
         Ok(measured)
     }
@@ -457,7 +500,8 @@ impl<D: Descriptor> Tracker<D> {
         result.times = times;
         match measured {
             Ok(m) => {
-                let pose = m.ref_pose * m.motion;
+                let mut pose = m.ref_pose * m.motion;
+                pose.rotation = UnitQuaternion::new_normalize(pose.rotation.into_inner());
                 self.velocity = Some(Velocity {
                     motion: m.motion,
                     dt_s: timestamp_s - m.ref_timestamp_s,
@@ -476,6 +520,7 @@ impl<D: Descriptor> Tracker<D> {
                 self.set_reference(frame, left, pose, timestamp_s, index);
             }
             Err(why) => {
+                self.window.clear();
                 let horizon = self.config.max_prediction_s;
                 let velocity = self.velocity.filter(|_| {
                     self.last_tracked_s

@@ -9,7 +9,8 @@ use swarmpose_odometry::{OdometryConfig, StageTimes, Status};
 use swarmpose_vision::frontend::StereoFrame;
 
 /// 2000 frames generated on the fly: the engine's state after 2000 frames is within 10 %
-/// of its largest size over the first 500.
+/// of its largest size over the first 500, frame to frame and with a window of 10
+/// keyframes.
 #[test]
 fn memory_does_not_grow_over_2000_frames() {
     let seq = FeatureSequence::new(FeatureSequenceConfig {
@@ -18,36 +19,45 @@ fn memory_does_not_grow_over_2000_frames() {
         clutter: 20,
         ..FeatureSequenceConfig::default()
     });
-    let mut tracker = seq.tracker(OdometryConfig::default());
-    let mut first_500 = 0usize;
-    let mut untracked = 0;
-    for k in 0..2000 {
-        let r = tracker
-            .track(
-                seq.frame(k),
-                None,
-                seq.timestamp_s(k),
-                StageTimes::default(),
-            )
-            .expect("frame");
-        if !matches!(r.status, Status::First | Status::Tracked) {
-            untracked += 1;
+    for keyframes in [0, 10] {
+        let config = OdometryConfig {
+            window: swarmpose_odometry::window::WindowConfig {
+                keyframes,
+                ..Default::default()
+            },
+            ..OdometryConfig::default()
+        };
+        let mut tracker = seq.tracker(config);
+        let mut first_500 = 0usize;
+        let mut untracked = 0;
+        for k in 0..2000 {
+            let r = tracker
+                .track(
+                    seq.frame(k),
+                    None,
+                    seq.timestamp_s(k),
+                    StageTimes::default(),
+                )
+                .expect("frame");
+            if !matches!(r.status, Status::First | Status::Tracked) {
+                untracked += 1;
+            }
+            if k < 500 {
+                first_500 = first_500.max(tracker.state_bytes());
+            }
         }
-        if k < 500 {
-            first_500 = first_500.max(tracker.state_bytes());
-        }
+        let last = tracker.state_bytes();
+        eprintln!(
+            "window {keyframes}: state {first_500} bytes (largest over the first 500 frames), \
+             {last} after 2000; {untracked} untracked frames"
+        );
+        assert!(first_500 > 0);
+        assert!(
+            last as f64 <= 1.1 * first_500 as f64,
+            "window {keyframes}: {last} bytes after 2000 frames, {first_500} over the first 500"
+        );
+        assert_eq!(untracked, 0);
     }
-    let last = tracker.state_bytes();
-    eprintln!(
-        "state: {first_500} bytes (largest over the first 500 frames), {last} after 2000; \
-         {untracked} untracked frames"
-    );
-    assert!(first_500 > 0);
-    assert!(
-        last as f64 <= 1.1 * first_500 as f64,
-        "{last} bytes after 2000 frames, {first_500} over the first 500"
-    );
-    assert_eq!(untracked, 0);
 }
 
 /// With pixel noise of known size, the mean normalised estimation error squared of the
@@ -96,8 +106,22 @@ fn motion_covariance_is_honest() {
 /// prediction horizon), keep the chain, and tracking resumes on the next good frames.
 #[test]
 fn frames_without_texture_are_marked_and_tracking_recovers() {
+    for keyframes in [0, 10] {
+        let config = OdometryConfig {
+            window: swarmpose_odometry::window::WindowConfig {
+                keyframes,
+                ..Default::default()
+            },
+            ..OdometryConfig::default()
+        };
+        texture_gaps(config);
+    }
+}
+
+/// Frames without texture in a synthetic stream, with `config`.
+fn texture_gaps(config: OdometryConfig) {
     let seq = FeatureSequence::new(FeatureSequenceConfig::default());
-    let mut tracker = seq.tracker(OdometryConfig::default());
+    let mut tracker = seq.tracker(config);
     let mut statuses = Vec::new();
     for k in 0..40 {
         // Frames 10-11 and 20-34 (1.5 s, longer than the 1 s horizon) have no texture.

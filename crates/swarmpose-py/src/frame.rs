@@ -98,6 +98,7 @@ impl Frame {
         d.set_item("match", t.match_ms)?;
         d.set_item("estimate", t.estimate_ms)?;
         d.set_item("refine", t.refine_ms)?;
+        d.set_item("window", t.window_ms)?;
         d.set_item("calibrate", t.calibrate_ms)?;
         d.set_item("total", t.total_ms())?;
         Ok(d)

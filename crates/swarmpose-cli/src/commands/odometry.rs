@@ -85,6 +85,11 @@ pub struct OdometryArgs {
     #[arg(long)]
     pub no_refine: bool,
 
+    /// Refine the last K keyframes and the feature tracks they share together (a sliding
+    /// window bundle adjustment; 0: frame to frame only; 2 is frame to frame again).
+    #[arg(long, value_name = "K", default_value_t = swarmpose_odometry::window::WindowConfig::default().keyframes)]
+    pub window: usize,
+
     /// Fewest inliers for a motion to be accepted.
     #[arg(long, value_name = "N", default_value_t = OdometryConfig::default().min_inliers)]
     pub min_inliers: usize,
@@ -162,6 +167,10 @@ fn config(args: &OdometryArgs) -> Result<OdometryConfig, CliError> {
         min_inliers: args.min_inliers.max(3),
         seed: args.seed,
         selfcal,
+        window: swarmpose_odometry::window::WindowConfig {
+            keyframes: args.window,
+            ..swarmpose_odometry::window::WindowConfig::default()
+        },
         ..OdometryConfig::default()
     })
 }
@@ -452,7 +461,7 @@ fn finish(
     }
     out(&format!(
         "time per frame: {total:.1} ms ({:.1} frames/s): load {:.1}, features {:.1}, stereo {:.1}, \
-         match {:.1}, estimate {:.1}, refine {:.1}, calibrate {:.1} ms",
+         match {:.1}, estimate {:.1}, refine {:.1}, calibrate {:.1}, window {:.1} ms",
         1000.0 / total.max(1e-9),
         t.load_ms / n,
         t.features_ms / n,
@@ -461,6 +470,7 @@ fn finish(
         t.estimate_ms / n,
         t.refine_ms / n,
         t.calibrate_ms / n,
+        t.window_ms / n,
     ))?;
     if let Some(e) = &evaluation {
         let drift = e

@@ -20,7 +20,9 @@
 pub mod evidence;
 pub mod model;
 
-use nalgebra::{Isometry3, Matrix3, Matrix6, Translation3, UnitQuaternion, Vector3, Vector6};
+use nalgebra::{
+    Isometry3, Matrix3, Matrix6, Rotation3, Translation3, UnitQuaternion, Vector3, Vector6,
+};
 
 use evidence::{PointBlocks, Reduced};
 use model::{Linearized, StereoModel, StereoObservation};
@@ -143,9 +145,17 @@ impl Pose {
     }
 
     fn motion(&self) -> Isometry3<f64> {
-        let r = UnitQuaternion::from_matrix(&self.rot);
+        let r = unit_quaternion(&self.rot);
         Isometry3::from_parts(Translation3::from(self.trans), r).inverse()
     }
+}
+
+/// The unit quaternion of a rotation matrix, for any angle (nalgebra's iterative
+/// `from_matrix` starts from the identity and is inaccurate far from it), normalised
+/// against rounding.
+pub(crate) fn unit_quaternion(rot: &Matrix3<f64>) -> UnitQuaternion<f64> {
+    let q = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(*rot));
+    UnitQuaternion::new_normalize(q.into_inner())
 }
 
 /// The two measurements of one point, linearised, or `None` if B cannot see it.

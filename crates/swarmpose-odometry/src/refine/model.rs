@@ -82,8 +82,11 @@ pub struct Linearized {
     pub d_point: Matrix3<f64>,
     /// `∂e/∂ξ` for the pose perturbation `(ν, ω)` (zero for frame A).
     pub d_pose: Matrix3x6,
-    /// `∂e/∂c` for the coefficients of the disparity correction.
+    /// `∂e/∂c` for the calibration terms (disparity correction, focal length).
     pub d_correction: Matrix3xK,
+    /// `∂e/∂h` for `h = ρ P_B` (zero for frame A): with `∂h/∂(anything)` it gives the
+    /// Jacobian of any other parametrisation of the pose (the window's, [`crate::window`]).
+    pub d_h: Matrix3<f64>,
 }
 
 impl StereoModel {
@@ -137,31 +140,53 @@ impl StereoModel {
         a: &StereoObservation,
         b: &StereoObservation,
     ) -> Option<(f64, f64)> {
+        Some((
+            self.residual2_in_reference(p, a),
+            self.residual2_in_current(rot, trans, p, b)?,
+        ))
+    }
+
+    /// Squared norm of the whitened residual of `p` in A.
+    #[must_use]
+    pub fn residual2_in_reference(&self, p: &Vector3<f64>, a: &StereoObservation) -> f64 {
         let r = &self.rig;
-        let c = &self.correction;
-        let bl = r.baseline_m;
-        let w = self.whiten();
         let rho = p.z;
-        let pa = Vector3::new(
+        let e = Vector3::new(
             r.fx * p.x + r.cx - a.u,
             r.fy * p.y + r.cy - a.v,
-            self.fb() * rho - c.at_normalised(p.x - bl * rho, p.y) - a.d,
+            self.fb() * rho - self.correction.at_normalised(p.x - r.baseline_m * rho, p.y) - a.d,
         );
+        e.component_mul(&self.whiten()).norm_squared()
+    }
+
+    /// Squared norm of the whitened residual of `p` in B for the pose `(rot, trans)` of A
+    /// in B, or `None` when the point is not in front of camera B.
+    #[must_use]
+    pub fn residual2_in_current(
+        &self,
+        rot: &Matrix3<f64>,
+        trans: &Vector3<f64>,
+        p: &Vector3<f64>,
+        b: &StereoObservation,
+    ) -> Option<f64> {
+        let r = &self.rig;
+        let rho = p.z;
         let h = rot * Vector3::new(p.x, p.y, 1.0) + trans * rho;
         if h.z <= 1e-9 {
             return None;
         }
         let iz = 1.0 / h.z;
         let (xn, yn) = (h.x * iz, h.y * iz);
-        let pb = Vector3::new(
+        let e = Vector3::new(
             r.fx * xn + r.cx - b.u,
             r.fy * yn + r.cy - b.v,
-            self.fb() * rho * iz - c.at_normalised(xn - bl * rho * iz, yn) - b.d,
+            self.fb() * rho * iz
+                - self
+                    .correction
+                    .at_normalised(xn - r.baseline_m * rho * iz, yn)
+                - b.d,
         );
-        Some((
-            pa.component_mul(&w).norm_squared(),
-            pb.component_mul(&w).norm_squared(),
-        ))
+        Some(e.component_mul(&self.whiten()).norm_squared())
     }
 
     /// The measurement in frame A of the point `p`: whitened residual and Jacobians.
@@ -186,6 +211,7 @@ impl StereoModel {
             d_point: Matrix3::from_diagonal(&w) * d_point,
             d_pose: Matrix3x6::zeros(),
             d_correction: Matrix3::from_diagonal(&w) * d_correction,
+            d_h: Matrix3::zeros(),
         }
     }
 
@@ -251,6 +277,7 @@ impl StereoModel {
             d_point: w * d_point,
             d_pose: w * dh * dh_dxi,
             d_correction: w * d_correction,
+            d_h: w * dh,
         })
     }
 }

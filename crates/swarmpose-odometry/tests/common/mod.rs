@@ -99,3 +99,29 @@ pub fn motion_error(estimate: &Isometry3<f64>, truth: &Isometry3<f64>) -> Vector
     let w = r.scaled_axis();
     Vector6::new(nu.x, nu.y, nu.z, w.x, w.y, w.z)
 }
+
+/// ATE of a run on the Karlsruhe sequence in `dir` after the SE(3) Umeyama alignment of
+/// its camera positions onto the INS positions, percent of the INS path length.
+pub fn karlsruhe_ate_percent(dir: &std::path::Path, r: &Run) -> f64 {
+    use nalgebra::Point3;
+    let ins = swarmpose_datasets::karlsruhe::KarlsruheSequence::open(dir)
+        .expect("open")
+        .ins_positions()
+        .expect("insdata.txt")
+        .expect("INS positions");
+    assert_eq!(r.results.len(), ins.len());
+    let x: Vec<Point3<f64>> = r
+        .poses()
+        .iter()
+        .map(|p| Point3::from(p.translation.vector))
+        .collect();
+    let y: Vec<Point3<f64>> = ins.iter().map(|p| Point3::new(p[0], p[1], p[2])).collect();
+    let t = swarmpose_eval::metrics::umeyama(&x, &y).expect("align");
+    let sq: f64 = x
+        .iter()
+        .zip(&y)
+        .map(|(a, b)| (b - t * a).norm_squared())
+        .sum();
+    let length: f64 = y.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
+    100.0 * (sq / x.len() as f64).sqrt() / length
+}

@@ -1,0 +1,230 @@
+//! Feature tracks and a sliding window of keyframes refined jointly on the reprojection
+//! error (a local bundle adjustment), on top of the frame-to-frame engine.
+//!
+//! **Tracks.** Every tracked pair's inlier matches link a feature of the reference frame to
+//! one of the current frame; a feature that continues a track gets its identity, any other
+//! starts a new one. A track is one 3D point, anchored by inverse depth in the first
+//! keyframe of the window that sees it ([`crate::refine::model`]), and it is re-estimated
+//! with every new observation.
+//!
+//! **Keyframes.** The engine measures each frame against the previous one, so every tracked
+//! frame is a keyframe: the window holds the last [`WindowConfig::keyframes`] tracked
+//! frames, in order, without a gap. A frame that is not tracked (constant velocity, lost)
+//! empties the window; it starts again from the next tracked pair.
+//!
+//! **Refinement** ([`solve`]). The poses of the window's keyframes except the oldest (held
+//! fixed: it fixes the gauge) and the points of every track seen at least twice are
+//! refined together on the whitened residuals of all their stereo measurements `(u, v, d)`,
+//! with a Huber loss, by Levenberg-Marquardt with the points eliminated by their 3x3 Schur
+//! complements, at most [`WindowConfig::max_iterations`] iterations: the time per frame is
+//! bounded by the window's size. The pose given out for the current frame is the window's.
+//! Poses already given out are not revised (the engine is online), but the window keeps
+//! their refined values for the next frames.
+//!
+//! Memory is bounded: at most `keyframes` frames, each with its own observations, and the
+//! track identities of the newest frame's features.
+
+pub mod solve;
+
+use std::collections::{HashMap, VecDeque};
+
+use nalgebra::Isometry3;
+
+use crate::refine::model::{StereoModel, StereoObservation};
+
+/// Settings of the sliding window.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WindowConfig {
+    /// Keyframes in the window, K (default 0: no window, frame to frame only). 2 is the
+    /// frame-to-frame refinement again; from 3 on, tracks span several frames.
+    pub keyframes: usize,
+    /// Most Levenberg-Marquardt iterations per frame (default 3).
+    pub max_iterations: usize,
+    /// Huber threshold on a measurement's whitened residual norm (default 2.5, as in the
+    /// frame-to-frame refinement).
+    pub huber_k: f64,
+}
+
+impl Default for WindowConfig {
+    fn default() -> Self {
+        Self {
+            keyframes: 0,
+            max_iterations: 3,
+            huber_k: 2.5,
+        }
+    }
+}
+
+/// An inlier match of a tracked pair: the feature's index in the reference frame and in
+/// the current frame, and its measurement in each.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Link {
+    /// Index of the feature in the reference frame.
+    pub reference_feature: usize,
+    /// Index of the feature in the current frame.
+    pub current_feature: usize,
+    /// Its measurement in the reference frame.
+    pub reference: StereoObservation,
+    /// Its measurement in the current frame.
+    pub current: StereoObservation,
+}
+
+/// One keyframe of the window.
+#[derive(Debug, Clone)]
+pub(crate) struct Keyframe {
+    /// Frame index in the stream.
+    pub index: usize,
+    /// Pose of the world in the camera, `T_kw` (metres): `P_k = T_kw P_w`.
+    pub pose_cw: Isometry3<f64>,
+    /// Its measurements, each of one track.
+    pub observations: Vec<(u32, StereoObservation)>,
+}
+
+/// What one refinement of the window did.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WindowReport {
+    /// Keyframes in the window.
+    pub keyframes: usize,
+    /// Tracks seen at least twice (the points refined).
+    pub tracks: usize,
+    /// Their measurements.
+    pub observations: usize,
+    /// Levenberg-Marquardt iterations.
+    pub iterations: usize,
+}
+
+/// The window: keyframes, and the track of each feature of the newest.
+#[derive(Debug, Clone, Default)]
+pub struct Window {
+    config: WindowConfig,
+    frames: VecDeque<Keyframe>,
+    /// Track of each feature (by index) of the newest keyframe.
+    newest_tracks: HashMap<usize, u32>,
+    next_track: u32,
+}
+
+impl Window {
+    /// An empty window.
+    #[must_use]
+    pub fn new(config: WindowConfig) -> Self {
+        Self {
+            config,
+            ..Self::default()
+        }
+    }
+
+    /// True when the window is on (more than two keyframes).
+    #[must_use]
+    pub fn enabled(&self) -> bool {
+        self.config.keyframes > 2
+    }
+
+    /// Empties the window (after a frame that was not tracked).
+    pub fn clear(&mut self) {
+        self.frames.clear();
+        self.newest_tracks.clear();
+    }
+
+    /// Keyframes held now.
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.frames.len()
+    }
+
+    /// True when no keyframe is held.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.frames.is_empty()
+    }
+
+    /// Heap bytes held: keyframes, their measurements, and the newest frame's tracks.
+    #[must_use]
+    pub fn heap_bytes(&self) -> usize {
+        self.frames.capacity() * size_of::<Keyframe>()
+            + self
+                .frames
+                .iter()
+                .map(|f| f.observations.capacity() * size_of::<(u32, StereoObservation)>())
+                .sum::<usize>()
+            + self.newest_tracks.capacity() * (size_of::<usize>() + size_of::<u32>())
+    }
+
+    /// Measurements held now, over all keyframes (bounded by the window's size).
+    #[must_use]
+    pub fn observations(&self) -> usize {
+        self.frames.iter().map(|f| f.observations.len()).sum()
+    }
+
+    /// Adds the tracked frame `index`, measured from the frame `reference_index` (posed at
+    /// `reference_pose`, the camera in the world) with the inlier `links`, at the pose
+    /// `pose` (the camera in the world, from the pair alone); refines the window with
+    /// `model` and returns the current frame's refined pose and what was done, or `None`
+    /// when the window is too short to add anything to the pair (or the refinement
+    /// failed; the pair's pose stands then).
+    pub fn add(
+        &mut self,
+        model: &StereoModel,
+        (reference_index, reference_pose): (usize, &Isometry3<f64>),
+        (index, pose): (usize, &Isometry3<f64>),
+        links: &[Link],
+    ) -> Option<(Isometry3<f64>, WindowReport)> {
+        if !self.enabled() {
+            return None;
+        }
+        if self.frames.back().map(|f| f.index) != Some(reference_index) {
+            // A gap: start again from the reference frame.
+            self.clear();
+            self.frames.push_back(Keyframe {
+                index: reference_index,
+                pose_cw: reference_pose.inverse(),
+                observations: Vec::new(),
+            });
+        }
+        // The pair's motion, from the window's own (refined) pose of the reference.
+        let motion = reference_pose.inverse() * pose;
+        let start = self
+            .frames
+            .back()
+            .map_or(*pose, |r| r.pose_cw.inverse() * motion);
+        let mut current = Keyframe {
+            index,
+            pose_cw: start.inverse(),
+            observations: Vec::with_capacity(links.len()),
+        };
+        let mut tracks = HashMap::with_capacity(links.len());
+        let mut used = std::collections::HashSet::with_capacity(links.len());
+        for l in links {
+            let track = match self.newest_tracks.get(&l.reference_feature) {
+                Some(&t) => t,
+                None => {
+                    let t = self.next_track;
+                    self.next_track = self.next_track.wrapping_add(1);
+                    if let Some(r) = self.frames.back_mut() {
+                        r.observations.push((t, l.reference));
+                    }
+                    t
+                }
+            };
+            // A feature of the current frame continues at most one track, and a track has
+            // at most one feature in a frame.
+            if !tracks.contains_key(&l.current_feature) && used.insert(track) {
+                tracks.insert(l.current_feature, track);
+                current.observations.push((track, l.current));
+            }
+        }
+        self.newest_tracks = tracks;
+        self.frames.push_back(current);
+        while self.frames.len() > self.config.keyframes {
+            self.frames.pop_front();
+        }
+        if self.frames.len() < 3 {
+            return None;
+        }
+        let report = solve::refine_window(model, &self.config, self.frames.make_contiguous())?;
+        let newest = self.frames.back()?;
+        Some((newest.pose_cw.inverse(), report))
+    }
+}
+
+#[cfg(test)]
+mod tests;

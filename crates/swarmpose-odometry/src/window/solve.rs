@@ -1,0 +1,456 @@
+//! The window's bundle adjustment: Levenberg-Marquardt on the keyframe poses, with the
+//! points eliminated by their Schur complements.
+//!
+//! Each keyframe `k` has the pose `T_kw` (world to camera), perturbed as
+//! `T_kw ← E(ξ_k) T_kw` with `E(ξ): P ↦ Exp(ω) P + ν`, `ξ = (ν, ω)` (metres, radians, in
+//! camera `k`). A track anchored in keyframe `a` has the point `p = (x, y, ρ)` of
+//! [`crate::refine::model`]; keyframe `j` sees it through `T_ja = T_jw T_aw⁻¹`, so with
+//! `h = ρ P_j = R_ja (x, y, 1) + ρ t_ja`:
+//!
+//! ```text
+//! ∂h/∂ξ_j = [ρ I, −[h]×],      ∂h/∂ξ_a = [−ρ R_ja, R_ja [(x, y, 1)]×]
+//! ```
+//!
+//! (the first is the pair refinement's pose Jacobian, the second follows from
+//! `T_ja ← T_ja E(ξ_a)⁻¹`). The oldest keyframe is held fixed. The reduced system
+//! `S = H_ξξ − Σ_points H_ξp H_pp⁻¹ H_pξ` is dense, `6 (K − 1)` square, and solved by
+//! Cholesky with Levenberg-Marquardt damping; points follow by back-substitution.
+
+use std::collections::HashMap;
+
+use nalgebra::{
+    DMatrix, DVector, Isometry3, Matrix3, Matrix6, Translation3, UnitQuaternion, Vector3, Vector6,
+};
+
+use super::{Keyframe, WindowConfig, WindowReport};
+use crate::refine::model::{Matrix3x6, StereoModel, StereoObservation};
+use crate::refine::unit_quaternion;
+
+/// A pose `T_kw` as a rotation matrix and translation.
+#[derive(Debug, Clone, Copy)]
+struct Pose {
+    rot: Matrix3<f64>,
+    trans: Vector3<f64>,
+}
+
+impl Pose {
+    fn of(t: &Isometry3<f64>) -> Self {
+        Self {
+            rot: *t.rotation.to_rotation_matrix().matrix(),
+            trans: t.translation.vector,
+        }
+    }
+
+    fn moved(&self, nu: &Vector3<f64>, omega: &Vector3<f64>) -> Self {
+        let e = *UnitQuaternion::from_scaled_axis(*omega)
+            .to_rotation_matrix()
+            .matrix();
+        Self {
+            rot: e * self.rot,
+            trans: e * self.trans + nu,
+        }
+    }
+
+    fn isometry(&self) -> Isometry3<f64> {
+        Isometry3::from_parts(Translation3::from(self.trans), unit_quaternion(&self.rot))
+    }
+
+    /// `T_ja = T_jw T_aw⁻¹` for `self = T_jw`.
+    fn relative_to(&self, a: &Self) -> (Matrix3<f64>, Vector3<f64>) {
+        let rot = self.rot * a.rot.transpose();
+        (rot, self.trans - rot * a.trans)
+    }
+}
+
+/// A track seen at least twice in the window: its measurements (keyframe slot, the
+/// measurement), the first in its anchor keyframe.
+struct Track {
+    obs: Vec<(usize, StereoObservation)>,
+    point: Vector3<f64>,
+}
+
+/// Huber weight and cost of a squared whitened norm.
+fn huber(s2: f64, k: f64) -> (f64, f64) {
+    if s2 <= k * k {
+        (1.0, s2)
+    } else {
+        let s = s2.sqrt();
+        (k / s, 2.0 * k * s - k * k)
+    }
+}
+
+/// A relative pose `T_ja`: rotation and translation (`P_j = R P_a + t`, metres).
+type Relative = (Matrix3<f64>, Vector3<f64>);
+
+/// The relative poses `T_ja` of every pair of keyframes, row-major by `(j, a)`.
+fn relative_poses(poses: &[Pose], out: &mut Vec<Relative>) {
+    out.clear();
+    for j in poses {
+        for a in poses {
+            out.push(j.relative_to(a));
+        }
+    }
+}
+
+/// One measurement linearised: whitened residual, `∂e/∂p`, and `∂e/∂ξ` for the observing
+/// keyframe (`j`) and the anchor (`a`), `None` for the anchor's own measurement.
+struct Jac {
+    residual: Vector3<f64>,
+    d_point: Matrix3<f64>,
+    poses: Option<(Matrix3x6, Matrix3x6)>,
+}
+
+/// The measurement `z` in keyframe `slot` of the point `p` anchored in keyframe `anchor`,
+/// `rel` from [`relative_poses`] over `n` keyframes.
+fn linearize(
+    model: &StereoModel,
+    (rel, n): (&[Relative], usize),
+    anchor: usize,
+    slot: usize,
+    p: &Vector3<f64>,
+    z: &StereoObservation,
+) -> Option<Jac> {
+    if slot == anchor {
+        let l = model.in_reference(p, z);
+        return Some(Jac {
+            residual: l.residual,
+            d_point: l.d_point,
+            poses: None,
+        });
+    }
+    let (rot, trans) = &rel[slot * n + anchor];
+    let l = model.in_current(rot, trans, p, z)?;
+    let mut dh_da = Matrix3x6::zeros();
+    dh_da.fixed_view_mut::<3, 3>(0, 0).copy_from(&(-rot * p.z));
+    dh_da
+        .fixed_view_mut::<3, 3>(0, 3)
+        .copy_from(&(rot * Vector3::new(p.x, p.y, 1.0).cross_matrix()));
+    Some(Jac {
+        residual: l.residual,
+        d_point: l.d_point,
+        poses: Some((l.d_pose, l.d_h * dh_da)),
+    })
+}
+
+/// Robust cost `Σ ρ` of every track at the relative poses `rel` of `n` keyframes, or
+/// infinity when a point leaves a view.
+fn cost(
+    model: &StereoModel,
+    k: f64,
+    (rel, n): (&[Relative], usize),
+    tracks: &[Track],
+    points: &[Vector3<f64>],
+) -> f64 {
+    let mut total = 0.0;
+    for (t, p) in tracks.iter().zip(points) {
+        let anchor = t.obs[0].0;
+        for (slot, z) in &t.obs {
+            let r2 = if *slot == anchor {
+                model.residual2_in_reference(p, z)
+            } else {
+                let (rot, trans) = &rel[slot * n + anchor];
+                match model.residual2_in_current(rot, trans, p, z) {
+                    Some(r2) => r2,
+                    None => return f64::INFINITY,
+                }
+            };
+            total += huber(r2, k).1;
+        }
+    }
+    total
+}
+
+/// The blocks of one track kept for back-substitution; its `H_pξ` blocks are
+/// `Scratch::hpx[start..end]`.
+struct Eliminated {
+    hpp_inv: Matrix3<f64>,
+    gp: Vector3<f64>,
+    start: usize,
+    end: usize,
+}
+
+/// Buffers of one refinement, reused over its iterations.
+#[derive(Default)]
+struct Scratch {
+    rel: Vec<Relative>,
+    elim: Vec<Eliminated>,
+    /// `H_pξ` per track and pose variable (index of the variable, 3x6 block).
+    hpx: Vec<(usize, Matrix3x6)>,
+    /// The reduced system's 6x6 blocks, row-major over the pose variables.
+    blocks: Vec<Matrix6<f64>>,
+    gradient: Vec<Vector6<f64>>,
+}
+
+/// Adds `block` to the `H_pξ` of variable `v` among `hpx[start..]`.
+fn add_hpx(hpx: &mut Vec<(usize, Matrix3x6)>, start: usize, v: usize, block: &Matrix3x6) {
+    match hpx[start..].iter_mut().find(|(i, _)| *i == v) {
+        Some((_, b)) => *b += block,
+        None => hpx.push((v, *block)),
+    }
+}
+
+/// The reduced system at `poses` and `points`; `None` if a point left a view or its
+/// block is singular.
+fn build(
+    model: &StereoModel,
+    k: f64,
+    poses: &[Pose],
+    tracks: &[Track],
+    points: &[Vector3<f64>],
+    sc: &mut Scratch,
+) -> Option<(DMatrix<f64>, DVector<f64>)> {
+    let n = poses.len();
+    let m = n - 1;
+    relative_poses(poses, &mut sc.rel);
+    sc.elim.clear();
+    sc.hpx.clear();
+    sc.blocks.clear();
+    sc.blocks.resize(m * m, Matrix6::zeros());
+    sc.gradient.clear();
+    sc.gradient.resize(m, Vector6::zeros());
+    // Variable of keyframe slot `i`: slot 0 is fixed.
+    let var = |slot: usize| slot.checked_sub(1);
+    for (t, p) in tracks.iter().zip(points) {
+        let anchor = t.obs[0].0;
+        let mut hpp = Matrix3::zeros();
+        let mut gp = Vector3::zeros();
+        let start = sc.hpx.len();
+        for (slot, z) in &t.obs {
+            let j = linearize(model, (&sc.rel, n), anchor, *slot, p, z)?;
+            let (w, _) = huber(j.residual.norm_squared(), k);
+            let dpw = j.d_point.transpose() * w;
+            hpp += dpw * j.d_point;
+            gp += dpw * j.residual;
+            let Some((dj, da)) = j.poses else {
+                continue;
+            };
+            let pair = [(var(*slot), dj), (var(anchor), da)];
+            for (v1, b1) in &pair {
+                let Some(v1) = *v1 else { continue };
+                add_hpx(&mut sc.hpx, start, v1, &(dpw * b1));
+                let b1w = b1.transpose() * w;
+                sc.gradient[v1] += b1w * j.residual;
+                for (v2, b2) in &pair {
+                    let Some(v2) = *v2 else { continue };
+                    sc.blocks[v1 * m + v2] += b1w * b2;
+                }
+            }
+        }
+        let hpp_inv = hpp.try_inverse()?;
+        let end = sc.hpx.len();
+        for i1 in start..end {
+            let (v1, b1) = sc.hpx[i1];
+            let t1 = b1.transpose() * hpp_inv;
+            sc.gradient[v1] -= t1 * gp;
+            for i2 in start..end {
+                let (v2, b2) = &sc.hpx[i2];
+                sc.blocks[v1 * m + v2] -= t1 * b2;
+            }
+        }
+        sc.elim.push(Eliminated {
+            hpp_inv,
+            gp,
+            start,
+            end,
+        });
+    }
+    let s = DMatrix::from_fn(6 * m, 6 * m, |r, c| {
+        sc.blocks[(r / 6) * m + c / 6][(r % 6, c % 6)]
+    });
+    let g = DVector::from_fn(6 * m, |r, _| sc.gradient[r / 6][r % 6]);
+    Some((s, g))
+}
+
+/// Refines the window's poses (all but the oldest) and its tracks' points in place.
+/// `None` when there is nothing to refine or the system is singular (poses unchanged).
+pub(crate) fn refine_window(
+    model: &StereoModel,
+    config: &WindowConfig,
+    frames: &mut [Keyframe],
+) -> Option<WindowReport> {
+    if frames.len() < 2 {
+        return None;
+    }
+    let k = config.huber_k;
+    let mut by_track: HashMap<u32, Vec<(usize, StereoObservation)>> = HashMap::new();
+    for (slot, f) in frames.iter().enumerate() {
+        for (t, z) in &f.observations {
+            by_track.entry(*t).or_default().push((slot, *z));
+        }
+    }
+    let mut poses: Vec<Pose> = frames.iter().map(|f| Pose::of(&f.pose_cw)).collect();
+    let mut tracks: Vec<Track> = by_track
+        .into_values()
+        .filter(|obs| obs.len() >= 2)
+        .filter_map(|obs| {
+            let point = model.anchor(&obs[0].1);
+            (point.z > 0.0 && point.iter().all(|v| v.is_finite())).then_some(Track { obs, point })
+        })
+        .collect();
+    // Deterministic order (the map's is not).
+    tracks.sort_unstable_by_key(|t| {
+        let (s, z) = t.obs[0];
+        (s, (z.u * 64.0) as i64, (z.v * 64.0) as i64)
+    });
+    let n = poses.len();
+    let mut sc = Scratch::default();
+    relative_poses(&poses, &mut sc.rel);
+    // Each point fitted to the poses first (Gauss-Newton on its own measurements).
+    for t in &mut tracks {
+        let anchor = t.obs[0].0;
+        for _ in 0..3 {
+            let mut h = Matrix3::zeros();
+            let mut g = Vector3::zeros();
+            for (slot, z) in &t.obs {
+                if let Some(j) = linearize(model, (&sc.rel, n), anchor, *slot, &t.point, z) {
+                    let (w, _) = huber(j.residual.norm_squared(), k);
+                    h += j.d_point.transpose() * j.d_point * w;
+                    g += j.d_point.transpose() * j.residual * w;
+                }
+            }
+            match h.try_inverse() {
+                Some(inv) => t.point -= inv * g,
+                None => break,
+            }
+        }
+    }
+    tracks.retain(|t| t.point.z >= 0.0 && t.point.iter().all(|v| v.is_finite()));
+    let observations = tracks.iter().map(|t| t.obs.len()).sum();
+    let mut points: Vec<Vector3<f64>> = tracks.iter().map(|t| t.point).collect();
+    let mut current = cost(model, k, (&sc.rel, n), &tracks, &points);
+    if !current.is_finite() || tracks.is_empty() {
+        return None;
+    }
+    let mut trial_rel = Vec::with_capacity(n * n);
+    let mut trial_points = points.clone();
+    let mut lambda = 1e-4;
+    let mut iterations = 0;
+    'outer: for _ in 0..config.max_iterations {
+        iterations += 1;
+        let (s, g) = build(model, k, &poses, &tracks, &points, &mut sc)?;
+        loop {
+            if lambda > 1e8 {
+                break 'outer;
+            }
+            let mut damped = s.clone();
+            for d in 0..damped.nrows() {
+                damped[(d, d)] *= 1.0 + lambda;
+                damped[(d, d)] += 1e-12;
+            }
+            let Some(chol) = damped.cholesky() else {
+                lambda *= 10.0;
+                continue;
+            };
+            let dx = -chol.solve(&g);
+            let mut trial = poses.clone();
+            for (v, pose) in trial.iter_mut().enumerate().skip(1) {
+                let o = 6 * (v - 1);
+                let nu = Vector3::new(dx[o], dx[o + 1], dx[o + 2]);
+                let om = Vector3::new(dx[o + 3], dx[o + 4], dx[o + 5]);
+                *pose = pose.moved(&nu, &om);
+            }
+            for ((tp, p), e) in trial_points.iter_mut().zip(&points).zip(&sc.elim) {
+                let mut rhs = e.gp;
+                for (v, b) in &sc.hpx[e.start..e.end] {
+                    rhs += b * dx.fixed_rows::<6>(6 * v);
+                }
+                *tp = p - e.hpp_inv * rhs;
+            }
+            relative_poses(&trial, &mut trial_rel);
+            let c = cost(model, k, (&trial_rel, n), &tracks, &trial_points);
+            if c < current {
+                let done = current - c < 1e-6 * current;
+                poses = trial;
+                points.copy_from_slice(&trial_points);
+                current = c;
+                lambda = (lambda * 0.1).max(1e-9);
+                if done {
+                    break 'outer;
+                }
+                break;
+            }
+            lambda *= 10.0;
+        }
+    }
+    for (f, p) in frames.iter_mut().zip(&poses) {
+        f.pose_cw = p.isometry();
+    }
+    Some(WindowReport {
+        keyframes: frames.len(),
+        tracks: tracks.len(),
+        observations,
+        iterations,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::refine::model::PixelNoise;
+    use nalgebra::Rotation3;
+    use swarmpose_vision::stereo::RectifiedStereo;
+
+    /// Central differences of the residual against both pose Jacobians.
+    #[test]
+    fn pose_jacobians_match_finite_differences() {
+        let model = StereoModel {
+            rig: RectifiedStereo {
+                fx: 700.0,
+                fy: 690.0,
+                cx: 600.0,
+                cy: 180.0,
+                baseline_m: 0.54,
+            },
+            noise: PixelNoise {
+                position_px: 0.5,
+                disparity_px: 0.25,
+            },
+            correction: Default::default(),
+        };
+        let pose = |r: (f64, f64, f64), t: [f64; 3]| Pose {
+            rot: *Rotation3::from_euler_angles(r.0, r.1, r.2).matrix(),
+            trans: Vector3::from(t),
+        };
+        let poses = [
+            pose((0.0, 0.0, 0.0), [0.0, 0.0, 0.0]),
+            pose((0.01, -0.03, 0.02), [0.1, -0.05, -0.9]),
+            pose((0.02, -0.07, 0.01), [0.3, -0.02, -1.8]),
+        ];
+        let p = Vector3::new(0.2, -0.1, 1.0 / 14.0);
+        let z = StereoObservation {
+            u: 740.0,
+            v: 120.0,
+            d: 27.0,
+        };
+        let (anchor, slot) = (1, 2);
+        let mut rel = Vec::new();
+        relative_poses(&poses, &mut rel);
+        let j = linearize(&model, (&rel, 3), anchor, slot, &p, &z).expect("in view");
+        let (dj, da) = j.poses.expect("two keyframes");
+        let h = 1e-6;
+        for (which, analytic) in [(slot, dj), (anchor, da)] {
+            for k in 0..6 {
+                let residual = |s: f64| {
+                    let mut xi = [0.0; 6];
+                    xi[k] = s * h;
+                    let mut moved = poses;
+                    moved[which] = poses[which].moved(
+                        &Vector3::new(xi[0], xi[1], xi[2]),
+                        &Vector3::new(xi[3], xi[4], xi[5]),
+                    );
+                    let mut rel = Vec::new();
+                    relative_poses(&moved, &mut rel);
+                    linearize(&model, (&rel, 3), anchor, slot, &p, &z)
+                        .expect("in view")
+                        .residual
+                };
+                let num = (residual(1.0) - residual(-1.0)) / (2.0 * h);
+                assert!(
+                    (num - analytic.column(k)).norm() < 1e-4 * (1.0 + num.norm()),
+                    "keyframe {which}, column {k}: {num} vs {}",
+                    analytic.column(k)
+                );
+            }
+        }
+    }
+}

@@ -1,0 +1,145 @@
+use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use swarmpose_vision::stereo::RectifiedStereo;
+
+use super::*;
+use crate::refine::model::PixelNoise;
+
+fn model() -> StereoModel {
+    StereoModel {
+        rig: RectifiedStereo {
+            fx: 700.0,
+            fy: 700.0,
+            cx: 600.0,
+            cy: 180.0,
+            baseline_m: 0.54,
+        },
+        noise: PixelNoise {
+            position_px: 0.5,
+            disparity_px: 0.25,
+        },
+        correction: Default::default(),
+    }
+}
+
+/// The measurement of the world point `pw` by the camera at `pose` (camera in world), if
+/// it is in view.
+fn measure(m: &StereoModel, pose: &Isometry3<f64>, pw: &Point3<f64>) -> Option<StereoObservation> {
+    let p = pose.inverse() * pw;
+    if p.z < 1.0 {
+        return None;
+    }
+    let r = &m.rig;
+    let (u, v) = (r.fx * p.x / p.z + r.cx, r.fy * p.y / p.z + r.cy);
+    (u > 0.0 && u < 1240.0 && v > 0.0 && v < 370.0).then_some(StereoObservation {
+        u,
+        v,
+        d: r.fx * r.baseline_m / p.z,
+    })
+}
+
+/// A camera driving forward 1 m a frame and turning 1 degree, among 300 random points;
+/// the window is given poses that drift by 1 cm and 0.05 degree a frame.
+fn drive(keyframes: usize, frames: usize) -> (Vec<Isometry3<f64>>, Vec<Isometry3<f64>>) {
+    let m = model();
+    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    let points: Vec<Point3<f64>> = (0..300)
+        .map(|_| {
+            Point3::new(
+                rng.random_range(-15.0..15.0),
+                rng.random_range(-3.0..2.0),
+                rng.random_range(4.0..40.0),
+            )
+        })
+        .collect();
+    let step = Isometry3::from_parts(
+        Translation3::new(0.0, 0.0, 1.0),
+        UnitQuaternion::from_axis_angle(&Vector3::y_axis(), 1f64.to_radians()),
+    );
+    let error = Isometry3::from_parts(
+        Translation3::new(0.01, 0.0, 0.0),
+        UnitQuaternion::from_axis_angle(&Vector3::y_axis(), 0.05f64.to_radians()),
+    );
+    let mut window = Window::new(WindowConfig {
+        keyframes,
+        max_iterations: 20,
+        ..WindowConfig::default()
+    });
+    let (mut truth, mut given) = (vec![Isometry3::identity()], vec![Isometry3::identity()]);
+    for i in 1..frames {
+        let t_prev = truth[i - 1];
+        let t = t_prev * step;
+        let links: Vec<Link> = points
+            .iter()
+            .enumerate()
+            // Each point is seen in 4 consecutive frames out of every 6.
+            .filter(|(k, _)| (i + k) % 6 < 4)
+            .filter_map(|(k, pw)| {
+                Some(Link {
+                    reference_feature: k,
+                    current_feature: k,
+                    reference: measure(&m, &t_prev, pw)?,
+                    current: measure(&m, &t, pw)?,
+                })
+            })
+            .collect();
+        let start = given[i - 1] * step * error;
+        let pose = window
+            .add(&m, (i - 1, &given[i - 1]), (i, &start), &links)
+            .map_or(start, |(p, _)| p);
+        assert!(window.len() <= keyframes.max(2));
+        truth.push(t);
+        given.push(pose);
+    }
+    (truth, given)
+}
+
+fn error_m(a: &Isometry3<f64>, b: &Isometry3<f64>) -> f64 {
+    (a.translation.vector - b.translation.vector).norm()
+}
+
+#[test]
+fn exact_measurements_undo_the_drift() {
+    let (truth, window) = drive(3, 12);
+    let (_, none) = drive(0, 12);
+    let last = truth.len() - 1;
+    let (e_window, e_none) = (
+        error_m(&truth[last], &window[last]),
+        error_m(&truth[last], &none[last]),
+    );
+    // Without the window the error adds up frame after frame; with it, each new frame is
+    // pulled back onto the tracks seen from the window's fixed first keyframe.
+    eprintln!("window {e_window} m, none {e_none} m");
+    assert!(e_none > 0.1, "{e_none}");
+    assert!(e_window < 1e-6, "window {e_window} m, none {e_none} m");
+}
+
+#[test]
+fn a_gap_starts_the_window_again() {
+    let m = model();
+    let mut w = Window::new(WindowConfig {
+        keyframes: 4,
+        ..WindowConfig::default()
+    });
+    let z = StereoObservation {
+        u: 600.0,
+        v: 180.0,
+        d: 20.0,
+    };
+    let link = Link {
+        reference_feature: 0,
+        current_feature: 0,
+        reference: z,
+        current: z,
+    };
+    let id = Isometry3::identity();
+    assert!(w.add(&m, (0, &id), (1, &id), &[link]).is_none());
+    assert_eq!(w.len(), 2);
+    // Frame 3 measured from frame 2, which the window does not hold.
+    assert!(w.add(&m, (2, &id), (3, &id), &[link]).is_none());
+    assert_eq!(w.len(), 2);
+    assert_eq!(w.observations(), 2);
+    w.clear();
+    assert!(w.is_empty());
+}

@@ -1,0 +1,120 @@
+//! The sliding window of keyframes ([`swarmpose_odometry::window`]) side by side with the
+//! frame-to-frame engine on every shared real sequence, and the same trajectory with one
+//! and with two threads.
+
+mod common;
+
+use swarmpose_datasets::open;
+use swarmpose_odometry::batch::{camera_of, collect, run_sequence_two_threads};
+use swarmpose_odometry::synthetic::SyntheticSequence;
+use swarmpose_odometry::window::WindowConfig;
+use swarmpose_odometry::{Odometry, OdometryConfig};
+
+fn with_window(keyframes: usize) -> OdometryConfig {
+    OdometryConfig {
+        window: WindowConfig {
+            keyframes,
+            ..WindowConfig::default()
+        },
+        ..OdometryConfig::default()
+    }
+}
+
+/// kitti_vo_seq2: a window of 10 keyframes ends closer to the ground truth than frame to
+/// frame, and its aligned ATE is lower.
+#[test]
+fn window_beats_frame_to_frame_on_kitti() {
+    let name = "kitti_vo_seq2";
+    let Some(dir) = common::dataset(name) else {
+        return;
+    };
+    let seq = open(&dir).expect("open");
+    let f2f = common::run_sequence(seq.as_ref(), with_window(0));
+    let win = common::run_sequence(seq.as_ref(), with_window(10));
+    let (a, b) = (
+        common::evaluate_run(name, &f2f),
+        common::evaluate_run(name, &win),
+    );
+    let (da, db) = (
+        a.final_drift_percent.expect("a path"),
+        b.final_drift_percent.expect("a path"),
+    );
+    eprintln!(
+        "{name}: frame to frame drift {da:.3} %, ATE {:.4} m, eq. (20) {:.5}; window of 10: \
+         drift {db:.3} %, ATE {:.4} m, eq. (20) {:.5}",
+        a.ate_aligned.rmse, a.eq20_rms, b.ate_aligned.rmse, b.eq20_rms
+    );
+    assert_eq!(win.untracked(), 0);
+    assert!(
+        db < da,
+        "drift {db:.3} % with the window, {da:.3} % without"
+    );
+    assert!(b.ate_aligned.rmse < a.ate_aligned.rmse);
+    assert!(b.eq20_rms <= 0.0011, "RMS eq. (20) {:.5}", b.eq20_rms);
+}
+
+/// Karlsruhe: the ATE after alignment onto the INS is lower with the window.
+#[test]
+fn window_beats_frame_to_frame_on_karlsruhe() {
+    let name = "karlsruhe_2010_03_09_drive_0023";
+    let Some(dir) = common::dataset(name) else {
+        return;
+    };
+    let seq = open(&dir).expect("open");
+    let f2f = common::run_sequence(seq.as_ref(), with_window(0));
+    let win = common::run_sequence(seq.as_ref(), with_window(10));
+    let a = common::karlsruhe_ate_percent(&dir, &f2f);
+    let b = common::karlsruhe_ate_percent(&dir, &win);
+    eprintln!("{name}: ATE frame to frame {a:.3} %, window of 10 {b:.3} % of the path");
+    assert_eq!(win.untracked(), 0);
+    assert!(b < a, "ATE {b:.3} % with the window, {a:.3} % without");
+}
+
+/// The still EuRoC clip: with the window the camera stays within 3 mm of where it started.
+#[test]
+fn window_keeps_a_still_camera_still() {
+    let name = "euroc_v1_01_easy_micro";
+    let Some(dir) = common::dataset(name) else {
+        return;
+    };
+    let seq = open(&dir).expect("open");
+    let win = common::run_sequence(seq.as_ref(), with_window(10));
+    let worst = win
+        .poses()
+        .iter()
+        .map(|p| p.translation.vector.norm())
+        .fold(0.0, f64::max);
+    eprintln!(
+        "{name}: window of 10, farthest from the start {:.2} mm",
+        1e3 * worst
+    );
+    assert_eq!(win.untracked(), 0);
+    assert!(worst <= 0.003, "{worst} m");
+}
+
+/// One thread and two threads give the same trajectory with the window on.
+#[test]
+fn window_gives_the_same_trajectory_with_two_threads() {
+    let seq = SyntheticSequence::default();
+    let mut one = Odometry::new(camera_of(&seq), with_window(5)).expect("engine");
+    let a = collect(&seq, &mut one, 0.1).expect("one thread");
+    let mut two = Odometry::new(camera_of(&seq), with_window(5)).expect("engine");
+    let mut b = Vec::new();
+    run_sequence_two_threads(&seq, &mut two, 0.1, &mut |r| {
+        b.push(r.clone());
+        std::ops::ControlFlow::Continue(())
+    })
+    .expect("two threads");
+    assert_eq!(a.len(), b.len());
+    for (x, y) in a.iter().zip(&b) {
+        assert_eq!(x.pose, y.pose, "frame {}", x.index);
+        assert_eq!(x.status, y.status, "frame {}", x.index);
+    }
+    let e = common::evaluate_poses(
+        a.iter().map(|r| r.pose).collect(),
+        swarmpose_datasets::StereoSequence::ground_truth(&seq).expect("known path"),
+    );
+    let drift = e.final_drift_percent.expect("a path");
+    eprintln!("synthetic, window of 5: drift {drift:.3} %");
+    assert!(drift <= 0.1, "{drift} %");
+}
