@@ -2,7 +2,8 @@
 //! front end, robust PSO, reprojection refinement, online self-calibration), on one
 //! thread (`track`) and on two (`run_two_threads`: loading and the front end of frame
 //! k + 1 beside the back end of frame k). One iteration is the whole sequence through a
-//! new engine; frames per second = 51 / time. A first pass prints the per-stage split
+//! new engine; frames per second = 51 / time. Each also with a sliding window of 5 and of
+//! 10 keyframes ([`swarmpose_odometry::window`]). A first pass prints the per-stage split
 //! and the per-frame latency (p50, p99). Needs `kitti_vo_seq2` under the data root
 //! (`SWARMPOSE_DATA`); skipped with a message otherwise.
 //!
@@ -16,6 +17,7 @@ use std::ops::ControlFlow;
 use swarmpose_datasets::open;
 
 use swarmpose_odometry::batch::{camera_of, collect, run_sequence_two_threads};
+use swarmpose_odometry::window::WindowConfig;
 use swarmpose_odometry::{Odometry, OdometryConfig, StageTimes, StereoInput};
 
 fn percentile(sorted: &[f64], p: f64) -> f64 {
@@ -31,59 +33,80 @@ fn bench_pipeline(c: &mut Criterion) {
     };
     let camera = camera_of(seq.as_ref());
     let config = OdometryConfig::default();
-    // Per-frame latency of the engine alone (images already in memory), and the split.
     let frames: Vec<_> = (0..seq.len()).filter_map(|i| seq.frame(i).ok()).collect();
-    let mut odo = Odometry::new(camera, config.clone()).expect("engine");
-    let mut latency = Vec::new();
-    let mut sum = StageTimes::default();
-    for (i, f) in frames.iter().enumerate() {
-        let t = Instant::now();
-        let r = odo.track(StereoInput {
-            left: f.left.view(),
-            right: f.right.view(),
-            timestamp_s: i as f64 * 0.1,
-        });
-        latency.push(t.elapsed().as_secs_f64() * 1e3);
-        if let Ok(r) = r {
-            sum += &r.times;
+    let windowed = |keyframes: usize| OdometryConfig {
+        window: WindowConfig {
+            keyframes,
+            ..WindowConfig::default()
+        },
+        ..OdometryConfig::default()
+    };
+    let variants = [
+        ("", config.clone()),
+        (", window 5", windowed(5)),
+        (", window 10", windowed(10)),
+    ];
+    // Per-frame latency of the engine alone (images in memory), and the split.
+    for (label, config) in &variants {
+        let mut odo = Odometry::new(camera, config.clone()).expect("engine");
+        let mut latency = Vec::new();
+        let mut sum = StageTimes::default();
+        for (i, f) in frames.iter().enumerate() {
+            let t = Instant::now();
+            let r = odo.track(StereoInput {
+                left: f.left.view(),
+                right: f.right.view(),
+                timestamp_s: i as f64 * 0.1,
+            });
+            latency.push(t.elapsed().as_secs_f64() * 1e3);
+            if let Ok(r) = r {
+                sum += &r.times;
+            }
         }
+        let n = latency.len() as f64;
+        latency.sort_by(f64::total_cmp);
+        eprintln!(
+            "kitti_vo_seq2, orb + pso{label}, engine per frame (images in memory): p50 {:.1} ms, \
+             p99 {:.1} ms; mean features {:.2}, stereo {:.2}, match {:.2}, estimate {:.2}, \
+             refine {:.2}, calibrate {:.2}, window {:.2} ms",
+            percentile(&latency, 0.5),
+            percentile(&latency, 0.99),
+            sum.features_ms / n,
+            sum.stereo_ms / n,
+            sum.match_ms / n,
+            sum.estimate_ms / n,
+            sum.refine_ms / n,
+            sum.calibrate_ms / n,
+            sum.window_ms / n,
+        );
     }
-    let n = latency.len() as f64;
-    latency.sort_by(f64::total_cmp);
-    eprintln!(
-        "kitti_vo_seq2, orb + pso, engine per frame (images in memory): p50 {:.1} ms, p99 {:.1} ms; \
-         mean features {:.2}, stereo {:.2}, match {:.2}, estimate {:.2}, refine {:.2}, calibrate {:.2} ms",
-        percentile(&latency, 0.5),
-        percentile(&latency, 0.99),
-        sum.features_ms / n,
-        sum.stereo_ms / n,
-        sum.match_ms / n,
-        sum.estimate_ms / n,
-        sum.refine_ms / n,
-        sum.calibrate_ms / n,
-    );
     let mut g = c.benchmark_group("odometry");
     g.sample_size(10);
     g.measurement_time(Duration::from_secs(20));
     g.throughput(Throughput::Elements(seq.len() as u64));
-    g.bench_function("kitti_vo_seq2/load+engine", |b| {
-        b.iter(|| {
-            let mut odo = Odometry::new(camera, config.clone()).expect("engine");
-            black_box(collect(seq.as_ref(), &mut odo, 0.1))
+    for (label, config) in &variants {
+        g.bench_function(format!("kitti_vo_seq2/load+engine{label}"), |b| {
+            b.iter(|| {
+                let mut odo = Odometry::new(camera, config.clone()).expect("engine");
+                black_box(collect(seq.as_ref(), &mut odo, 0.1))
+            });
         });
-    });
-    g.bench_function("kitti_vo_seq2/load+engine, two threads", |b| {
-        b.iter(|| {
-            let mut odo = Odometry::new(camera, config.clone()).expect("engine");
-            let mut n = 0;
-            run_sequence_two_threads(seq.as_ref(), &mut odo, 0.1, &mut |r| {
-                n += black_box(r.index);
-                ControlFlow::Continue(())
-            })
-            .expect("run");
-            n
-        });
-    });
+        g.bench_function(
+            format!("kitti_vo_seq2/load+engine{label}, two threads"),
+            |b| {
+                b.iter(|| {
+                    let mut odo = Odometry::new(camera, config.clone()).expect("engine");
+                    let mut n = 0;
+                    run_sequence_two_threads(seq.as_ref(), &mut odo, 0.1, &mut |r| {
+                        n += black_box(r.index);
+                        ControlFlow::Continue(())
+                    })
+                    .expect("run");
+                    n
+                });
+            },
+        );
+    }
     g.bench_function("kitti_vo_seq2/engine", |b| {
         b.iter(|| {
             let mut odo = Odometry::new(camera, config.clone()).expect("engine");
