@@ -36,11 +36,12 @@ impl Odometry {
     /// ``refine`` (reprojection refinement), ``calibrate`` (the causes self-calibration
     /// may correct, e.g. ``"principal-point+yaw"``, or ``"none"``; default as the
     /// command line), ``disparity_correction`` (a fixed ``(offset, quadratic)`` in
-    /// pixels instead), ``min_inliers``, ``seed`` (frame k uses seed + k).
+    /// pixels instead), ``min_inliers``, ``seed`` (frame k uses seed + k), ``window``
+    /// (keyframes of the sliding-window bundle adjustment; 0, the default: frame to frame).
     #[new]
     #[pyo3(signature = (fx, fy, cx, cy, baseline, width, height, *, method = "pso", threshold = None,
         detector = "orb", refine = true, calibrate = None, disparity_correction = None,
-        min_inliers = None, seed = 0))]
+        min_inliers = None, seed = 0, window = 0))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         fx: f64,
@@ -58,6 +59,7 @@ impl Odometry {
         disparity_correction: Option<(f64, f64)>,
         min_inliers: Option<usize>,
         seed: u64,
+        window: usize,
     ) -> PyResult<Self> {
         let camera = StereoCamera {
             rig: RectifiedStereo {
@@ -79,6 +81,7 @@ impl Odometry {
             disparity_correction,
             min_inliers,
             seed,
+            window,
             rgbd: None,
         };
         Ok(Self {
@@ -90,7 +93,8 @@ impl Odometry {
     /// size); options as for ``Odometry(...)``.
     #[staticmethod]
     #[pyo3(signature = (sequence_dir, *, method = "pso", threshold = None, detector = "orb",
-        refine = true, calibrate = None, disparity_correction = None, min_inliers = None, seed = 0))]
+        refine = true, calibrate = None, disparity_correction = None, min_inliers = None, seed = 0,
+        window = 0))]
     #[allow(clippy::too_many_arguments)]
     fn from_sequence(
         sequence_dir: PathBuf,
@@ -102,6 +106,7 @@ impl Odometry {
         disparity_correction: Option<(f64, f64)>,
         min_inliers: Option<usize>,
         seed: u64,
+        window: usize,
     ) -> PyResult<Self> {
         let seq = Sequence::open(&sequence_dir)?;
         let options = Options {
@@ -113,6 +118,7 @@ impl Odometry {
             disparity_correction,
             min_inliers,
             seed,
+            window,
             rgbd: None,
         };
         Ok(Self {
@@ -162,7 +168,8 @@ impl Odometry {
     /// features, no disparity correction; other options as for ``Odometry(...)``.
     #[staticmethod]
     #[pyo3(signature = (fx, fy, cx, cy, width, height, *, depth_coefficient = None,
-        method = "pso", threshold = None, refine = true, min_inliers = None, seed = 0))]
+        method = "pso", threshold = None, refine = true, min_inliers = None, seed = 0,
+        window = 0))]
     #[allow(clippy::too_many_arguments)]
     fn rgbd(
         fx: f64,
@@ -177,6 +184,7 @@ impl Odometry {
         refine: bool,
         min_inliers: Option<usize>,
         seed: u64,
+        window: usize,
     ) -> PyResult<Self> {
         let mut noise = RgbdNoise::default();
         noise.depth_coefficient = depth_coefficient.unwrap_or(noise.depth_coefficient);
@@ -200,6 +208,7 @@ impl Odometry {
             disparity_correction: None,
             min_inliers,
             seed,
+            window,
             rgbd: Some(noise),
         };
         Ok(Self {

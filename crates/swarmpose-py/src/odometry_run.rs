@@ -25,7 +25,7 @@ use crate::sequence::Sequence;
 #[pyfunction]
 #[pyo3(signature = (sequence_dir, *, frame_period = 0.1, method = "pso", threshold = None,
     detector = "orb", refine = true, calibrate = None, disparity_correction = None,
-    min_inliers = None, seed = 0))]
+    min_inliers = None, seed = 0, window = 0))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn odometry(
     py: Python<'_>,
@@ -39,6 +39,7 @@ pub(crate) fn odometry(
     disparity_correction: Option<(f64, f64)>,
     min_inliers: Option<usize>,
     seed: u64,
+    window: usize,
 ) -> PyResult<OdometryRun> {
     if !(frame_period.is_finite() && frame_period > 0.0) {
         return Err(PyValueError::new_err(
@@ -55,6 +56,7 @@ pub(crate) fn odometry(
         disparity_correction,
         min_inliers,
         seed,
+        window,
         rgbd: None,
     };
     let mut engine = options.build(camera_of(seq.inner.as_ref()))?;

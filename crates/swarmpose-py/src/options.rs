@@ -23,6 +23,8 @@ pub(crate) struct Options<'a> {
     pub(crate) disparity_correction: Option<(f64, f64)>,
     pub(crate) min_inliers: Option<usize>,
     pub(crate) seed: u64,
+    /// Keyframes of the sliding window (0: frame to frame).
+    pub(crate) window: usize,
     /// An RGB-D camera with this depth noise (frames go to `track_rgbd`).
     pub(crate) rgbd: Option<RgbdNoise>,
 }
@@ -39,6 +41,10 @@ impl Options<'_> {
             detector,
             refine: self.refine,
             seed: self.seed,
+            window: swarmpose_odometry::window::WindowConfig {
+                keyframes: self.window,
+                ..swarmpose_odometry::window::WindowConfig::default()
+            },
             ..OdometryConfig::default()
         };
         if let Some(n) = self.min_inliers {

@@ -146,3 +146,23 @@ def test_evaluate_arrays():
     with pytest.raises(ValueError) as e:
         swarmpose.evaluate(steps[:, :3], steps)
     assert str(e.value) == "estimate has shape (20, 3, 4): (N, 4, 4) expected"
+
+
+def test_window_matches_the_cli(kitti_seq2, swarmpose_bin, tmp_path):
+    """``window=K`` is the command line's ``--window K``: the same trajectory, and a
+    bad value is refused."""
+    out = tmp_path / "cli"
+    subprocess.run([str(swarmpose_bin), "odometry", str(kitti_seq2), "--out", str(out),
+                    "--quiet", "--window", "5"], check=True, capture_output=True)
+    cli = read_kitti(out / "trajectory.kitti.txt")
+    run = swarmpose.odometry(kitti_seq2, window=5)
+    assert np.max(np.abs(run.poses - cli)) < 1e-12
+    frame_to_frame = swarmpose.odometry(kitti_seq2)
+    assert np.max(np.abs(run.poses - frame_to_frame.poses)) > 1e-6
+    times = swarmpose.Odometry.from_sequence(kitti_seq2, window=5)
+    seq = swarmpose.Sequence(kitti_seq2)
+    for i in range(3):
+        frame = times.track(*seq[i], 0.1 * i)
+    assert "window" in frame.times_ms
+    with pytest.raises(OverflowError):
+        swarmpose.odometry(kitti_seq2, window=-1)

@@ -282,26 +282,33 @@ impl StereoModel {
     }
 }
 
+/// A KITTI-like rig (`fx` 700, `fy` 690 px, baseline 0.54 m, noise 0.5 / 0.25 px) with
+/// `correction`, for tests.
+#[cfg(test)]
+pub(crate) fn test_model(correction: DisparityCorrection) -> StereoModel {
+    StereoModel {
+        rig: RectifiedStereo {
+            fx: 700.0,
+            fy: 690.0,
+            cx: 600.0,
+            cy: 180.0,
+            baseline_m: 0.54,
+        },
+        noise: PixelNoise {
+            position_px: 0.5,
+            disparity_px: 0.25,
+        },
+        correction,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use nalgebra::{Rotation3, UnitQuaternion};
 
     fn model(correction: DisparityCorrection) -> StereoModel {
-        StereoModel {
-            rig: RectifiedStereo {
-                fx: 700.0,
-                fy: 690.0,
-                cx: 600.0,
-                cy: 180.0,
-                baseline_m: 0.54,
-            },
-            noise: PixelNoise {
-                position_px: 0.5,
-                disparity_px: 0.25,
-            },
-            correction,
-        }
+        test_model(correction)
     }
 
     /// Central differences of the residual against the analytic Jacobians.

@@ -385,27 +385,12 @@ pub(crate) fn refine_window(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::refine::model::PixelNoise;
     use nalgebra::Rotation3;
-    use swarmpose_vision::stereo::RectifiedStereo;
 
     /// Central differences of the residual against both pose Jacobians.
     #[test]
     fn pose_jacobians_match_finite_differences() {
-        let model = StereoModel {
-            rig: RectifiedStereo {
-                fx: 700.0,
-                fy: 690.0,
-                cx: 600.0,
-                cy: 180.0,
-                baseline_m: 0.54,
-            },
-            noise: PixelNoise {
-                position_px: 0.5,
-                disparity_px: 0.25,
-            },
-            correction: Default::default(),
-        };
+        let model = crate::refine::model::test_model(Default::default());
         let pose = |r: (f64, f64, f64), t: [f64; 3]| Pose {
             rot: *Rotation3::from_euler_angles(r.0, r.1, r.2).matrix(),
             trans: Vector3::from(t),

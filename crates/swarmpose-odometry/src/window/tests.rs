@@ -1,26 +1,11 @@
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use swarmpose_vision::stereo::RectifiedStereo;
 
 use super::*;
-use crate::refine::model::PixelNoise;
 
 fn model() -> StereoModel {
-    StereoModel {
-        rig: RectifiedStereo {
-            fx: 700.0,
-            fy: 700.0,
-            cx: 600.0,
-            cy: 180.0,
-            baseline_m: 0.54,
-        },
-        noise: PixelNoise {
-            position_px: 0.5,
-            disparity_px: 0.25,
-        },
-        correction: Default::default(),
-    }
+    crate::refine::model::test_model(Default::default())
 }
 
 /// The measurement of the world point `pw` by the camera at `pose` (camera in world), if

@@ -157,6 +157,7 @@ class Odometry:
         disparity_correction: Optional[Tuple[float, float]] = None,
         min_inliers: Optional[int] = None,
         seed: int = 0,
+        window: int = 0,
     ) -> None: ...
     @staticmethod
     def from_sequence(
@@ -170,6 +171,7 @@ class Odometry:
         disparity_correction: Optional[Tuple[float, float]] = None,
         min_inliers: Optional[int] = None,
         seed: int = 0,
+        window: int = 0,
     ) -> "Odometry": ...
     def track(
         self, left: npt.NDArray[np.uint8], right: npt.NDArray[np.uint8], timestamp: float
@@ -190,6 +192,7 @@ class Odometry:
         refine: bool = True,
         min_inliers: Optional[int] = None,
         seed: int = 0,
+        window: int = 0,
     ) -> "Odometry":
         """An engine for an RGB-D camera; frames go to ``track_rgbd``."""
     def track_rgbd(
@@ -235,6 +238,7 @@ def odometry(
     disparity_correction: Optional[Tuple[float, float]] = None,
     min_inliers: Optional[int] = None,
     seed: int = 0,
+    window: int = 0,
 ) -> OdometryRun:
     """Runs a whole KITTI, Karlsruhe or EuRoC sequence directory, as ``swarmpose odometry``."""
 
