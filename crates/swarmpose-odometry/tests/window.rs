@@ -110,6 +110,11 @@ fn window_gives_the_same_trajectory_with_two_threads() {
         assert_eq!(x.pose, y.pose, "frame {}", x.index);
         assert_eq!(x.status, y.status, "frame {}", x.index);
     }
+    // From the third frame (index 2) on the pose is the window's, given without a covariance (its
+    // motion from the reference as given out carries the reference's revision); before,
+    // the pair's.
+    assert!(a[1].covariance.is_some());
+    assert!(a[3..].iter().all(|r| r.covariance.is_none()));
     let e = common::evaluate_poses(
         a.iter().map(|r| r.pose).collect(),
         swarmpose_datasets::StereoSequence::ground_truth(&seq).expect("known path"),
