@@ -122,7 +122,8 @@ pub struct FrameResult {
     /// Covariance of the measured motion from [`FrameResult::reference`] (equal to
     /// `motion` when the reference is the previous frame), when it was refined: of
     /// `ξ = (ν, ω)` (metres, radians, in this camera's frame) in `T_true = T ∘ E(ξ)`,
-    /// `E(ξ): P ↦ Exp(ω) P + ν`; see [`crate::refine`].
+    /// `E(ξ): P ↦ Exp(ω) P + ν`; see [`crate::refine`]. `None` when the sliding window gave
+    /// the pose ([`crate::window`]).
     pub covariance: Option<Matrix6<f64>>,
     /// What happened.
     pub status: Status,

@@ -49,7 +49,8 @@ impl Frame {
     }
 
     /// 6x6 covariance of the measured motion, of ``(v, w)`` (metres, radians, in this
-    /// camera's frame), or ``None`` when it was not refined.
+    /// camera's frame), or ``None`` when it was not refined or the sliding window gave the
+    /// pose (``window=K``: see RESULTS.md).
     #[getter]
     fn covariance<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray2<f64>>> {
         self.result.covariance.as_ref().map(|c| matrix(py, c))
