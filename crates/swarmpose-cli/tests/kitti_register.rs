@@ -9,7 +9,7 @@
 //! self-calibrated once from the images of the whole sequence (`--self-calibrate 50`, no
 //! ground truth, as the odometry engine does online) and passed to the other pairs with
 //! `--disparity-offset` and `--disparity-quadratic`: this copy of the sequence has
-//! disparities short of its `calib.txt` (docs/kitti-disparity-offset.md). As
+//! disparities short of its `calib.txt` (docs/self-calibration.md). As
 //! calibrated, 21 pairs pass.
 //! Skipped with a message when the data is absent, failing under `CI=true`.
 

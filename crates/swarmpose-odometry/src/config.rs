@@ -5,7 +5,7 @@ use swarmpose_vision::frontend::{Detector, DisparityCorrection};
 
 use crate::refine::RefineConfig;
 use crate::refine::model::PixelNoise;
-use crate::selfcal::SelfCalConfig;
+use crate::selfcal::{CorrectionModel, SelfCalConfig};
 use crate::window::WindowConfig;
 
 /// How the disparity correction of the stereo calibration is obtained.
@@ -20,6 +20,49 @@ pub enum Calibration {
     Off,
     /// A fixed correction.
     Fixed(DisparityCorrection),
+}
+
+/// Largest magnitude of a fixed disparity correction term, pixels: real corrections are
+/// fractions of a pixel to a few pixels; beyond this the points would be placed at depths
+/// that have nothing to do with the images (an offset of 1e9 px puts every point at the
+/// camera and every motion at the identity).
+pub const MAX_FIXED_CORRECTION_PX: f64 = 100.0;
+
+impl Calibration {
+    /// The mode a user's options ask for: the `causes` self-calibration may correct, and
+    /// a fixed correction's offset and quadratic term (pixels; either may be given),
+    /// whose option names `names` the messages use. A fixed correction wins; no causes
+    /// and no fixed correction is [`Calibration::Off`].
+    ///
+    /// # Errors
+    /// A term that is not finite or is larger than [`MAX_FIXED_CORRECTION_PX`].
+    pub fn from_options(
+        causes: CorrectionModel,
+        offset_px: Option<f64>,
+        quadratic_px: Option<f64>,
+        names: [&str; 2],
+    ) -> Result<Self, String> {
+        for (name, v) in names.iter().zip([offset_px, quadratic_px]) {
+            if v.is_some_and(|d| !d.is_finite()) {
+                return Err(format!("{name} must be a finite number of pixels"));
+            }
+            if let Some(d) = v.filter(|d| d.abs() > MAX_FIXED_CORRECTION_PX) {
+                return Err(format!(
+                    "{name} {d:e} px is outside -{MAX_FIXED_CORRECTION_PX}..\
+                     {MAX_FIXED_CORRECTION_PX} px: a disparity correction is a few pixels at most"
+                ));
+            }
+        }
+        Ok(match (offset_px, quadratic_px) {
+            (None, None) if causes == CorrectionModel::NONE => Self::Off,
+            (None, None) => Self::Auto,
+            (a, q) => Self::Fixed(DisparityCorrection {
+                offset_px: a.unwrap_or(0.0),
+                quadratic_px: q.unwrap_or(0.0),
+                ..DisparityCorrection::default()
+            }),
+        })
+    }
 }
 
 /// Settings of [`crate::Odometry`].

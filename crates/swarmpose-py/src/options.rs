@@ -7,7 +7,7 @@ use pyo3::prelude::*;
 use swarmpose_odometry::config::Calibration;
 use swarmpose_odometry::frontend::RgbdNoise;
 use swarmpose_odometry::{CorrectionModel, OdometryConfig, StereoCamera};
-use swarmpose_vision::frontend::{Detector, DisparityCorrection};
+use swarmpose_vision::frontend::Detector;
 
 use crate::errors::odometry_error;
 use crate::methods;
@@ -55,25 +55,22 @@ impl Options<'_> {
             }
             c.min_inliers = n;
         }
-        if let Some(causes) = self.calibrate {
-            let model = CorrectionModel::parse(causes).map_err(PyValueError::new_err)?;
-            c.selfcal.candidates = model;
-            if model == CorrectionModel::NONE {
-                c.calibration = Calibration::Off;
-            }
-        }
-        if let Some((offset_px, quadratic_px)) = self.disparity_correction {
-            if !(offset_px.is_finite() && quadratic_px.is_finite()) {
-                return Err(PyValueError::new_err(
-                    "disparity_correction (offset, quadratic) must be finite numbers of pixels",
-                ));
-            }
-            c.calibration = Calibration::Fixed(DisparityCorrection {
-                offset_px,
-                quadratic_px,
-                ..DisparityCorrection::default()
-            });
-        }
+        let causes = match self.calibrate {
+            Some(text) => CorrectionModel::parse(text).map_err(PyValueError::new_err)?,
+            None => c.selfcal.candidates,
+        };
+        c.selfcal.candidates = causes;
+        let (offset, quadratic) = self.disparity_correction.unzip();
+        c.calibration = Calibration::from_options(
+            causes,
+            offset,
+            quadratic,
+            [
+                "disparity_correction offset",
+                "disparity_correction quadratic",
+            ],
+        )
+        .map_err(PyValueError::new_err)?;
         Ok(c)
     }
 

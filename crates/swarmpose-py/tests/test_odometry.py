@@ -166,3 +166,12 @@ def test_window_matches_the_cli(kitti_seq2, swarmpose_bin, tmp_path):
     assert "window" in frame.times_ms
     with pytest.raises(OverflowError):
         swarmpose.odometry(kitti_seq2, window=-1)
+
+
+def test_fixed_correction_out_of_range():
+    """A fixed correction of 1e9 px (every point at the camera) is refused as on the
+    command line, with the same message."""
+    with pytest.raises(ValueError, match=r"disparity_correction offset 1e9 px is outside -100\.\.100 px"):
+        swarmpose.Odometry(**KITTI_CAMERA, disparity_correction=(1e9, 0.0))
+    with pytest.raises(ValueError, match="finite"):
+        swarmpose.Odometry(**KITTI_CAMERA, disparity_correction=(0.0, float("nan")))

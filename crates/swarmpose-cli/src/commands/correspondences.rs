@@ -182,7 +182,10 @@ fn read_inliers(path: &Path, data: &Correspondences) -> Result<Vec<bool>, CliErr
 /// # Errors
 /// A bad sequence or frame index (exit 2), an unwritable output (exit 1).
 pub fn run(args: &CorrespondencesArgs) -> Result<(), CliError> {
-    let fixed = args.stereo.fixed_correction()?;
+    let fixed = match args.stereo.calibration()?.0 {
+        Calibration::Fixed(c) => Some(c),
+        Calibration::Auto | Calibration::Off => None,
+    };
     let (i, j) = match args.frames.as_slice() {
         [i, j] => (*i, *j),
         _ => return Err(CliError::usage("--frames takes two frame indices, I and J")),

@@ -5,15 +5,9 @@ use clap::Args;
 use swarmpose_odometry::CorrectionModel;
 use swarmpose_odometry::config::Calibration;
 use swarmpose_odometry::selfcal::SelfCalConfig;
-use swarmpose_vision::frontend::{Detector, DisparityCorrection};
+use swarmpose_vision::frontend::Detector;
 
 use crate::error::CliError;
-
-/// Largest magnitude of a fixed disparity correction term, pixels: real corrections are
-/// fractions of a pixel to a few pixels; beyond this the points would be placed at depths
-/// that have nothing to do with the images (an offset of 1e9 px puts every point at the
-/// camera and every motion at the identity).
-pub const MAX_CORRECTION_PX: f64 = 100.0;
 
 fn parse_detector(s: &str) -> Result<Detector, String> {
     s.parse::<Detector>().map_err(|e| e.to_string())
@@ -76,52 +70,24 @@ fn parse_memory(s: &str) -> Result<f64, String> {
 }
 
 impl StereoOptions {
-    /// The fixed correction given by the flags, if any.
-    ///
-    /// # Errors
-    /// A flag that is not a finite number of pixels.
-    pub fn fixed_correction(&self) -> Result<Option<DisparityCorrection>, CliError> {
-        for (flag, v) in [
-            ("--disparity-offset", self.disparity_offset),
-            ("--disparity-quadratic", self.disparity_quadratic),
-        ] {
-            if v.is_some_and(|d| !d.is_finite()) {
-                return Err(CliError::usage(format!(
-                    "{flag} must be a finite number of pixels"
-                )));
-            }
-            if let Some(d) = v.filter(|d| d.abs() > MAX_CORRECTION_PX) {
-                return Err(CliError::usage(format!(
-                    "{flag} {d:e} px is outside -{MAX_CORRECTION_PX}..{MAX_CORRECTION_PX} px: \
-                     a disparity correction is a few pixels at most"
-                )));
-            }
-        }
-        Ok(match (self.disparity_offset, self.disparity_quadratic) {
-            (None, None) => None,
-            (a, q) => Some(DisparityCorrection {
-                offset_px: a.unwrap_or(0.0),
-                quadratic_px: q.unwrap_or(0.0),
-                ..DisparityCorrection::default()
-            }),
-        })
-    }
-
     /// The engine's calibration mode and self-calibration settings.
     ///
     /// # Errors
-    /// As [`StereoOptions::fixed_correction`].
+    /// A fixed correction term that is not finite or too large
+    /// ([`Calibration::from_options`]).
     pub fn calibration(&self) -> Result<(Calibration, SelfCalConfig), CliError> {
         let selfcal = SelfCalConfig {
             candidates: self.calibrate,
             memory_s: self.calibration_memory,
             ..SelfCalConfig::default()
         };
-        let mode = match self.fixed_correction()? {
-            Some(c) => Calibration::Fixed(c),
-            None if self.calibrate == CorrectionModel::NONE => Calibration::Off,
-            None => Calibration::Auto,
-        };
+        let mode = Calibration::from_options(
+            self.calibrate,
+            self.disparity_offset,
+            self.disparity_quadratic,
+            ["--disparity-offset", "--disparity-quadratic"],
+        )
+        .map_err(CliError::usage)?;
         Ok((mode, selfcal))
     }
 }
