@@ -27,55 +27,64 @@ fn synthetic_tum_rgbd_is_followed() {
         .expect("write");
     let seq = RgbdSequence::open(&dir).expect("open");
     assert_eq!(seq.len(), 12);
-    let mut odo = Odometry::builder(seq.camera().expect("camera"))
-        .config(OdometryConfig::default())
-        .rgbd(RgbdNoise::default())
-        .build()
-        .expect("engine");
-    let mut results = Vec::new();
-    run_rgbd_sequence(&seq, &mut odo, &mut |r| {
-        results.push(r.clone());
-        ControlFlow::Continue(())
-    })
-    .expect("run");
-    let gt = seq.ground_truth().expect("groundtruth.txt").to_vec();
-    // Re-based on the first frame: the first true pose is the identity.
-    assert!(gt[0].translation.vector.norm() < 1e-9);
-    let poses: Vec<_> = results.iter().map(|r| r.pose).collect();
-    let e = evaluate(
-        &by_index(
-            &Trajectory::indexed("estimate", poses),
-            &Trajectory::indexed("truth", gt),
+    // Frame to frame, and with a window of 5 keyframes.
+    for keyframes in [0, 5] {
+        let mut odo = Odometry::builder(seq.camera().expect("camera"))
+            .config(OdometryConfig {
+                window: swarmpose_odometry::window::WindowConfig {
+                    keyframes,
+                    ..Default::default()
+                },
+                ..OdometryConfig::default()
+            })
+            .rgbd(RgbdNoise::default())
+            .build()
+            .expect("engine");
+        let mut results = Vec::new();
+        run_rgbd_sequence(&seq, &mut odo, &mut |r| {
+            results.push(r.clone());
+            ControlFlow::Continue(())
+        })
+        .expect("run");
+        let gt = seq.ground_truth().expect("groundtruth.txt").to_vec();
+        // Re-based on the first frame: the first true pose is the identity.
+        assert!(gt[0].translation.vector.norm() < 1e-9);
+        let poses: Vec<_> = results.iter().map(|r| r.pose).collect();
+        let e = evaluate(
+            &by_index(
+                &Trajectory::indexed("estimate", poses),
+                &Trajectory::indexed("truth", gt),
+            )
+            .expect("pairs"),
         )
-        .expect("pairs"),
-    )
-    .expect("evaluate");
-    for f in &results {
+        .expect("evaluate");
+        for f in &results {
+            eprintln!(
+                "frame {:2}: {:4} points {:4} matches {:4} inliers {}",
+                f.index,
+                f.counts.stereo_points,
+                f.counts.matches,
+                f.counts.inliers,
+                f.status.text()
+            );
+        }
         eprintln!(
-            "frame {:2}: {:4} points {:4} matches {:4} inliers {}",
-            f.index,
-            f.counts.stereo_points,
-            f.counts.matches,
-            f.counts.inliers,
-            f.status.text()
+            "rgbd, window {keyframes}: path {:.2} m, drift {:.4} m ({:.2} %), RMS eq. (20) {:.5}, ATE {:.4} m",
+            e.path_length_m,
+            e.final_drift_m,
+            e.final_drift_percent.unwrap_or(f64::NAN),
+            e.eq20_rms,
+            e.ate_aligned.rmse
         );
+        assert!((results[1].timestamp_s - results[0].timestamp_s - 1.0 / 30.0).abs() < 1e-5);
+        assert!(
+            results
+                .iter()
+                .all(|r| matches!(r.status, Status::First | Status::Tracked))
+        );
+        assert!(e.final_drift_percent.expect("3.3 m") < 2.0);
+        assert!(e.eq20_rms < 0.01);
     }
-    eprintln!(
-        "rgbd: path {:.2} m, drift {:.4} m ({:.2} %), RMS eq. (20) {:.5}, ATE {:.4} m",
-        e.path_length_m,
-        e.final_drift_m,
-        e.final_drift_percent.unwrap_or(f64::NAN),
-        e.eq20_rms,
-        e.ate_aligned.rmse
-    );
-    assert!((results[1].timestamp_s - results[0].timestamp_s - 1.0 / 30.0).abs() < 1e-5);
-    assert!(
-        results
-            .iter()
-            .all(|r| matches!(r.status, Status::First | Status::Tracked))
-    );
-    assert!(e.final_drift_percent.expect("3.3 m") < 2.0);
-    assert!(e.eq20_rms < 0.01);
     let _ = std::fs::remove_dir_all(&dir);
 }
 
