@@ -116,6 +116,9 @@ const CONVERGED_NATS: f64 = 1e-3;
 /// wrong matches exactly (weight 0, likelihood that of the uniform part).
 const NEGLIGIBLE: f64 = 36.0;
 
+/// Halvings of a step that lowered the likelihood before EM stops.
+const HALVINGS: usize = 4;
+
 /// Most EM rounds per model.
 const ROUNDS: usize = 40;
 
@@ -270,6 +273,7 @@ fn em(
     let mut last = f64::NEG_INFINITY;
     let mut previous = (pose, noise, gamma);
     let mut reverted = false;
+    let mut halvings = 0;
     for _ in 0..ROUNDS {
         // E step, in log space: a row whose inlier density is below e^-NEGLIGIBLE of the
         // wrong matches' (most rows, at high outlier rates) costs no exp or ln.
@@ -329,11 +333,22 @@ fn em(
         }
         if log_likelihood < last - CONVERGED_NATS {
             // The Gauss-Newton and scoring steps are not exact M steps: when a round
-            // lowers the likelihood, take the previous parameters back and stop there.
-            (pose, noise, gamma) = previous;
-            reverted = true;
+            // lowers the likelihood, halve the step; after HALVINGS, take the previous
+            // parameters back and stop there.
+            if halvings < HALVINGS {
+                halvings += 1;
+                let (p, f, g) = previous;
+                pose = p.lerp_slerp(&pose, 0.5);
+                let (a, b) = (f.as_array(), noise.as_array());
+                noise = RangeNoise::from_array([0, 1, 2].map(|k| 0.5 * (a[k] + b[k])));
+                gamma = 0.5 * (g + gamma);
+            } else {
+                (pose, noise, gamma) = previous;
+                reverted = true;
+            }
             continue;
         }
+        halvings = 0;
         // Nats, whatever the unit: the choice needs far less than one.
         let converged = log_likelihood - last <= CONVERGED_NATS || log_likelihood >= enough;
         last = log_likelihood;
