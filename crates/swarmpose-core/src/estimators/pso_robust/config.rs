@@ -23,7 +23,7 @@ impl std::fmt::Display for Threshold {
     }
 }
 
-/// Settings of [`PsoEstimator`]. Defaults in brackets.
+/// Settings of [`super::PsoEstimator`]. Defaults in brackets.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PsoEstimatorConfig {
     /// Inlier threshold δ on `|dst - (R src + t)|` [`Threshold::Auto`]. A fixed δ of about
