@@ -39,10 +39,11 @@ fn correspondences(
 }
 
 /// How the inliers were tested, as `swarmpose register` reports it.
-fn noise_model(method: &str, data: &Correspondences) -> &'static str {
+fn noise_model(method: &str, data: &Correspondences, estimate: &Estimate) -> &'static str {
     match (method, data.noise_covariance().is_some()) {
         ("pso", true) => "covariance",
         ("svd", _) => "none",
+        _ if estimate.diagnostics.range_noise.is_some() => "range",
         _ => "threshold",
     }
 }
@@ -82,7 +83,7 @@ pub(crate) fn register(
         method: estimator.name(),
         seed,
         n: data.len(),
-        noise_model: noise_model(estimator.name(), &data),
+        noise_model: noise_model(estimator.name(), &data, &estimate),
         estimate,
     })
 }
@@ -211,7 +212,9 @@ impl Registration {
     }
 
     /// How inliers were tested: ``"covariance"`` (Mahalanobis, ``pso`` with
-    /// covariances), ``"threshold"``, or ``"none"`` (``svd``).
+    /// covariances), ``"range"`` (``pso`` without covariances, when the residuals chose a
+    /// noise model growing with the range along the viewing ray over isotropic noise),
+    /// ``"threshold"``, or ``"none"`` (``svd``).
     #[getter]
     fn noise_model(&self) -> &'static str {
         self.noise_model

@@ -1,11 +1,12 @@
 //! Criterion benchmarks of the default `pso` on stereo-noise scenes (`StereoSpec::street`):
 //! 600 correspondences at 90 % and 97 % outliers and 20 000 at 90 %, each with the
-//! covariances and as plain coordinates, one thread.
+//! covariances, as plain coordinates, and as plain coordinates with the range noise model
+//! turned off (`plain_isotropic`: what the model costs), one thread.
 //!
 //! `cargo bench -p swarmpose-sim --bench stereo`
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
-use swarmpose_core::{Estimator, PsoEstimator};
+use swarmpose_core::{Estimator, PsoEstimator, PsoEstimatorConfig};
 use swarmpose_sim::StereoSpec;
 
 fn bench(c: &mut Criterion) {
@@ -25,6 +26,10 @@ fn bench(c: &mut Criterion) {
         });
         group.bench_with_input(BenchmarkId::new("plain", &id), &plain, |b, d| {
             b.iter(|| std::hint::black_box(pso.estimate_seeded(d, 7)));
+        });
+        let isotropic = PsoEstimator::new(PsoEstimatorConfig::default().with_range_noise(false));
+        group.bench_with_input(BenchmarkId::new("plain_isotropic", &id), &plain, |b, d| {
+            b.iter(|| std::hint::black_box(isotropic.estimate_seeded(d, 7)));
         });
     }
     group.finish();

@@ -19,7 +19,8 @@ Output: one JSON object on standard output, one line: method, input, seed, \
 n_correspondences, rotation_wxyz ([w, x, y, z], w >= 0), translation ([x, y, z], metres), \
 inliers (0-based row indices), inlier_ratio, noise_model (\"covariance\" when the CSV has \
 the 12 covariance columns and the method is pso: Mahalanobis inlier test and fit; \
-\"threshold\"; \"none\" for svd), threshold_m (null for svd and with covariances), \
+\"range\" when pso's residuals chose a noise model growing with the range along the viewing \
+ray over isotropic noise, and tested and fitted with it; \"threshold\"; \"none\" for svd), threshold_m (null for svd and with covariances), \
 final_cost (m^2), \
 residual_rms_m, iterations, cost_evaluations, elapsed_ms, ambiguous (a second motion \
 with at least half the support was found: pso only) and runner_up (its rotation_wxyz, \
@@ -101,6 +102,7 @@ impl<'a> Report<'a> {
         let noise_model = match (method, data.noise_covariance().is_some()) {
             ("pso", true) => "covariance",
             ("svd", _) => "none",
+            _ if e.diagnostics.range_noise.is_some() => "range",
             _ => "threshold",
         };
         let t = e.transform.translation.vector;

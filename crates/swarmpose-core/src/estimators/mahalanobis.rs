@@ -60,10 +60,16 @@ pub fn refine_mahalanobis(
         (r.matrix() * src_cov[i] * r.matrix().transpose() + dst_cov[i]).try_inverse()
     };
     let select = |pose: &Isometry3<f64>, gate: f64, out: &mut Vec<usize>| {
+        let rot = pose.rotation.to_rotation_matrix();
         out.clear();
         out.extend((0..data.len()).filter(|&i| {
             let r = data.dst()[i] - pose * data.src()[i];
-            information(pose, i).is_some_and(|w| r.dot(&(w * r)) < gate)
+            // rᵀ Σ⁻¹ r ≥ |r|² / tr Σ (tr Σ_s is rotation-invariant): most wrong matches
+            // fail without an inversion.
+            r.norm_squared() < gate * (src_cov[i].trace() + dst_cov[i].trace())
+                && (rot.matrix() * src_cov[i] * rot.matrix().transpose() + dst_cov[i])
+                    .try_inverse()
+                    .is_some_and(|w| r.dot(&(w * r)) < gate)
         }));
     };
     let schedule = |round: usize| gate * [16.0, 4.0].get(round).copied().unwrap_or(1.0);

@@ -119,7 +119,7 @@ pub(crate) fn refine_mixture(
 
 /// Volume of the destination points' bounding box, m³, with each side at least 1 % of
 /// the largest (so flat scenes keep a finite outlier density).
-fn outlier_volume(data: &Correspondences) -> f64 {
+pub(crate) fn outlier_volume(data: &Correspondences) -> f64 {
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
     for p in data.dst() {

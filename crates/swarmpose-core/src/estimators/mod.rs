@@ -7,6 +7,7 @@ mod mixture;
 mod msac;
 mod pso_paper;
 mod pso_robust;
+mod ray_noise;
 pub mod registry;
 mod svd;
 #[cfg(test)]
@@ -29,6 +30,7 @@ pub use mahalanobis::{CHI2_3_99, refine_mahalanobis};
 pub use msac::{MsacConfig, MsacEstimator};
 pub use pso_paper::{PsoPaperConfig, PsoPaperEstimator};
 pub use pso_robust::{PsoEstimator, PsoEstimatorConfig, Threshold};
+pub use ray_noise::RangeNoise;
 pub use registry::Method;
 pub use svd::SvdEstimator;
 pub use wls::WlsEstimator;
@@ -53,6 +55,10 @@ pub struct Diagnostics {
     /// found it: the answer is ambiguous (for example a moving object covering much of
     /// the view).
     pub runner_up: Option<RunnerUp>,
+    /// The range-dependent noise model that plain coordinates' residuals chose over
+    /// isotropic noise, when they did (`pso` only): the fit and the inlier test then used
+    /// its covariances ([`RangeNoise`]).
+    pub range_noise: Option<RangeNoise>,
 }
 
 /// A second rigid motion found among the correspondences the estimate left over.

@@ -189,6 +189,7 @@ impl Estimator for MsacEstimator {
                 threshold_m: Some(cfg.threshold_m),
                 elapsed: start.elapsed(),
                 runner_up: None,
+                range_noise: None,
             },
             transform,
             inliers,

@@ -147,6 +147,7 @@ impl Estimator for PsoPaperEstimator {
                 threshold_m: Some(cfg.threshold_m),
                 elapsed: start.elapsed(),
                 runner_up: None,
+                range_noise: None,
             },
             transform,
             inliers,

@@ -54,6 +54,7 @@ pub(crate) fn fit_of_all_points(
             threshold_m: None,
             elapsed: start.elapsed(),
             runner_up: None,
+            range_noise: None,
         },
         inliers: (0..data.len()).collect(),
     }

@@ -136,6 +136,28 @@ impl Correspondences {
         Ok(self)
     }
 
+    /// Attaches covariances that are positive definite by construction (a noise model
+    /// fitted by an estimator), with each row's σ (the square root of the sum of the two
+    /// largest eigenvalues, as [`Correspondences::with_noise_covariance`] derives it).
+    /// Only lengths are checked: the per-matrix checks would cost more than the fit.
+    pub(crate) fn with_trusted_noise_covariance(
+        mut self,
+        src_cov: Vec<Matrix3<f64>>,
+        dst_cov: Vec<Matrix3<f64>>,
+        sigma: Vec<f64>,
+    ) -> Option<Self> {
+        let n = self.src.len();
+        if src_cov.len() != n || dst_cov.len() != n || sigma.len() != n {
+            return None;
+        }
+        self.noise_sigma_m = Some(sigma);
+        self.covariance_m2 = Some(NoiseCovariance {
+            src: src_cov,
+            dst: dst_cov,
+        });
+        Some(self)
+    }
+
     /// The per-point noise covariances `(src_cov, dst_cov)`, m², if attached.
     #[must_use]
     pub fn noise_covariance(&self) -> Option<CovariancePair<'_>> {

@@ -63,7 +63,7 @@ class Registration:
     def n_correspondences(self) -> int: ...
     @property
     def noise_model(self) -> str:
-        """"covariance", "threshold" or "none"."""
+        """"covariance", "range", "threshold" or "none"."""
     @property
     def threshold(self) -> Optional[float]:
         """Inlier threshold used, metres."""

@@ -165,9 +165,10 @@ impl PsoEstimator {
             |i| (pose * src[i], r * src_cov[i] * r.transpose()),
             |(q, c), j| {
                 let e = dst[j] - q;
-                (c + dst_cov[j])
-                    .try_inverse()
-                    .is_some_and(|w| e.dot(&(w * e)) < gate)
+                let cov = c + dst_cov[j];
+                // eᵀ Σ⁻¹ e ≥ |e|² / tr Σ: most pairs fail without an inversion.
+                e.norm_squared() < gate * cov.trace()
+                    && cov.try_inverse().is_some_and(|w| e.dot(&(w * e)) < gate)
             },
         )
     }

@@ -23,7 +23,7 @@ impl std::fmt::Display for Threshold {
     }
 }
 
-/// Settings of [`PsoEstimator`]. Defaults in brackets.
+/// Settings of [`super::PsoEstimator`]. Defaults in brackets.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PsoEstimatorConfig {
     /// Inlier threshold δ on `|dst - (R src + t)|` [`Threshold::Auto`]. A fixed δ of about
@@ -70,6 +70,11 @@ pub struct PsoEstimatorConfig {
     /// Most rounds of the final Gaussian-uniform mixture refinement (step 6) \[10\]; 0
     /// ends with the hard-band SVD refit of step 4.
     pub mixture_rounds: usize,
+    /// Without a noise model in the data, fit one that grows with the range along and
+    /// across the viewing ray from each frame's origin (stereo, RGB-D, lidar), and use it
+    /// (Mahalanobis fit and self-check, as with covariances) when the evidence prefers it
+    /// to isotropic noise (see `ray_noise` in the module documentation) \[true\].
+    pub range_noise: bool,
 }
 
 impl Default for PsoEstimatorConfig {
@@ -93,6 +98,7 @@ impl Default for PsoEstimatorConfig {
             restarts: 3,
             restart_below_ratio: 0.2,
             mixture_rounds: 10,
+            range_noise: true,
         }
     }
 }
@@ -130,6 +136,13 @@ impl PsoEstimatorConfig {
     #[must_use]
     pub fn with_mixture_rounds(mut self, rounds: usize) -> Self {
         self.mixture_rounds = rounds;
+        self
+    }
+
+    /// Sets whether a range-dependent noise model is considered for plain coordinates.
+    #[must_use]
+    pub fn with_range_noise(mut self, on: bool) -> Self {
+        self.range_noise = on;
         self
     }
 

@@ -37,6 +37,15 @@
 //!    graph held a sample, the sample doubles (up to `max_sample_growth` times
 //!    `max_points`) and steps 1-5 run again; then the answer is
 //!    [`PoseError::InsufficientSupport`] with the support needed, never a plain success.
+//!
+//!    **Noise model** (plain coordinates at a uniform δ, `range_noise`): before the
+//!    self-check, the residuals choose between isotropic noise and noise that grows with
+//!    the range along and across the viewing ray from each frame's origin (stereo,
+//!    RGB-D, lidar), by a likelihood-ratio test and a test that no second motion is
+//!    swallowed ([`super::ray_noise`]; sets larger than 2000 rows are sampled). When the
+//!    range model wins, its covariances are attached and the estimate continues as with
+//!    covariances (Mahalanobis fit, self-check on its test); the model is reported in
+//!    [`Diagnostics::range_noise`].
 //! 6. **Ambiguity.** If the points left over could hold a second motion with at least
 //!    `ambiguity_ratio` of the winner's support (a moving object), steps 1-4 run on them
 //!    (one swarm). The runner-up is reported ([`Diagnostics::runner_up`]) only when it
@@ -73,6 +82,7 @@
 mod check;
 mod config;
 mod graph;
+mod range;
 mod scale;
 mod vote;
 
@@ -98,6 +108,7 @@ use crate::geometry::{
 use crate::pso::ParticleSwarm;
 use crate::rng::SeededRng;
 use graph::PairGraph;
+use range::Modelled;
 
 /// `pso`: the robust PSO/SVD estimator (see the module documentation).
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -315,7 +326,7 @@ impl PsoEstimator {
         auto_scene: Option<f64>,
         max_points: usize,
         rng: &mut SeededRng,
-    ) -> Result<(Found, PairGraph, Option<f64>), PoseError> {
+    ) -> Result<(Found, PairGraph, Option<f64>, Modelled), PoseError> {
         let cfg = &self.config;
         let mut attempt = self.find(data, first, max_points, rng);
         if let (Some(scene), Tolerance::Uniform(mut d)) = (auto_scene, first) {
@@ -330,12 +341,25 @@ impl PsoEstimator {
             }
             let (mut found, graph) = attempt?;
             let delta = self.auto_refit(data, &mut found, d, scene, rng);
-            self.checked(data, &mut found, &graph, Tolerance::Uniform(delta), rng)?;
-            return Ok((found, graph, Some(delta)));
+            let modelled = self.range_model(data, &found, delta, rng);
+            let checked_on = modelled.as_ref().map_or(data, |m| &m.0);
+            self.checked(
+                checked_on,
+                &mut found,
+                &graph,
+                Tolerance::Uniform(delta),
+                rng,
+            )?;
+            return Ok((found, graph, Some(delta), modelled));
         }
         let (mut found, graph) = attempt?;
-        self.checked(data, &mut found, &graph, first, rng)?;
-        Ok((found, graph, None))
+        let modelled = match first {
+            Tolerance::Uniform(d) => self.range_model(data, &found, d, rng),
+            Tolerance::PerPoint(_) => None,
+        };
+        let checked_on = modelled.as_ref().map_or(data, |m| &m.0);
+        self.checked(checked_on, &mut found, &graph, first, rng)?;
+        Ok((found, graph, None, modelled))
     }
 
     /// When the runner-up holds more inliers than the winner (the swarm settled on a
@@ -510,7 +534,7 @@ impl Estimator for PsoEstimator {
         // Grow the sample while its consensus is not supported.
         let n = data.len();
         let mut max_points = cfg.max_points;
-        let (mut found, graph, auto_delta) = loop {
+        let (mut found, graph, auto_delta, modelled) = loop {
             match self.consensus(data, first_tol, auto_scene, max_points, rng) {
                 Ok(ok) => break ok,
                 Err(e)
@@ -521,6 +545,9 @@ impl Estimator for PsoEstimator {
                 Err(_) => max_points = (2 * max_points).min(n),
             }
         };
+        // Plain coordinates whose residuals chose the range-dependent noise model carry
+        // its covariances from here on.
+        let data = modelled.as_ref().map_or(data, |m| &m.0);
         let (tol, threshold_m) = match (auto_delta, cfg.threshold) {
             (Some(d), _) => (Tolerance::Uniform(d), Some(d)),
             (None, Threshold::Fixed(d)) if per_point.is_none() => (first_tol, Some(d)),
@@ -540,6 +567,7 @@ impl Estimator for PsoEstimator {
                 threshold_m,
                 elapsed: start.elapsed(),
                 runner_up,
+                range_noise: modelled.as_ref().map(|m| m.1),
             },
             transform: found.pose,
             inliers: found.inliers,
