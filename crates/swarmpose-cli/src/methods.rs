@@ -258,22 +258,17 @@ fn reject(method: Method, options: &[&'static str]) -> Result<(), CliError> {
     }
 }
 
-/// The estimator for `method` with `options` applied over its defaults; `odometry`
-/// turns `pso`'s range noise model off (see `Method::build_for_odometry`).
+/// The estimator for `method` with `options` applied over its defaults.
 ///
 /// # Errors
 /// A usage error when an option given does not apply to `method`.
-pub fn build(
-    method: Method,
-    options: &EstimatorOptions,
-    odometry: bool,
-) -> Result<Box<dyn Estimator>, CliError> {
+pub fn build(method: Method, options: &EstimatorOptions) -> Result<Box<dyn Estimator>, CliError> {
     let pso = options.pso_given();
     let msac = options.msac_given();
     Ok(match method {
         Method::Pso => {
             reject(method, &msac)?;
-            let mut config = PsoEstimatorConfig::default().with_range_noise(!odometry);
+            let mut config = PsoEstimatorConfig::default();
             if let Some(d) = options.threshold {
                 config.threshold = Threshold::Fixed(d);
             }
@@ -321,7 +316,7 @@ mod tests {
             swarmpose_core::Method::ALL.len()
         );
         for &m in Method::value_variants() {
-            let e = build(m, &EstimatorOptions::default(), false).expect("defaults build");
+            let e = build(m, &EstimatorOptions::default()).expect("defaults build");
             assert_eq!(e.name(), m.name());
             let parsed = Method::from_str(m.name(), false).expect("value name");
             assert_eq!(parsed, m);
@@ -361,20 +356,18 @@ mod tests {
             threshold: Some(0.2),
             ..Default::default()
         };
-        let e = build(Method::Svd, &opts, false)
-            .err()
-            .expect("svd has no knobs");
+        let e = build(Method::Svd, &opts).err().expect("svd has no knobs");
         assert_eq!(
             e.message,
             "--threshold, --particles do not apply to --method svd"
         );
-        assert!(build(Method::Msac, &opts, false).is_err());
-        assert!(build(Method::PsoPaper, &opts, false).is_ok());
+        assert!(build(Method::Msac, &opts).is_err());
+        assert!(build(Method::PsoPaper, &opts).is_ok());
         let seeded = EstimatorOptions {
             seeded_particles: Some(3),
             ..Default::default()
         };
-        assert!(build(Method::PsoPaper, &seeded, false).is_err());
-        assert!(build(Method::Pso, &seeded, false).is_ok());
+        assert!(build(Method::PsoPaper, &seeded).is_err());
+        assert!(build(Method::Pso, &seeded).is_ok());
     }
 }

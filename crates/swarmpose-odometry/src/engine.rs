@@ -113,12 +113,9 @@ impl OdometryBuilder {
             camera.rig.baseline_m = noise.virtual_baseline_m;
         }
         camera.validate()?;
-        let estimator = self.estimator.unwrap_or_else(|| {
-            // Without the range noise model: see `Method::build_for_odometry`.
-            Box::new(PsoEstimator::new(
-                PsoEstimatorConfig::default().with_range_noise(false),
-            ))
-        });
+        let estimator = self
+            .estimator
+            .unwrap_or_else(|| Box::new(PsoEstimator::new(PsoEstimatorConfig::default())));
         let sensor = match self.rgbd {
             Some(noise) => {
                 if config.detector != Detector::Orb {

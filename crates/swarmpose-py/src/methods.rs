@@ -20,18 +20,6 @@ pub(crate) fn names() -> Vec<&'static str> {
 /// `ValueError` for an unknown name, a threshold that is not finite and positive, or a
 /// threshold for a method without one.
 pub(crate) fn estimator(method: &str, threshold_m: Option<f64>) -> PyResult<Box<dyn Estimator>> {
-    estimator_for(method, threshold_m, false)
-}
-
-/// [`estimator`] as the odometry uses it when `odometry` (`Method::build_for_odometry`).
-///
-/// # Errors
-/// As [`estimator`].
-pub(crate) fn estimator_for(
-    method: &str,
-    threshold_m: Option<f64>,
-    odometry: bool,
-) -> PyResult<Box<dyn Estimator>> {
     if let Some(d) = threshold_m
         && !(d.is_finite() && d > 0.0)
     {
@@ -50,9 +38,5 @@ pub(crate) fn estimator_for(
             "threshold does not apply to method {method}"
         )));
     }
-    Ok(if odometry {
-        m.build_for_odometry(threshold_m)
-    } else {
-        m.build(threshold_m)
-    })
+    Ok(m.build(threshold_m))
 }

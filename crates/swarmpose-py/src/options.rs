@@ -73,7 +73,7 @@ impl Options<'_> {
 
     pub(crate) fn build(&self, camera: StereoCamera) -> PyResult<swarmpose_odometry::Odometry> {
         let config = self.config()?;
-        let estimator = methods::estimator_for(self.method, self.threshold, true)?;
+        let estimator = methods::estimator(self.method, self.threshold)?;
         let mut builder = swarmpose_odometry::Odometry::builder(camera)
             .config(config)
             .estimator(estimator);

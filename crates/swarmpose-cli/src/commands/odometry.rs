@@ -173,7 +173,7 @@ fn config(args: &OdometryArgs) -> Result<OdometryConfig, CliError> {
 /// usable (exit 3).
 pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
     let config = config(args)?;
-    let estimator = build(args.method, &args.options, true)?;
+    let estimator = build(args.method, &args.options)?;
     let source = match &args.sequence {
         None => {
             let seq = SyntheticSequence::default();

@@ -163,7 +163,7 @@ pub fn estimation_error(name: &str, method: Method, e: &PoseError) -> CliError {
 /// where they concern it), or standard output that cannot be written.
 pub fn run(args: &RegisterArgs) -> Result<(), CliError> {
     // Options first: a bad option is reported before any input is read.
-    let estimator = build(args.method, &args.options, false)?;
+    let estimator = build(args.method, &args.options)?;
     let name = display_name(&args.input);
     let data = read_correspondences(&args.input)?;
     let estimate = estimator

@@ -34,14 +34,9 @@
 //! Measured (`swarmpose bench`): on the peers' isotropic suite (3000 scenarios) the
 //! answer changes on one run only, an already failed half-and-half moving object at noise
 //! 0.1 m; on stereo-noise street scenes (600 rows, 90-97 % wrong matches) the ray model
-//! wins on 57 of 60 (counted while developing it, before the step halving). Both models
-//! are closed under a change of unit (scaling the data by `k` scales `f` by `k²` and `α`
-//! by `k⁻²`, leaves `β`), and the tests are in nats, so the choice and the fit do not
-//! depend on the unit.
-//!
-//! Known defect: the fit is deterministic for one build but not identical across build
-//! profiles (a debug and a release build differ by millimetres on one 600-row stereo
-//! scene); the odometry therefore does not use it yet ([`super::Method::build_for_odometry`]).
+//! wins on 57 of 60 (counted while developing it, before the step halving). Both models are closed under a change of unit (scaling the data by `k` scales
+//! `f` by `k²` and `α` by `k⁻²`, leaves `β`), and the tests are in nats, so the choice and
+//! the fit do not depend on the unit.
 
 use nalgebra::{
     Isometry3, Matrix3, Matrix3x6, Matrix6, Point3, Translation3, UnitQuaternion, Vector3,

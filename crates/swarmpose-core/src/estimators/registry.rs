@@ -61,22 +61,9 @@ impl Method {
     /// threshold δ (metres; `None` keeps the default: automatic for `pso`).
     #[must_use]
     pub fn build(self, threshold_m: Option<f64>) -> Box<dyn Estimator> {
-        self.build_with(threshold_m, true)
-    }
-
-    /// The estimator as the odometry uses it: [`Method::build`], with `pso`'s range noise
-    /// model off ([`PsoEstimatorConfig::range_noise`]). Its fit is not yet bit-identical
-    /// between build profiles (a debug and a release build differ by about 1e-9 on a
-    /// KITTI trajectory), and the streaming engine promises the CLI's trajectory exactly.
-    #[must_use]
-    pub fn build_for_odometry(self, threshold_m: Option<f64>) -> Box<dyn Estimator> {
-        self.build_with(threshold_m, false)
-    }
-
-    fn build_with(self, threshold_m: Option<f64>, range_noise: bool) -> Box<dyn Estimator> {
         match self {
             Method::Pso => {
-                let mut c = PsoEstimatorConfig::default().with_range_noise(range_noise);
+                let mut c = PsoEstimatorConfig::default();
                 if let Some(d) = threshold_m {
                     c = c.with_threshold(d);
                 }

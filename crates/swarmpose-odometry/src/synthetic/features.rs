@@ -129,7 +129,7 @@ impl FeatureSequence {
         };
         let temporal = swarmpose_vision::frontend::Frontend::orb(c.rig).temporal;
         let estimator = Box::new(swarmpose_core::PsoEstimator::new(
-            swarmpose_core::PsoEstimatorConfig::default().with_range_noise(false),
+            swarmpose_core::PsoEstimatorConfig::default(),
         ));
         Tracker::new(camera, c.noise, temporal, config, estimator)
     }
