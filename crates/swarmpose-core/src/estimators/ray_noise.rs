@@ -428,6 +428,21 @@ fn isotropic_step(
     f.is_finite().then(|| RangeNoise::from_array([f, 0.0, 0.0]))
 }
 
+/// Solves `F x = s` for a symmetric positive definite 3 × 3 `F` whose parameters have
+/// very different scales (`f`, `α`, `β` differ by orders of magnitude): scaled to unit
+/// diagonal, then the closed-form inverse. The same operations in every build (nalgebra's
+/// LU gave a debug and a release build different answers here).
+fn solve_scaled(f: &Matrix3<f64>, s: &Vector3<f64>) -> Option<Vector3<f64>> {
+    let d = Vector3::new(f[(0, 0)], f[(1, 1)], f[(2, 2)]);
+    if !d.iter().all(|v| *v > 0.0 && v.is_finite()) {
+        return None;
+    }
+    let d = d.map(|v| 1.0 / v.sqrt());
+    let scaled = Matrix3::from_fn(|i, j| f[(i, j)] * d[i] * d[j]);
+    let y = scaled.try_inverse()? * s.component_mul(&d);
+    Some(y.component_mul(&d))
+}
+
 /// Two Fisher scoring steps of the ray model's variance parameters
 /// (score `½ Σ w (uᵀ M_k u - tr(W M_k))` with `u = W e`, information
 /// `½ Σ w tr(W M_k W M_l)`; `W` the inverse covariance, that of the E step first), kept
@@ -484,7 +499,7 @@ fn scoring_step(
                 }
             }
         }
-        let delta = fisher.lu().solve(&score)?;
+        let delta = solve_scaled(&fisher, &score)?;
         if !delta.iter().all(|v| v.is_finite()) {
             return None;
         }
