@@ -17,7 +17,6 @@ use std::ops::ControlFlow;
 use swarmpose_datasets::open;
 
 use swarmpose_odometry::batch::{camera_of, collect, run_sequence_two_threads};
-use swarmpose_odometry::window::WindowConfig;
 use swarmpose_odometry::{Odometry, OdometryConfig, StageTimes, StereoInput};
 
 fn percentile(sorted: &[f64], p: f64) -> f64 {
@@ -34,17 +33,10 @@ fn bench_pipeline(c: &mut Criterion) {
     let camera = camera_of(seq.as_ref());
     let config = OdometryConfig::default();
     let frames: Vec<_> = (0..seq.len()).filter_map(|i| seq.frame(i).ok()).collect();
-    let windowed = |keyframes: usize| OdometryConfig {
-        window: WindowConfig {
-            keyframes,
-            ..WindowConfig::default()
-        },
-        ..OdometryConfig::default()
-    };
     let variants = [
         ("", config.clone()),
-        (", window 5", windowed(5)),
-        (", window 10", windowed(10)),
+        (", window 5", config.clone().with_window(5)),
+        (", window 10", config.clone().with_window(10)),
     ];
     // Per-frame latency of the engine alone (images in memory), and the split.
     for (label, config) in &variants {

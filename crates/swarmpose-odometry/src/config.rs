@@ -94,6 +94,16 @@ pub struct OdometryConfig {
     pub window: WindowConfig,
 }
 
+impl OdometryConfig {
+    /// The same settings with a sliding window of `keyframes` keyframes
+    /// ([`crate::window`]; 0 to 2: frame to frame only).
+    #[must_use]
+    pub fn with_window(mut self, keyframes: usize) -> Self {
+        self.window.keyframes = keyframes;
+        self
+    }
+}
+
 impl Default for OdometryConfig {
     fn default() -> Self {
         Self {

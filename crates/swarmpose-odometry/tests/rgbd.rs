@@ -30,13 +30,7 @@ fn synthetic_tum_rgbd_is_followed() {
     // Frame to frame, and with a window of 5 keyframes.
     for keyframes in [0, 5] {
         let mut odo = Odometry::builder(seq.camera().expect("camera"))
-            .config(OdometryConfig {
-                window: swarmpose_odometry::window::WindowConfig {
-                    keyframes,
-                    ..Default::default()
-                },
-                ..OdometryConfig::default()
-            })
+            .config(OdometryConfig::default().with_window(keyframes))
             .rgbd(RgbdNoise::default())
             .build()
             .expect("engine");

@@ -20,13 +20,7 @@ fn memory_does_not_grow_over_2000_frames() {
         ..FeatureSequenceConfig::default()
     });
     for keyframes in [0, 10] {
-        let config = OdometryConfig {
-            window: swarmpose_odometry::window::WindowConfig {
-                keyframes,
-                ..Default::default()
-            },
-            ..OdometryConfig::default()
-        };
+        let config = OdometryConfig::default().with_window(keyframes);
         let mut tracker = seq.tracker(config);
         let mut first_500 = 0usize;
         let mut untracked = 0;
@@ -107,13 +101,7 @@ fn motion_covariance_is_honest() {
 #[test]
 fn frames_without_texture_are_marked_and_tracking_recovers() {
     for keyframes in [0, 10] {
-        let config = OdometryConfig {
-            window: swarmpose_odometry::window::WindowConfig {
-                keyframes,
-                ..Default::default()
-            },
-            ..OdometryConfig::default()
-        };
+        let config = OdometryConfig::default().with_window(keyframes);
         texture_gaps(config);
     }
 }

@@ -7,17 +7,10 @@ mod common;
 use swarmpose_datasets::open;
 use swarmpose_odometry::batch::{camera_of, collect, run_sequence_two_threads};
 use swarmpose_odometry::synthetic::SyntheticSequence;
-use swarmpose_odometry::window::WindowConfig;
 use swarmpose_odometry::{Odometry, OdometryConfig};
 
 fn with_window(keyframes: usize) -> OdometryConfig {
-    OdometryConfig {
-        window: WindowConfig {
-            keyframes,
-            ..WindowConfig::default()
-        },
-        ..OdometryConfig::default()
-    }
+    OdometryConfig::default().with_window(keyframes)
 }
 
 /// kitti_vo_seq2: a window of 10 keyframes ends closer to the ground truth than frame to

@@ -41,12 +41,9 @@ impl Options<'_> {
             detector,
             refine: self.refine,
             seed: self.seed,
-            window: swarmpose_odometry::window::WindowConfig {
-                keyframes: self.window,
-                ..swarmpose_odometry::window::WindowConfig::default()
-            },
             ..OdometryConfig::default()
-        };
+        }
+        .with_window(self.window);
         if let Some(n) = self.min_inliers {
             if n < 3 {
                 return Err(PyValueError::new_err(format!(

@@ -167,12 +167,9 @@ fn config(args: &OdometryArgs) -> Result<OdometryConfig, CliError> {
         min_inliers: args.min_inliers.max(3),
         seed: args.seed,
         selfcal,
-        window: swarmpose_odometry::window::WindowConfig {
-            keyframes: args.window,
-            ..swarmpose_odometry::window::WindowConfig::default()
-        },
         ..OdometryConfig::default()
-    })
+    }
+    .with_window(args.window))
 }
 
 /// Runs `odometry`.
