@@ -6,8 +6,8 @@
 //!   ([`swarmpose_eval::trajectory`]'s formats);
 //! * `frames.csv` ([`FRAMES_HEADER`]): status, counts, stage times, the motion, the
 //!   position and the disparity correction of every frame;
-//! * `motion_covariance.csv` ([`COVARIANCE_HEADER`]): the 6x6 covariance of every
-//!   tracked motion.
+//! * `motion_covariance.csv` ([`COVARIANCE_HEADER`]): every tracked frame's measured
+//!   motion from its reference frame and the motion's 6x6 covariance.
 //!
 //! And at the end, the summary ([`Summary`]).
 
@@ -77,17 +77,26 @@ pub fn frames_row(r: &FrameResult) -> String {
 }
 
 /// The header of `motion_covariance.csv`.
-pub const COVARIANCE_HEADER: &str = "# Covariance of each tracked motion T (pose of camera k \
-in its reference camera): of xi = (nu_x, nu_y, nu_z, omega_x, omega_y, omega_z), metres and \
-radians in the frame of camera k, with T_true = T o E(xi), E(xi): P -> Exp(omega) P + nu. \
-Upper triangle, row by row (c_ij for i <= j, 0-based).\n\
-frame,reference,c00,c01,c02,c03,c04,c05,c11,c12,c13,c14,c15,c22,c23,c24,c25,c33,c34,c35,c44,c45,c55";
+pub const COVARIANCE_HEADER: &str = "# Each tracked frame's measured motion T from its \
+reference frame (pose of camera k in the reference camera: translation metres, quaternion; \
+frame to frame the previous frame, with the sliding window the window's oldest keyframe) \
+and its covariance: of xi = (nu_x, nu_y, nu_z, omega_x, omega_y, omega_z), metres and \
+radians in the frame of camera k, with T_true = T o E(xi), E(xi): P -> Exp(omega) P + nu; \
+conditional on the disparity correction applied. Upper triangle, row by row (c_ij for \
+i <= j, 0-based).\n\
+frame,reference,tx,ty,tz,qw,qx,qy,qz,c00,c01,c02,c03,c04,c05,c11,c12,c13,c14,c15,c22,c23,\
+c24,c25,c33,c34,c35,c44,c45,c55";
 
 /// One row of `motion_covariance.csv` (no line end), for a frame with a covariance.
 #[must_use]
 pub fn covariance_row(r: &FrameResult) -> Option<String> {
     let c = r.covariance?;
-    let mut s = format!("{},{}", r.index, r.reference?);
+    let t = r.measured_motion.translation.vector;
+    let [qw, qx, qy, qz] = quaternion_wxyz(&r.measured_motion.rotation);
+    let mut s = format!(
+        "{},{},{:.6},{:.6},{:.6},{:.9},{:.9},{:.9},{:.9}",
+        r.index, r.reference?, t.x, t.y, t.z, qw, qx, qy, qz
+    );
     for i in 0..6 {
         for j in i..6 {
             let _ = write!(s, ",{:e}", c[(i, j)]);

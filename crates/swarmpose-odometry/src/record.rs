@@ -116,14 +116,22 @@ pub struct FrameResult {
     /// The motion from the previous frame, `T_{k-1,k}` (the pose of this camera in the
     /// previous one); identity for the first frame.
     pub motion: Isometry3<f64>,
-    /// The frame the motion was measured from: the previous one, or an earlier one when
-    /// the frames in between had too few points; `None` unless tracked.
+    /// The frame this frame was measured from: the previous one (or an earlier one when
+    /// the frames in between had too few points) for the frame-to-frame refinement; with
+    /// the sliding window, the window's oldest keyframe. `None` unless tracked.
     pub reference: Option<usize>,
-    /// Covariance of the measured motion from [`FrameResult::reference`] (equal to
-    /// `motion` when the reference is the previous frame), when it was refined: of
+    /// The motion measured from [`FrameResult::reference`], `T_{ref,k}` (this camera's
+    /// pose in the reference camera, metres); the identity unless tracked. Without the
+    /// window it equals [`FrameResult::motion`] when the reference is the previous frame.
+    /// With the window it is the window's estimate from its oldest keyframe, whose pose
+    /// the window may have revised since it was given out, so the pose given out is not
+    /// that frame's given-out pose composed with this motion (see [`crate::window`]).
+    pub measured_motion: Isometry3<f64>,
+    /// Covariance of [`FrameResult::measured_motion`], when it was refined: of
     /// `ξ = (ν, ω)` (metres, radians, in this camera's frame) in `T_true = T ∘ E(ξ)`,
-    /// `E(ξ): P ↦ Exp(ω) P + ν`; see [`crate::refine`]. `None` when the sliding window gave
-    /// the pose ([`crate::window`]).
+    /// `E(ξ): P ↦ Exp(ω) P + ν`; see [`crate::refine`] and
+    /// [`crate::window::WindowMotion::covariance`]. It is conditional on the disparity
+    /// correction applied.
     pub covariance: Option<Matrix6<f64>>,
     /// What happened.
     pub status: Status,

@@ -33,7 +33,7 @@ use crate::record::{Counts, FrameResult, StageTimes, Status};
 use crate::refine::model::{PixelNoise, StereoModel, StereoObservation};
 use crate::refine::{Refined, refine};
 use crate::selfcal::{CorrectionModel, Decision, SelfCalibration};
-use crate::window::{Link, Window};
+use crate::window::{Link, Window, WindowMotion};
 
 /// The frame that the next one is matched to.
 #[derive(Debug, Clone)]
@@ -64,6 +64,7 @@ struct Velocity {
 struct Measured {
     motion: Isometry3<f64>,
     covariance: Option<Matrix6<f64>>,
+    window: Option<WindowMotion>,
     inliers: usize,
     correction: DisparityCorrection,
     focal_px: f64,
@@ -280,6 +281,7 @@ impl<D: Descriptor> Tracker<D> {
         let mut measured = Measured {
             motion: start,
             covariance: None,
+            window: None,
             inliers: est_inliers,
             correction,
             focal_px,
@@ -418,7 +420,7 @@ impl<D: Descriptor> Tracker<D> {
                     })
                     .collect();
                 let pose = ref_pose * measured.motion;
-                if let Some((pose, _)) = self.window.add(
+                if let Some((pose, _, window)) = self.window.add(
                     &self.model(correction, focal_px),
                     (ref_index, &ref_pose),
                     (index, &pose),
@@ -433,9 +435,11 @@ impl<D: Descriptor> Tracker<D> {
                     // pose of the reference: the motion from the reference's pose as given
                     // out carries that revision, whose error neither the pair's nor the
                     // window's information describes (RESULTS.md: the pair's covariance
-                    // gives a mean NEES of 12.4 for it, the window's 13.4). None is given
-                    // rather than a wrong one.
+                    // gives a mean NEES of 12.4 for it, the window's 13.4). What is
+                    // measured, with its covariance, is the window's motion from its
+                    // oldest keyframe.
                     measured.covariance = None;
+                    measured.window = Some(window);
                 }
                 times.window_ms = ms(t);
             }
@@ -478,6 +482,7 @@ impl<D: Descriptor> Tracker<D> {
             pose: Isometry3::identity(),
             motion: Isometry3::identity(),
             reference: None,
+            measured_motion: Isometry3::identity(),
             covariance: None,
             status: Status::First,
             counts,
@@ -517,8 +522,18 @@ impl<D: Descriptor> Tracker<D> {
                 counts.inliers = m.inliers;
                 result.pose = pose;
                 result.motion = last.pose.inverse() * pose;
-                result.reference = Some(m.ref_index);
-                result.covariance = m.covariance;
+                match m.window {
+                    Some(w) => {
+                        result.reference = Some(w.keyframe);
+                        result.measured_motion = w.motion;
+                        result.covariance = w.covariance;
+                    }
+                    None => {
+                        result.reference = Some(m.ref_index);
+                        result.measured_motion = m.motion;
+                        result.covariance = m.covariance;
+                    }
+                }
                 result.status = Status::Tracked;
                 result.correction = m.correction;
                 result.focal_px = m.focal_px;

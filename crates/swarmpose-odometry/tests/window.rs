@@ -99,15 +99,21 @@ fn window_gives_the_same_trajectory_with_two_threads() {
     })
     .expect("two threads");
     assert_eq!(a.len(), b.len());
+    let x_covariance =
+        |r: &swarmpose_odometry::FrameResult| (r.reference, r.measured_motion, r.covariance);
     for (x, y) in a.iter().zip(&b) {
         assert_eq!(x.pose, y.pose, "frame {}", x.index);
         assert_eq!(x.status, y.status, "frame {}", x.index);
     }
-    // From the third frame (index 2) on the pose is the window's, given without a covariance (its
-    // motion from the reference as given out carries the reference's revision); before,
-    // the pair's.
+    // From the third frame (index 2) on the pose is the window's, measured from its oldest
+    // keyframe (up to 4 frames back), with the window's covariance; before, the pair's.
+    assert_eq!(a[1].reference, Some(0));
     assert!(a[1].covariance.is_some());
-    assert!(a[2..].iter().all(|r| r.covariance.is_none()));
+    for (k, r) in a.iter().enumerate().skip(2) {
+        assert_eq!(r.reference, Some(k.saturating_sub(4)), "frame {k}");
+        assert!(r.covariance.is_some(), "frame {k}");
+        assert_eq!(x_covariance(&a[k]), x_covariance(&b[k]), "frame {k}");
+    }
     let e = common::evaluate_poses(
         a.iter().map(|r| r.pose).collect(),
         swarmpose_datasets::StereoSequence::ground_truth(&seq).expect("known path"),

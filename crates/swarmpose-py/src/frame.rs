@@ -42,15 +42,25 @@ impl Frame {
         transform(py, &self.result.motion)
     }
 
-    /// The frame the motion was measured from (``None`` unless tracked).
+    /// The frame this frame was measured from (``None`` unless tracked): the previous
+    /// one frame to frame; with ``window=K`` the window's oldest keyframe.
     #[getter]
     fn reference(&self) -> Option<usize> {
         self.result.reference
     }
 
-    /// 6x6 covariance of the measured motion, of ``(v, w)`` (metres, radians, in this
-    /// camera's frame), or ``None`` when it was not refined or the sliding window gave the
-    /// pose (``window=K``: see RESULTS.md).
+    /// The motion measured from ``reference`` (this camera's pose in the reference
+    /// camera, metres), 4x4; the identity unless tracked. With ``window=K`` the window
+    /// may have revised the reference's pose since it was given out, so ``pose`` is not
+    /// the reference's given-out pose times this motion.
+    #[getter]
+    fn measured_motion<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        transform(py, &self.result.measured_motion)
+    }
+
+    /// 6x6 covariance of ``measured_motion``, of ``(v, w)`` (metres, radians, in this
+    /// camera's frame, ``T_true = T E(v, w)``), conditional on the disparity correction
+    /// applied; ``None`` when the motion was not refined.
     #[getter]
     fn covariance<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray2<f64>>> {
         self.result.covariance.as_ref().map(|c| matrix(py, c))

@@ -179,6 +179,8 @@ struct Scratch {
     /// The reduced system's 6x6 blocks, row-major over the pose variables.
     blocks: Vec<Matrix6<f64>>,
     gradient: Vec<Vector6<f64>>,
+    /// `Σ w r²` of the last build (Huber-weighted squared whitened residuals).
+    chi2: f64,
 }
 
 /// Adds `block` to the `H_pξ` of variable `v` among `hpx[start..]`.
@@ -208,6 +210,7 @@ fn build(
     sc.blocks.resize(m * m, Matrix6::zeros());
     sc.gradient.clear();
     sc.gradient.resize(m, Vector6::zeros());
+    sc.chi2 = 0.0;
     // Variable of keyframe slot `i`: slot 0 is fixed.
     let var = |slot: usize| slot.checked_sub(1);
     for (t, p) in tracks.iter().zip(points) {
@@ -217,7 +220,9 @@ fn build(
         let start = sc.hpx.len();
         for (slot, z) in &t.obs {
             let j = linearize(model, (&sc.rel, n), anchor, *slot, p, z)?;
-            let (w, _) = huber(j.residual.norm_squared(), k);
+            let r2 = j.residual.norm_squared();
+            let (w, _) = huber(r2, k);
+            sc.chi2 += w * r2;
             let dpw = j.d_point.transpose() * w;
             hpp += dpw * j.d_point;
             gp += dpw * j.residual;
@@ -324,9 +329,13 @@ pub(crate) fn refine_window(
     let mut trial_points = points.clone();
     let mut lambda = 1e-4;
     let mut iterations = 0;
+    let mut covariance = None;
     'outer: for _ in 0..config.max_iterations {
         iterations += 1;
         let (s, g) = build(model, k, &poses, &tracks, &points, &mut sc)?;
+        if iterations == 1 {
+            covariance = newest_covariance(&s, sc.chi2, observations, tracks.len());
+        }
         loop {
             if lambda > 1e8 {
                 break 'outer;
@@ -379,7 +388,35 @@ pub(crate) fn refine_window(
         tracks: tracks.len(),
         observations,
         iterations,
+        covariance,
     })
+}
+
+/// The covariance of the newest keyframe's pose perturbation `ξ` (the oldest held fixed)
+/// at the start of the refinement: the newest pose's block of `S⁻¹`, `S` the reduced
+/// information (points eliminated), scaled by the residuals' variance factor `χ² / dof`
+/// with `dof = 3 (observations − tracks) − rows of S` (1 when the pixel noise is as
+/// modelled), as the pair refinement's. `None` when `S` is not positive definite.
+fn newest_covariance(
+    s: &DMatrix<f64>,
+    chi2: f64,
+    observations: usize,
+    tracks: usize,
+) -> Option<Matrix6<f64>> {
+    let n = s.nrows();
+    if n < 6 {
+        return None;
+    }
+    let dof = (3 * observations).checked_sub(3 * tracks + n)?.max(1) as f64;
+    let chol = s.clone().cholesky()?;
+    let mut unit = DMatrix::zeros(n, 6);
+    for i in 0..6 {
+        unit[(n - 6 + i, i)] = 1.0;
+    }
+    let columns = chol.solve(&unit);
+    let block: Matrix6<f64> = columns.fixed_view::<6, 6>(n - 6, 0).into_owned();
+    let cov = (block + block.transpose()) * (0.5 * chi2 / dof);
+    cov.iter().all(|v| v.is_finite()).then_some(cov)
 }
 
 #[cfg(test)]

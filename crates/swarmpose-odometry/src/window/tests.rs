@@ -72,7 +72,7 @@ fn drive(keyframes: usize, frames: usize) -> (Vec<Isometry3<f64>>, Vec<Isometry3
         let start = given[i - 1] * step * error;
         let pose = window
             .add(&m, (i - 1, &given[i - 1]), (i, &start), &links)
-            .map_or(start, |(p, _)| p);
+            .map_or(start, |(p, _, _)| p);
         assert!(window.len() <= keyframes.max(2));
         truth.push(t);
         given.push(pose);

@@ -115,10 +115,14 @@ class Frame:
     def motion(self) -> npt.NDArray[np.float64]:
         """4x4 motion from the previous frame."""
     @property
-    def reference(self) -> Optional[int]: ...
+    def reference(self) -> Optional[int]:
+        """The frame this one was measured from: the previous one, or with window=K the window's oldest keyframe."""
+    @property
+    def measured_motion(self) -> npt.NDArray[np.float64]:
+        """4x4 motion measured from `reference` (this camera's pose in the reference camera)."""
     @property
     def covariance(self) -> Optional[npt.NDArray[np.float64]]:
-        """6x6 covariance of the measured motion (metres, radians)."""
+        """6x6 covariance of `measured_motion` (metres, radians), given the disparity correction applied."""
     @property
     def status(self) -> str:
         """"first", "tracked", "constant-velocity (REASON)" or "lost (REASON)"."""
