@@ -1,0 +1,67 @@
+//! The window's effect on a suite of rendered synthetic stereo sequences (speeds, turns
+//! to either side): final drift, RMS eq. (20) and aligned ATE for each window size given
+//! on the command line (0: frame to frame), so that a change to the window is judged on
+//! more than one sequence. Slow (every frame is rendered): not a test.
+//!
+//! ```sh
+//! cargo run --release -p swarmpose-odometry --example synthetic_suite -- 0 10 20
+//! ```
+
+use swarmpose_datasets::StereoSequence;
+use swarmpose_eval::associate::by_index;
+use swarmpose_eval::{Trajectory, evaluate};
+use swarmpose_odometry::batch::{camera_of, collect};
+use swarmpose_odometry::synthetic::SyntheticSequence;
+use swarmpose_odometry::{Odometry, OdometryConfig};
+
+fn main() {
+    let windows: Vec<usize> = std::env::args()
+        .skip(1)
+        .map(|a| a.parse().expect("window sizes: integers"))
+        .collect();
+    let windows = if windows.is_empty() {
+        vec![0, 10]
+    } else {
+        windows
+    };
+    // (frames, metres per frame, yaw per frame in degrees)
+    let suite = [
+        (40, 1.0, 0.0),
+        (40, 1.0, 0.6),
+        (40, 0.5, -1.2),
+        (40, 0.3, 0.8),
+        (40, 1.5, -0.3),
+    ];
+    println!("| sequence | window | final drift | RMS eq. (20) | ATE aligned |");
+    println!("|---|---|---|---|---|");
+    let mut sums = vec![(0.0, 0.0, 0.0); windows.len()];
+    for &(n, step, yaw_deg) in &suite {
+        let seq = SyntheticSequence::new(n, step, f64::to_radians(yaw_deg));
+        let gt = seq.ground_truth().expect("ground truth").to_vec();
+        for (w, sum) in windows.iter().zip(&mut sums) {
+            let config = OdometryConfig::default().with_window(*w);
+            let mut odo = Odometry::new(camera_of(&seq), config).expect("engine");
+            let results = collect(&seq, &mut odo, 0.1).expect("odometry");
+            let poses: Vec<_> = results.iter().map(|r| r.pose).collect();
+            let e = evaluate(
+                &by_index(
+                    &Trajectory::indexed("estimate", poses),
+                    &Trajectory::indexed("truth", gt.clone()),
+                )
+                .expect("pairs"),
+            )
+            .expect("evaluate");
+            let drift = e.final_drift_percent.unwrap_or(f64::NAN);
+            println!(
+                "| {n} frames, {step} m, {yaw_deg} deg | {w} | {drift:.3} % | {:.5} | {:.4} m |",
+                e.eq20_rms, e.ate_aligned.rmse
+            );
+            sum.0 += drift / suite.len() as f64;
+            sum.1 += e.eq20_rms / suite.len() as f64;
+            sum.2 += e.ate_aligned.rmse / suite.len() as f64;
+        }
+    }
+    for (w, s) in windows.iter().zip(&sums) {
+        println!("| mean | {w} | {:.3} % | {:.5} | {:.4} m |", s.0, s.1, s.2);
+    }
+}
