@@ -33,7 +33,7 @@ use crate::record::{Counts, FrameResult, StageTimes, Status};
 use crate::refine::model::{PixelNoise, StereoModel, StereoObservation};
 use crate::refine::{Refined, refine};
 use crate::selfcal::{CorrectionModel, Decision, SelfCalibration};
-use crate::window::{Link, Window, WindowMotion};
+use crate::window::{Images, Link, Window, WindowMotion};
 
 /// The frame that the next one is matched to.
 #[derive(Debug, Clone)]
@@ -408,10 +408,8 @@ impl<D: Descriptor> Tracker<D> {
                             reference_feature: m.dst_index[s],
                             current_feature: m.src_index[s],
                             reference: obs.reference[k],
-                            // The detected keypoint, not the patch-aligned position:
-                            // each frame's measurement of a track is then its own, not
-                            // one conditioned on the previous frame's keypoint.
-                            current: StereoObservation {
+                            current: obs.current[k],
+                            current_keypoint: StereoObservation {
                                 u: f64::from(m.src_pixels[s].0),
                                 v: f64::from(m.src_pixels[s].1),
                                 d: m.src_disparities_px[s],
@@ -419,12 +417,20 @@ impl<D: Descriptor> Tracker<D> {
                         }
                     })
                     .collect();
+                let images = match (reference.left.as_ref(), left) {
+                    (Some(a), Some(b)) => Some(Images {
+                        reference: a.view(),
+                        current: b,
+                    }),
+                    _ => None,
+                };
                 let pose = ref_pose * measured.motion;
                 if let Some((pose, _, window)) = self.window.add(
                     &self.model(correction, focal_px),
                     (ref_index, &ref_pose),
                     (index, &pose),
                     &links,
+                    images,
                 ) {
                     // Normalised: the inverse of a unit quaternion is its conjugate, so
                     // rounding in the reference's norm would double with every frame.

@@ -89,9 +89,9 @@ fn window_keeps_a_still_camera_still() {
 #[test]
 fn window_gives_the_same_trajectory_with_two_threads() {
     let seq = SyntheticSequence::default();
-    let mut one = Odometry::new(camera_of(&seq), with_window(5)).expect("engine");
+    let mut one = Odometry::new(camera_of(&seq), with_window(10)).expect("engine");
     let a = collect(&seq, &mut one, 0.1).expect("one thread");
-    let mut two = Odometry::new(camera_of(&seq), with_window(5)).expect("engine");
+    let mut two = Odometry::new(camera_of(&seq), with_window(10)).expect("engine");
     let mut b = Vec::new();
     run_sequence_two_threads(&seq, &mut two, 0.1, &mut |r| {
         b.push(r.clone());
@@ -106,11 +106,11 @@ fn window_gives_the_same_trajectory_with_two_threads() {
         assert_eq!(x.status, y.status, "frame {}", x.index);
     }
     // From the third frame (index 2) on the pose is the window's, measured from its oldest
-    // keyframe (up to 4 frames back), with the window's covariance; before, the pair's.
+    // keyframe (up to 9 frames back), with the window's covariance; before, the pair's.
     assert_eq!(a[1].reference, Some(0));
     assert!(a[1].covariance.is_some());
     for (k, r) in a.iter().enumerate().skip(2) {
-        assert_eq!(r.reference, Some(k.saturating_sub(4)), "frame {k}");
+        assert_eq!(r.reference, Some(k.saturating_sub(9)), "frame {k}");
         assert!(r.covariance.is_some(), "frame {k}");
         assert_eq!(x_covariance(&a[k]), x_covariance(&b[k]), "frame {k}");
     }
@@ -119,6 +119,6 @@ fn window_gives_the_same_trajectory_with_two_threads() {
         swarmpose_datasets::StereoSequence::ground_truth(&seq).expect("known path"),
     );
     let drift = e.final_drift_percent.expect("a path");
-    eprintln!("synthetic, window of 5: drift {drift:.3} %");
+    eprintln!("synthetic, window of 10: drift {drift:.3} %");
     assert!(drift <= 0.1, "{drift} %");
 }

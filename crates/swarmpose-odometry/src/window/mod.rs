@@ -5,7 +5,11 @@
 //! one of the current frame; a feature that continues a track gets its identity, any other
 //! starts a new one. A track is one 3D point, anchored by inverse depth in the first
 //! keyframe of the window that sees it ([`crate::refine::model`]), and it is re-estimated
-//! with every new observation.
+//! with every new observation. Its measurement in each frame is where the image patch of
+//! the frame where it began appears (a [`PatchTemplate`] aligned to a fraction of a
+//! pixel), so that every frame measures the same physical point without the errors of
+//! the detected keypoints (whole pixels, moving with the corner's apparent size); a track
+//! whose patch is not found again ends.
 //!
 //! **Keyframes.** The engine measures each frame against the previous one, so every tracked
 //! frame is a keyframe: the window holds the last [`WindowConfig::keyframes`] tracked
@@ -22,13 +26,16 @@
 //! their refined values for the next frames.
 //!
 //! Memory is bounded: at most `keyframes` frames, each with its own observations, and the
-//! track identities of the newest frame's features.
+//! track identities and patches of the newest frame's features.
 
 pub mod solve;
 
 use std::collections::{HashMap, VecDeque};
 
 use nalgebra::{Isometry3, Matrix6, UnitQuaternion};
+
+use swarmpose_vision::features::GrayView;
+use swarmpose_vision::temporal::template::PatchTemplate;
 
 use crate::refine::model::{StereoModel, StereoObservation};
 
@@ -65,10 +72,33 @@ pub struct Link {
     pub reference_feature: usize,
     /// Index of the feature in the current frame.
     pub current_feature: usize,
-    /// Its measurement in the reference frame.
+    /// Its measurement in the reference frame: the detected keypoint.
     pub reference: StereoObservation,
-    /// Its measurement in the current frame.
+    /// Where the reference keypoint's patch appears in the current frame (the pair's
+    /// measurement; the detected keypoint when there are no images).
     pub current: StereoObservation,
+    /// The detected keypoint in the current frame.
+    pub current_keypoint: StereoObservation,
+}
+
+/// Iterations of a template's alignment (as the pair's).
+const ALIGN_ITERATIONS: usize = 10;
+/// Largest move of a template's alignment from the pair's measurement, pixels (as the
+/// pair's).
+const ALIGN_MAX_MOVE_PX: f32 = 2.0;
+/// Smallest normalised cross-correlation of an aligned template with the image: below,
+/// the patch has changed too much since the track began (scale, occlusion) and the track
+/// ends. 0.7 and 0.9 gave the same figures on the real sequences (within 0.01 points of
+/// drift) and a mean drift of 0.068 % and 0.056 % on the synthetic suite (0.060 % here).
+const ALIGN_MIN_NCC: f32 = 0.8;
+
+/// The left images of the reference and the current frame, for the tracks' templates.
+#[derive(Debug, Clone, Copy)]
+pub struct Images<'a> {
+    /// The reference frame's left image.
+    pub reference: GrayView<'a>,
+    /// The current frame's left image.
+    pub current: GrayView<'a>,
 }
 
 /// One keyframe of the window.
@@ -124,6 +154,8 @@ pub struct Window {
     frames: VecDeque<Keyframe>,
     /// Track of each feature (by index) of the newest keyframe.
     newest_tracks: HashMap<usize, u32>,
+    /// The patch of each live track in the frame where it began (with images).
+    templates: HashMap<u32, PatchTemplate>,
     next_track: u32,
 }
 
@@ -147,6 +179,14 @@ impl Window {
     pub fn clear(&mut self) {
         self.frames.clear();
         self.newest_tracks.clear();
+        self.templates.clear();
+    }
+
+    /// A new track identity.
+    fn new_track(&mut self) -> u32 {
+        let t = self.next_track;
+        self.next_track = self.next_track.wrapping_add(1);
+        t
     }
 
     /// Keyframes held now.
@@ -171,6 +211,7 @@ impl Window {
                 .map(|f| f.observations.capacity() * size_of::<(u32, StereoObservation)>())
                 .sum::<usize>()
             + self.newest_tracks.capacity() * (size_of::<usize>() + size_of::<u32>())
+            + self.templates.capacity() * (size_of::<u32>() + size_of::<PatchTemplate>())
     }
 
     /// Measurements held now, over all keyframes (bounded by the window's size).
@@ -182,15 +223,21 @@ impl Window {
     /// Adds the tracked frame `index`, measured from the frame `reference_index` (posed at
     /// `reference_pose`, the camera in the world) with the inlier `links`, at the pose
     /// `pose` (the camera in the world, from the pair alone); refines the window with
-    /// `model` and returns the current frame's refined pose and what was done, or `None`
-    /// when the window is too short to add anything to the pair (or the refinement
-    /// failed; the pair's pose stands then).
+    /// `model` and returns the current frame's refined pose, what was done and the
+    /// window's measurement of the frame, or `None` when the window is too short to add
+    /// anything to the pair (or the refinement failed; the pair's pose stands then).
+    ///
+    /// With `images`, a track's measurement in each frame is where the patch of the frame
+    /// where it began appears ([`PatchTemplate`]): the same physical point in every
+    /// frame. A track whose patch is not found again ends there, and its feature begins a
+    /// new track at its detected keypoint. Without images, the detected keypoints.
     pub fn add(
         &mut self,
         model: &StereoModel,
         (reference_index, reference_pose): (usize, &Isometry3<f64>),
         (index, pose): (usize, &Isometry3<f64>),
         links: &[Link],
+        images: Option<Images<'_>>,
     ) -> Option<(Isometry3<f64>, WindowReport, WindowMotion)> {
         if !self.enabled() {
             return None;
@@ -217,26 +264,67 @@ impl Window {
         };
         let mut tracks = HashMap::with_capacity(links.len());
         let mut used = std::collections::HashSet::with_capacity(links.len());
+        let at = |z: &StereoObservation| (z.u as f32, z.v as f32);
         for l in links {
-            let track = match self.newest_tracks.get(&l.reference_feature) {
-                Some(&t) => t,
-                None => {
-                    let t = self.next_track;
-                    self.next_track = self.next_track.wrapping_add(1);
+            if tracks.contains_key(&l.current_feature) {
+                continue;
+            }
+            let (track, z) = match (self.newest_tracks.get(&l.reference_feature), images) {
+                (Some(&t), None) => (t, l.current_keypoint),
+                (Some(&t), Some(im)) => {
+                    let found = self.templates.get(&t).and_then(|tpl| {
+                        tpl.align(
+                            im.current,
+                            at(&l.current),
+                            ALIGN_ITERATIONS,
+                            ALIGN_MAX_MOVE_PX,
+                            ALIGN_MIN_NCC,
+                        )
+                    });
+                    match found {
+                        Some((u, v)) => (
+                            t,
+                            StereoObservation {
+                                u: f64::from(u),
+                                v: f64::from(v),
+                                d: l.current.d,
+                            },
+                        ),
+                        None => {
+                            let t = self.new_track();
+                            if let Some(tpl) =
+                                PatchTemplate::sample(im.current, at(&l.current_keypoint))
+                            {
+                                self.templates.insert(t, tpl);
+                            }
+                            (t, l.current_keypoint)
+                        }
+                    }
+                }
+                (None, _) => {
+                    let t = self.new_track();
                     if let Some(r) = self.frames.back_mut() {
                         r.observations.push((t, l.reference));
                     }
-                    t
+                    match images
+                        .and_then(|im| PatchTemplate::sample(im.reference, at(&l.reference)))
+                    {
+                        Some(tpl) => {
+                            self.templates.insert(t, tpl);
+                            (t, l.current)
+                        }
+                        None => (t, l.current_keypoint),
+                    }
                 }
             };
-            // A feature of the current frame continues at most one track, and a track has
-            // at most one feature in a frame.
-            if !tracks.contains_key(&l.current_feature) && used.insert(track) {
+            if used.insert(track) {
                 tracks.insert(l.current_feature, track);
-                current.observations.push((track, l.current));
+                current.observations.push((track, z));
             }
         }
         self.newest_tracks = tracks;
+        let live: std::collections::HashSet<u32> = self.newest_tracks.values().copied().collect();
+        self.templates.retain(|t, _| live.contains(t));
         self.frames.push_back(current);
         while self.frames.len() > self.config.keyframes {
             self.frames.pop_front();

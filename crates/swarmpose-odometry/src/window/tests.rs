@@ -61,17 +61,19 @@ fn drive(keyframes: usize, frames: usize) -> (Vec<Isometry3<f64>>, Vec<Isometry3
             // Each point is seen in 4 consecutive frames out of every 6.
             .filter(|(k, _)| (i + k) % 6 < 4)
             .filter_map(|(k, pw)| {
+                let current = measure(&m, &t, pw)?;
                 Some(Link {
                     reference_feature: k,
                     current_feature: k,
                     reference: measure(&m, &t_prev, pw)?,
-                    current: measure(&m, &t, pw)?,
+                    current,
+                    current_keypoint: current,
                 })
             })
             .collect();
         let start = given[i - 1] * step * error;
         let pose = window
-            .add(&m, (i - 1, &given[i - 1]), (i, &start), &links)
+            .add(&m, (i - 1, &given[i - 1]), (i, &start), &links, None)
             .map_or(start, |(p, _, _)| p);
         assert!(window.len() <= keyframes.max(2));
         truth.push(t);
@@ -117,12 +119,13 @@ fn a_gap_starts_the_window_again() {
         current_feature: 0,
         reference: z,
         current: z,
+        current_keypoint: z,
     };
     let id = Isometry3::identity();
-    assert!(w.add(&m, (0, &id), (1, &id), &[link]).is_none());
+    assert!(w.add(&m, (0, &id), (1, &id), &[link], None).is_none());
     assert_eq!(w.len(), 2);
     // Frame 3 measured from frame 2, which the window does not hold.
-    assert!(w.add(&m, (2, &id), (3, &id), &[link]).is_none());
+    assert!(w.add(&m, (2, &id), (3, &id), &[link], None).is_none());
     assert_eq!(w.len(), 2);
     assert_eq!(w.observations(), 2);
     w.clear();

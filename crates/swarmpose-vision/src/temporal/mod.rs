@@ -2,6 +2,7 @@
 //! optionally inside a pixel window, and the circular check of a stereo quadruple.
 
 pub mod subpixel;
+pub mod template;
 
 use crate::features::{Descriptor, Keypoint};
 

@@ -1,0 +1,196 @@
+//! A feature's appearance kept from the frame where its track began, and where it appears
+//! in a later image.
+//!
+//! Along a track, aligning each frame's patch to the previous frame's detected keypoint
+//! ([`super::subpixel::align_patch`]) chains the keypoints' errors: the detected position
+//! in frame `k` is off by up to half a pixel (FAST detects at whole pixels, and the
+//! detected position moves with the corner's apparent size), and the alignment in frame
+//! `k + 1` is relative to it. The detected keypoints themselves carry those errors in every
+//! frame. Aligning every frame to the *first* frame's patch measures the same physical
+//! point in every frame, so the errors neither accumulate nor repeat: what is left is the
+//! alignment's own noise and the first keypoint's offset, which is common to all the
+//! track's measurements (the point is where that patch's centre is).
+
+use crate::features::GrayView;
+use crate::image::sample_patch;
+
+/// Half the side of the aligned patch, pixels (a 9x9 patch, as the frame-to-frame
+/// alignment of the odometry's refinement).
+pub const TEMPLATE_RADIUS: usize = 4;
+/// Side of the sampled patch: the aligned patch with a one-pixel border for its gradients.
+const SIDE: usize = 2 * TEMPLATE_RADIUS + 3;
+/// Side of the aligned patch.
+const N: usize = 2 * TEMPLATE_RADIUS + 1;
+
+/// The image patch around a keypoint of the frame where a track began, with its
+/// gradients (inverse compositional Lucas-Kanade, translation only).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PatchTemplate {
+    values: [f32; N * N],
+    gx: [f32; N * N],
+    gy: [f32; N * N],
+    /// The structure tensor `Σ ∇I ∇Iᵀ`: `(xx, xy, yy)`.
+    tensor: (f32, f32, f32),
+}
+
+impl PatchTemplate {
+    /// The patch of `image` centred at `at` (pixels, sub-pixel allowed). `None` when the
+    /// patch leaves the image or has no texture in one direction (the smaller eigenvalue
+    /// of its structure tensor below one grey level squared per pixel).
+    #[must_use]
+    pub fn sample(image: GrayView<'_>, at: (f32, f32)) -> Option<Self> {
+        let r = TEMPLATE_RADIUS as f32;
+        let mut big = [0f32; SIDE * SIDE];
+        sample_patch(image, at.0 - r - 1.0, at.1 - r - 1.0, SIDE, &mut big)?;
+        let mut t = Self {
+            values: [0.0; N * N],
+            gx: [0.0; N * N],
+            gy: [0.0; N * N],
+            tensor: (0.0, 0.0, 0.0),
+        };
+        let (mut hxx, mut hxy, mut hyy) = (0f32, 0f32, 0f32);
+        for j in 0..N {
+            for i in 0..N {
+                let c = (j + 1) * SIDE + i + 1;
+                let k = j * N + i;
+                t.values[k] = big[c];
+                let gx = 0.5 * (big[c + 1] - big[c - 1]);
+                let gy = 0.5 * (big[c + SIDE] - big[c - SIDE]);
+                t.gx[k] = gx;
+                t.gy[k] = gy;
+                hxx += gx * gx;
+                hxy += gx * gy;
+                hyy += gy * gy;
+            }
+        }
+        let det = hxx * hyy - hxy * hxy;
+        let trace = hxx + hyy;
+        let min_eig = 0.5 * (trace - ((hxx - hyy).powi(2) + 4.0 * hxy * hxy).sqrt());
+        if det <= 0.0 || min_eig < (N * N) as f32 {
+            return None;
+        }
+        t.tensor = (hxx, hxy, hyy);
+        Some(t)
+    }
+
+    /// Where the patch appears in `image`, starting the search at `start` (pixels): the
+    /// position minimising `Σ (I(p + w) − T(w))²`, or `None` when the patch leaves the
+    /// image, the iterations do not settle (to 0.01 px within `iterations`), the position
+    /// moves more than `max_move_px` from `start`, or the patch found differs from the
+    /// template more than its contrast allows (zero-mean normalised cross-correlation
+    /// below `min_ncc`: the appearance has changed since the track began).
+    #[must_use]
+    pub fn align(
+        &self,
+        image: GrayView<'_>,
+        start: (f32, f32),
+        iterations: usize,
+        max_move_px: f32,
+        min_ncc: f32,
+    ) -> Option<(f32, f32)> {
+        let r = TEMPLATE_RADIUS as f32;
+        let (hxx, hxy, hyy) = self.tensor;
+        let det = hxx * hyy - hxy * hxy;
+        let mut patch = [0f32; N * N];
+        let (mut px, mut py) = start;
+        for _ in 0..iterations {
+            sample_patch(image, px - r, py - r, N, &mut patch)?;
+            let (mut ex, mut ey) = (0f32, 0f32);
+            for k in 0..N * N {
+                let e = patch[k] - self.values[k];
+                ex += self.gx[k] * e;
+                ey += self.gy[k] * e;
+            }
+            let dx = (hyy * ex - hxy * ey) / det;
+            let dy = (hxx * ey - hxy * ex) / det;
+            px -= dx;
+            py -= dy;
+            if (px - start.0).hypot(py - start.1) > max_move_px {
+                return None;
+            }
+            if dx.hypot(dy) < 0.01 {
+                sample_patch(image, px - r, py - r, N, &mut patch)?;
+                return (ncc(&patch, &self.values) >= min_ncc).then_some((px, py));
+            }
+        }
+        None
+    }
+}
+
+/// Zero-mean normalised cross-correlation of two patches (0 when one is flat).
+fn ncc(a: &[f32; N * N], b: &[f32; N * N]) -> f32 {
+    let n = (N * N) as f32;
+    let ma = a.iter().sum::<f32>() / n;
+    let mb = b.iter().sum::<f32>() / n;
+    let (mut ab, mut aa, mut bb) = (0f32, 0f32, 0f32);
+    for (x, y) in a.iter().zip(b) {
+        let (x, y) = (x - ma, y - mb);
+        ab += x * y;
+        aa += x * x;
+        bb += y * y;
+    }
+    if aa <= 0.0 || bb <= 0.0 {
+        0.0
+    } else {
+        ab / (aa * bb).sqrt()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn view(data: &[u8], width: usize, height: usize) -> GrayView<'_> {
+        GrayView {
+            width,
+            height,
+            data,
+        }
+    }
+
+    fn image(w: usize, h: usize, shift: (f32, f32)) -> Vec<u8> {
+        let pattern = |x: f32, y: f32| {
+            128.0 + 60.0 * (0.31 * x).sin() * (0.23 * y).cos() + 30.0 * (0.17 * (x + y)).sin()
+        };
+        (0..h)
+            .flat_map(|y| (0..w).map(move |x| (x, y)))
+            .map(|(x, y)| pattern(x as f32 - shift.0, y as f32 - shift.1).round() as u8)
+            .collect()
+    }
+
+    /// A template taken in one image is found, to a fraction of a pixel, in images
+    /// shifted by known amounts, each time from the template (no chaining).
+    #[test]
+    fn shifted_copies_are_found_from_the_first_patch() {
+        let (w, h) = (80usize, 60usize);
+        let first = image(w, h, (0.0, 0.0));
+        let t = PatchTemplate::sample(view(&first, w, h), (40.0, 30.0)).expect("textured");
+        for shift in [(0.3f32, -0.2f32), (1.37, -0.62), (-1.1, 0.9)] {
+            let img = image(w, h, shift);
+            let (x, y) = t
+                .align(view(&img, w, h), (40.0, 30.0), 20, 2.0, 0.9)
+                .expect("found");
+            assert!(
+                (x - 40.0 - shift.0).abs() < 0.05 && (y - 30.0 - shift.1).abs() < 0.05,
+                "shift {shift:?}: found ({x}, {y})"
+            );
+        }
+    }
+
+    /// A flat patch is no template, a patch that is not there is not found, and a patch
+    /// near the border is not sampled.
+    #[test]
+    fn flat_absent_or_clipped_patches_are_refused() {
+        let (w, h) = (80usize, 60usize);
+        let flat = vec![100u8; w * h];
+        assert!(PatchTemplate::sample(view(&flat, w, h), (40.0, 30.0)).is_none());
+        let first = image(w, h, (0.0, 0.0));
+        let t = PatchTemplate::sample(view(&first, w, h), (40.0, 30.0)).expect("textured");
+        let noise: Vec<u8> = (0..w * h).map(|i| ((i * 7919) % 251) as u8).collect();
+        assert!(
+            t.align(view(&noise, w, h), (40.0, 30.0), 20, 2.0, 0.9)
+                .is_none()
+        );
+        assert!(PatchTemplate::sample(view(&first, w, h), (2.0, 2.0)).is_none());
+    }
+}
