@@ -96,10 +96,10 @@ impl PatchTemplate {
         for _ in 0..iterations {
             sample_patch(image, px - r, py - r, N, &mut patch)?;
             let (mut ex, mut ey) = (0f32, 0f32);
-            for k in 0..N * N {
-                let e = patch[k] - self.values[k];
-                ex += self.gx[k] * e;
-                ey += self.gy[k] * e;
+            for (((p, t), gx), gy) in patch.iter().zip(&self.values).zip(&self.gx).zip(&self.gy) {
+                let e = p - t;
+                ex += gx * e;
+                ey += gy * e;
             }
             let dx = (hyy * ex - hxy * ey) / det;
             let dy = (hxx * ey - hxy * ex) / det;
