@@ -82,7 +82,7 @@ reference frame (pose of camera k in the reference camera: translation metres, q
 frame to frame the previous frame, with the sliding window the window's oldest keyframe) \
 and its covariance: of xi = (nu_x, nu_y, nu_z, omega_x, omega_y, omega_z), metres and \
 radians in the frame of camera k, with T_true = T o E(xi), E(xi): P -> Exp(omega) P + nu; \
-conditional on the disparity correction applied. Upper triangle, row by row (c_ij for \
+the self-calibrated disparity correction's uncertainty included. Upper triangle, row by row (c_ij for \
 i <= j, 0-based).\n\
 frame,reference,tx,ty,tz,qw,qx,qy,qz,c00,c01,c02,c03,c04,c05,c11,c12,c13,c14,c15,c22,c23,\
 c24,c25,c33,c34,c35,c44,c45,c55";

@@ -130,8 +130,8 @@ pub struct FrameResult {
     /// Covariance of [`FrameResult::measured_motion`], when it was refined: of
     /// `ξ = (ν, ω)` (metres, radians, in this camera's frame) in `T_true = T ∘ E(ξ)`,
     /// `E(ξ): P ↦ Exp(ω) P + ν`; see [`crate::refine`] and
-    /// [`crate::window::WindowMotion::covariance`]. It is conditional on the disparity
-    /// correction applied.
+    /// [`crate::window::WindowMotion::covariance`]. It includes the uncertainty of the
+    /// self-calibrated disparity correction (none for a calibration taken as given).
     pub covariance: Option<Matrix6<f64>>,
     /// What happened.
     pub status: Status,

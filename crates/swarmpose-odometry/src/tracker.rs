@@ -30,6 +30,7 @@ use crate::estimate::{initial_motion, observations};
 use crate::frontend::ms;
 use crate::intake::{StereoCamera, check_timestamp};
 use crate::record::{Counts, FrameResult, StageTimes, Status};
+use crate::refine::evidence::{MatrixK, Reduced};
 use crate::refine::model::{PixelNoise, StereoModel, StereoObservation};
 use crate::refine::{Refined, refine};
 use crate::selfcal::{CorrectionModel, Decision, SelfCalibration};
@@ -80,6 +81,30 @@ const CORRECTION_TOLERANCE_PX: f64 = 0.05;
 
 /// Most refinements of a pair again under the correction its own evidence leads to.
 const FIXED_POINT_ITERATIONS: usize = 4;
+
+/// The pair's motion covariance `covariance` (from the measurements) with the
+/// calibration's added: the motion moves with the calibration terms as
+/// `∂ξ/∂c = −S_ξξ⁻¹ S_ξc` (the reduced normal equations of both folds), so their
+/// covariance `calibration` adds `G Σ_c Gᵀ`.
+fn with_calibration(
+    covariance: &Matrix6<f64>,
+    reduced: &[Reduced; 2],
+    calibration: &MatrixK,
+) -> Matrix6<f64> {
+    let mut both = reduced[0];
+    both += &reduced[1];
+    let Some(inv) = both.pose_pose.try_inverse() else {
+        return *covariance;
+    };
+    let g = inv * both.pose_correction;
+    let added = g * calibration * g.transpose();
+    let out = covariance + (added + added.transpose()) * 0.5;
+    if out.iter().all(|v| v.is_finite()) {
+        out
+    } else {
+        *covariance
+    }
+}
 
 /// `rig` with its focal length changed by `focal_px` pixels of `fx`, `fy` in proportion.
 fn focal_changed(rig: &RectifiedStereo, focal_px: f64) -> RectifiedStereo {
@@ -202,6 +227,15 @@ impl<D: Descriptor> Tracker<D> {
         match self.config.calibration {
             Calibration::Auto => self.selfcal.decision().focal_px,
             Calibration::Off | Calibration::Fixed(_) => 0.0,
+        }
+    }
+
+    /// Covariance of the calibration terms applied (pixels²): the self-calibration's,
+    /// zero for a calibration taken as given.
+    fn calibration_covariance(&self) -> MatrixK {
+        match self.config.calibration {
+            Calibration::Auto => self.selfcal.decision().covariance,
+            Calibration::Off | Calibration::Fixed(_) => MatrixK::zeros(),
         }
     }
 
@@ -391,8 +425,13 @@ impl<D: Descriptor> Tracker<D> {
             // Otherwise the estimator alone: its motion, on the points corrected as
             // decided before this pair.
             let (refined, correction, focal_px, model) = best;
+            let calibration_covariance = self.calibration_covariance();
             measured.motion = refined.motion;
-            measured.covariance = Some(refined.covariance);
+            measured.covariance = Some(with_calibration(
+                &refined.covariance,
+                &refined.reduced,
+                &calibration_covariance,
+            ));
             measured.inliers = refined.inliers.len();
             measured.correction = correction;
             measured.focal_px = focal_px;
@@ -426,7 +465,7 @@ impl<D: Descriptor> Tracker<D> {
                 };
                 let pose = ref_pose * measured.motion;
                 if let Some((pose, _, window)) = self.window.add(
-                    &self.model(correction, focal_px),
+                    (&self.model(correction, focal_px), &calibration_covariance),
                     (ref_index, &ref_pose),
                     (index, &pose),
                     &links,

@@ -59,8 +59,8 @@ impl Frame {
     }
 
     /// 6x6 covariance of ``measured_motion``, of ``(v, w)`` (metres, radians, in this
-    /// camera's frame, ``T_true = T E(v, w)``), conditional on the disparity correction
-    /// applied; ``None`` when the motion was not refined.
+    /// camera's frame, ``T_true = T E(v, w)``), the self-calibrated disparity
+    /// correction's uncertainty included; ``None`` when the motion was not refined.
     #[getter]
     fn covariance<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray2<f64>>> {
         self.result.covariance.as_ref().map(|c| matrix(py, c))

@@ -247,6 +247,56 @@ fn fit_on_base(q: &QuadraticCost, base: &VectorK, free: &[usize]) -> VectorK {
     out
 }
 
+/// The covariance of the coefficients `free` fitted on `q` (`A⁻¹` over them, χ² units so
+/// pixels²), zero elsewhere; zero when `A` is singular there.
+fn covariance_on(q: &QuadraticCost, free: &[usize]) -> MatrixK {
+    let n = free.len();
+    let mut out = MatrixK::zeros();
+    if n == 0 {
+        return out;
+    }
+    let mut a = SMatrix::<f64, K, K>::identity();
+    for (i, &ki) in free.iter().enumerate() {
+        for (j, &kj) in free.iter().enumerate() {
+            a[(i, j)] = q.a[(ki, kj)];
+        }
+    }
+    let Some(chol) = a.cholesky() else {
+        return out;
+    };
+    let inv = chol.inverse();
+    for (i, &ki) in free.iter().enumerate() {
+        for (j, &kj) in free.iter().enumerate() {
+            out[(ki, kj)] = inv[(i, j)];
+        }
+    }
+    if out.iter().all(|v| v.is_finite()) {
+        out
+    } else {
+        MatrixK::zeros()
+    }
+}
+
+/// The covariance of the calibration terms set by the rotation terms the rows support:
+/// a yaw `f ψ` sets the offset and the quadratic coefficient to `−f ψ`, a roll `f θ` the
+/// `y` coefficient, a pitch `f φ` the `x y` coefficient ([`RowDecision::correction`]).
+fn rows_covariance(rows: &RowDecision) -> MatrixK {
+    // Column r: how each calibration term moves with rotation term r.
+    let mut j = SMatrix::<f64, K, 3>::zeros();
+    if rows.yaw {
+        j[(0, 0)] = -1.0;
+        j[(1, 0)] = -1.0;
+    }
+    if rows.roll {
+        j[(3, 1)] = 1.0;
+    }
+    if rows.pitch {
+        j[(4, 2)] = 1.0;
+    }
+    let c = nalgebra::Matrix3::from_fn(|r, s| rows.rotation_covariance[r][s]);
+    j * c * j.transpose()
+}
+
 /// The current decision and its evidence.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Decision {
@@ -265,6 +315,12 @@ pub struct Decision {
     /// Held-out rigidity score of the best horizontal term not chosen (the margin it
     /// missed), or `None` when none is left.
     pub rigidity_next_score: Option<f64>,
+    /// Covariance of the calibration terms applied (disparity correction coefficients,
+    /// then the focal length; pixels²): the inverse of the rigidity evidence's
+    /// information over the terms it fitted, plus the row fit's covariance of the
+    /// rotation terms read off the rows (mapped to the coefficients they set; the two are
+    /// taken as independent). Zero when no term is applied.
+    pub covariance: MatrixK,
     /// Pairs that contributed rigidity evidence.
     pub pairs: usize,
     /// Frames whose confirmed matches gave row evidence.
@@ -405,6 +461,7 @@ impl SelfCalibration {
             model: chosen.model,
             correction: correction_of(&fitted),
             focal_px: fitted[FOCAL_TERM],
+            covariance: covariance_on(&self.joint, &chosen.free) + rows_covariance(&rows),
             rows,
             rigidity_score: chosen.relative,
             rigidity_next_score: chosen.next,

@@ -77,6 +77,38 @@ impl Normal {
         }
     }
 
+    /// Covariance of the rotation terms among `terms` (`f ψ`, `f θ`, `f φ` in the signs of
+    /// [`RowDecision::rotation_px`]) fitted as `c`: the residual variance times the
+    /// inverse of the normal equations over `terms`; zero for the terms not fitted.
+    fn rotation_covariance(&self, terms: &[usize], c: &VectorR) -> [[f64; 3]; 3] {
+        let mut out = [[0.0; 3]; 3];
+        let n = terms.len();
+        let dof = self.n.saturating_sub(n).max(1) as f64;
+        let variance = self.rss(c) / dof;
+        let mut a = MatrixR::identity();
+        for (i, &ki) in terms.iter().enumerate() {
+            for (j, &kj) in terms.iter().enumerate() {
+                a[(i, j)] = self.a[(ki, kj)];
+            }
+        }
+        let Some(inv) = a.cholesky().map(|c| c.inverse()) else {
+            return out;
+        };
+        let rotation = [(YAW, -1.0), (ROLL, -1.0), (PITCH, 1.0)];
+        for (r1, &(k1, s1)) in rotation.iter().enumerate() {
+            for (r2, &(k2, s2)) in rotation.iter().enumerate() {
+                if let (Some(i), Some(j)) = (
+                    terms.iter().position(|&t| t == k1),
+                    terms.iter().position(|&t| t == k2),
+                ) {
+                    let v = s1 * s2 * variance * inv[(i, j)];
+                    out[r1][r2] = if v.is_finite() { v } else { 0.0 };
+                }
+            }
+        }
+        out
+    }
+
     /// Least squares over the terms in `terms` (the others 0).
     fn fit(&self, terms: &[usize]) -> VectorR {
         let n = terms.len();
@@ -121,6 +153,10 @@ pub struct RowDecision {
     pub score: f64,
     /// Row offsets used, over all frames.
     pub measurements: usize,
+    /// Covariance of the supported terms of `rotation_px` (pixels², zero for the others):
+    /// the residual variance times the inverse of the normal equations over the terms
+    /// fitted.
+    pub rotation_covariance: [[f64; 3]; 3],
 }
 
 impl RowDecision {
@@ -225,6 +261,7 @@ impl RowEvidence {
         decision.score = best;
         // The supported terms refitted without the unsupported ones.
         let c = all.fit(&terms);
+        decision.rotation_covariance = all.rotation_covariance(&terms, &c);
         decision.rotation_px = [
             if decision.yaw { -c[YAW] } else { -c_full[YAW] },
             if decision.roll {

@@ -37,6 +37,7 @@ use nalgebra::{Isometry3, Matrix6, UnitQuaternion};
 use swarmpose_vision::features::GrayView;
 use swarmpose_vision::temporal::template::PatchTemplate;
 
+use crate::refine::evidence::MatrixK;
 use crate::refine::model::{StereoModel, StereoObservation};
 
 /// Settings of the sliding window.
@@ -141,9 +142,9 @@ pub struct WindowMotion {
     /// Covariance of `ξ = (ν, ω)` (metres, radians, in camera `k`) in
     /// `T_true = T ∘ E(ξ)`, as for the pair's motion ([`crate::refine`]): the newest
     /// pose's block of the inverse of the window's reduced information (points
-    /// eliminated, the oldest pose fixed), scaled by the residuals' variance factor.
-    /// `None` when singular. It is conditional on the disparity correction in use: the
-    /// self-calibration's own uncertainty is not in it.
+    /// eliminated, the oldest pose fixed), scaled by the residuals' variance factor,
+    /// plus the calibration's uncertainty carried through the window's sensitivity to
+    /// the calibration terms. `None` when singular.
     pub covariance: Option<Matrix6<f64>>,
 }
 
@@ -223,7 +224,8 @@ impl Window {
     /// Adds the tracked frame `index`, measured from the frame `reference_index` (posed at
     /// `reference_pose`, the camera in the world) with the inlier `links`, at the pose
     /// `pose` (the camera in the world, from the pair alone); refines the window with
-    /// `model` and returns the current frame's refined pose, what was done and the
+    /// `model` (whose calibration terms have the covariance `calibration_covariance`,
+    /// pixels², for the covariance of the result) and returns the current frame's refined pose, what was done and the
     /// window's measurement of the frame, or `None` when the window is too short to add
     /// anything to the pair (or the refinement failed; the pair's pose stands then).
     ///
@@ -233,7 +235,7 @@ impl Window {
     /// new track at its detected keypoint. Without images, the detected keypoints.
     pub fn add(
         &mut self,
-        model: &StereoModel,
+        (model, calibration_covariance): (&StereoModel, &MatrixK),
         (reference_index, reference_pose): (usize, &Isometry3<f64>),
         (index, pose): (usize, &Isometry3<f64>),
         links: &[Link],
@@ -332,7 +334,12 @@ impl Window {
         if self.frames.len() < 3 {
             return None;
         }
-        let report = solve::refine_window(model, &self.config, self.frames.make_contiguous())?;
+        let report = solve::refine_window(
+            model,
+            calibration_covariance,
+            &self.config,
+            self.frames.make_contiguous(),
+        )?;
         let newest = self.frames.back()?;
         let oldest = self.frames.front()?;
         let mut motion = oldest.pose_cw * newest.pose_cw.inverse();

@@ -19,11 +19,15 @@
 use std::collections::HashMap;
 
 use nalgebra::{
-    DMatrix, DVector, Isometry3, Matrix3, Matrix6, Translation3, UnitQuaternion, Vector3, Vector6,
+    DMatrix, DVector, Isometry3, Matrix3, Matrix6, SMatrix, Translation3, UnitQuaternion, Vector3,
+    Vector6,
 };
 
 use super::{Keyframe, WindowConfig, WindowReport};
-use crate::refine::model::{Matrix3x6, StereoModel, StereoObservation};
+use crate::refine::evidence::{Matrix6xK, MatrixK};
+use crate::refine::model::{
+    CALIBRATION_TERMS, Matrix3x6, Matrix3xK, StereoModel, StereoObservation,
+};
 use crate::refine::unit_quaternion;
 
 /// A pose `T_kw` as a rotation matrix and translation.
@@ -97,6 +101,7 @@ fn relative_poses(poses: &[Pose], out: &mut Vec<Relative>) {
 struct Jac {
     residual: Vector3<f64>,
     d_point: Matrix3<f64>,
+    d_correction: Matrix3xK,
     poses: Option<(Matrix3x6, Matrix3x6)>,
 }
 
@@ -115,6 +120,7 @@ fn linearize(
         return Some(Jac {
             residual: l.residual,
             d_point: l.d_point,
+            d_correction: l.d_correction,
             poses: None,
         });
     }
@@ -128,6 +134,7 @@ fn linearize(
     Some(Jac {
         residual: l.residual,
         d_point: l.d_point,
+        d_correction: l.d_correction,
         poses: Some((l.d_pose, l.d_h * dh_da)),
     })
 }
@@ -181,6 +188,9 @@ struct Scratch {
     gradient: Vec<Vector6<f64>>,
     /// `Σ w r²` of the last build (Huber-weighted squared whitened residuals).
     chi2: f64,
+    /// The reduced system's pose-by-calibration blocks `S_ξc` (points eliminated), one
+    /// per pose variable: how the calibration terms pull on each pose.
+    pose_calibration: Vec<Matrix6xK>,
 }
 
 /// Adds `block` to the `H_pξ` of variable `v` among `hpx[start..]`.
@@ -211,12 +221,15 @@ fn build(
     sc.gradient.clear();
     sc.gradient.resize(m, Vector6::zeros());
     sc.chi2 = 0.0;
+    sc.pose_calibration.clear();
+    sc.pose_calibration.resize(m, Matrix6xK::zeros());
     // Variable of keyframe slot `i`: slot 0 is fixed.
     let var = |slot: usize| slot.checked_sub(1);
     for (t, p) in tracks.iter().zip(points) {
         let anchor = t.obs[0].0;
         let mut hpp = Matrix3::zeros();
         let mut gp = Vector3::zeros();
+        let mut hpc = SMatrix::<f64, 3, CALIBRATION_TERMS>::zeros();
         let start = sc.hpx.len();
         for (slot, z) in &t.obs {
             let j = linearize(model, (&sc.rel, n), anchor, *slot, p, z)?;
@@ -226,6 +239,7 @@ fn build(
             let dpw = j.d_point.transpose() * w;
             hpp += dpw * j.d_point;
             gp += dpw * j.residual;
+            hpc += dpw * j.d_correction;
             let Some((dj, da)) = j.poses else {
                 continue;
             };
@@ -235,6 +249,7 @@ fn build(
                 add_hpx(&mut sc.hpx, start, v1, &(dpw * b1));
                 let b1w = b1.transpose() * w;
                 sc.gradient[v1] += b1w * j.residual;
+                sc.pose_calibration[v1] += b1w * j.d_correction;
                 for (v2, b2) in &pair {
                     let Some(v2) = *v2 else { continue };
                     sc.blocks[v1 * m + v2] += b1w * b2;
@@ -247,6 +262,7 @@ fn build(
             let (v1, b1) = sc.hpx[i1];
             let t1 = b1.transpose() * hpp_inv;
             sc.gradient[v1] -= t1 * gp;
+            sc.pose_calibration[v1] -= t1 * hpc;
             for i2 in start..end {
                 let (v2, b2) = &sc.hpx[i2];
                 sc.blocks[v1 * m + v2] -= t1 * b2;
@@ -270,6 +286,7 @@ fn build(
 /// `None` when there is nothing to refine or the system is singular (poses unchanged).
 pub(crate) fn refine_window(
     model: &StereoModel,
+    calibration_covariance: &MatrixK,
     config: &WindowConfig,
     frames: &mut [Keyframe],
 ) -> Option<WindowReport> {
@@ -334,7 +351,12 @@ pub(crate) fn refine_window(
         iterations += 1;
         let (s, g) = build(model, k, &poses, &tracks, &points, &mut sc)?;
         if iterations == 1 {
-            covariance = newest_covariance(&s, sc.chi2, observations, tracks.len());
+            covariance = newest_covariance(
+                &s,
+                (sc.chi2, observations, tracks.len()),
+                &sc.pose_calibration,
+                calibration_covariance,
+            );
         }
         loop {
             if lambda > 1e8 {
@@ -393,18 +415,21 @@ pub(crate) fn refine_window(
 }
 
 /// The covariance of the newest keyframe's pose perturbation `ξ` (the oldest held fixed)
-/// at the start of the refinement: the newest pose's block of `S⁻¹`, `S` the reduced
-/// information (points eliminated), scaled by the residuals' variance factor `χ² / dof`
-/// with `dof = 3 (observations − tracks) − rows of S` (1 when the pixel noise is as
-/// modelled), as the pair refinement's. `None` when `S` is not positive definite.
+/// at the start of the refinement. The measurements' part is the newest pose's block of
+/// `S⁻¹`, `S` the reduced information (points eliminated), scaled by the residuals'
+/// variance factor `χ² / dof` with `dof = 3 (observations − tracks) − rows of S` (1 when
+/// the pixel noise is as modelled), as the pair refinement's. The calibration's part:
+/// the solution moves with the calibration terms `c` as `∂ξ/∂c = −S⁻¹ S_ξc`, so their
+/// covariance `Σ_c` adds `G Σ_c Gᵀ` with `G` the newest pose's rows of `S⁻¹ S_ξc`.
+/// `None` when `S` is not positive definite.
 fn newest_covariance(
     s: &DMatrix<f64>,
-    chi2: f64,
-    observations: usize,
-    tracks: usize,
+    (chi2, observations, tracks): (f64, usize, usize),
+    pose_calibration: &[Matrix6xK],
+    calibration_covariance: &MatrixK,
 ) -> Option<Matrix6<f64>> {
     let n = s.nrows();
-    if n < 6 {
+    if n < 6 || pose_calibration.len() * 6 != n {
         return None;
     }
     let dof = (3 * observations).checked_sub(3 * tracks + n)?.max(1) as f64;
@@ -413,9 +438,16 @@ fn newest_covariance(
     for i in 0..6 {
         unit[(n - 6 + i, i)] = 1.0;
     }
+    // The newest pose's columns of S⁻¹ (its rows, S being symmetric).
     let columns = chol.solve(&unit);
     let block: Matrix6<f64> = columns.fixed_view::<6, 6>(n - 6, 0).into_owned();
-    let cov = (block + block.transpose()) * (0.5 * chi2 / dof);
+    let mut cov = (block + block.transpose()) * (0.5 * chi2 / dof);
+    let mut g = Matrix6xK::zeros();
+    for (v, sxc) in pose_calibration.iter().enumerate() {
+        g += columns.fixed_view::<6, 6>(6 * v, 0).transpose() * sxc;
+    }
+    let from_calibration = g * calibration_covariance * g.transpose();
+    cov += (from_calibration + from_calibration.transpose()) * 0.5;
     cov.iter().all(|v| v.is_finite()).then_some(cov)
 }
 

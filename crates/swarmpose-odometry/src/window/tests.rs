@@ -73,7 +73,13 @@ fn drive(keyframes: usize, frames: usize) -> (Vec<Isometry3<f64>>, Vec<Isometry3
             .collect();
         let start = given[i - 1] * step * error;
         let pose = window
-            .add(&m, (i - 1, &given[i - 1]), (i, &start), &links, None)
+            .add(
+                (&m, &MatrixK::zeros()),
+                (i - 1, &given[i - 1]),
+                (i, &start),
+                &links,
+                None,
+            )
             .map_or(start, |(p, _, _)| p);
         assert!(window.len() <= keyframes.max(2));
         truth.push(t);
@@ -122,10 +128,16 @@ fn a_gap_starts_the_window_again() {
         current_keypoint: z,
     };
     let id = Isometry3::identity();
-    assert!(w.add(&m, (0, &id), (1, &id), &[link], None).is_none());
+    assert!(
+        w.add((&m, &MatrixK::zeros()), (0, &id), (1, &id), &[link], None)
+            .is_none()
+    );
     assert_eq!(w.len(), 2);
     // Frame 3 measured from frame 2, which the window does not hold.
-    assert!(w.add(&m, (2, &id), (3, &id), &[link], None).is_none());
+    assert!(
+        w.add((&m, &MatrixK::zeros()), (2, &id), (3, &id), &[link], None)
+            .is_none()
+    );
     assert_eq!(w.len(), 2);
     assert_eq!(w.observations(), 2);
     w.clear();

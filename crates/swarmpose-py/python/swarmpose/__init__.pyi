@@ -122,7 +122,7 @@ class Frame:
         """4x4 motion measured from `reference` (this camera's pose in the reference camera)."""
     @property
     def covariance(self) -> Optional[npt.NDArray[np.float64]]:
-        """6x6 covariance of `measured_motion` (metres, radians), given the disparity correction applied."""
+        """6x6 covariance of `measured_motion` (metres, radians), the self-calibration's uncertainty included."""
     @property
     def status(self) -> str:
         """"first", "tracked", "constant-velocity (REASON)" or "lost (REASON)"."""
