@@ -2,8 +2,9 @@
 //! front end, robust PSO, reprojection refinement, online self-calibration), on one
 //! thread (`track`) and on two (`run_two_threads`: loading and the front end of frame
 //! k + 1 beside the back end of frame k). One iteration is the whole sequence through a
-//! new engine; frames per second = 51 / time. Each also with a sliding window of 5 and of
-//! 10 keyframes ([`swarmpose_odometry::window`]). A first pass prints the per-stage split
+//! new engine; frames per second = 51 / time. Each with the default configuration (a
+//! sliding window of 10 keyframes, [`swarmpose_odometry::window`]) and frame to frame
+//! (no window). A first pass prints the per-stage split
 //! and the per-frame latency (p50, p99). Needs `kitti_vo_seq2` under the data root
 //! (`SWARMPOSE_DATA`); skipped with a message otherwise.
 //!
@@ -35,8 +36,7 @@ fn bench_pipeline(c: &mut Criterion) {
     let frames: Vec<_> = (0..seq.len()).filter_map(|i| seq.frame(i).ok()).collect();
     let variants = [
         ("", config.clone()),
-        (", window 5", config.clone().with_window(5)),
-        (", window 10", config.clone().with_window(10)),
+        (", frame to frame", config.clone().with_window(0)),
     ];
     // Per-frame latency of the engine alone (images in memory), and the split.
     for (label, config) in &variants {

@@ -27,8 +27,8 @@ fn synthetic_tum_rgbd_is_followed() {
         .expect("write");
     let seq = RgbdSequence::open(&dir).expect("open");
     assert_eq!(seq.len(), 12);
-    // Frame to frame, and with a window of 5 keyframes.
-    for keyframes in [0, 5] {
+    // Frame to frame, and with the default window of 10 keyframes.
+    for keyframes in [0, 10] {
         let mut odo = Odometry::builder(seq.camera().expect("camera"))
             .config(OdometryConfig::default().with_window(keyframes))
             .rgbd(RgbdNoise::default())

@@ -37,11 +37,12 @@ impl Odometry {
     /// may correct, e.g. ``"principal-point+yaw"``, or ``"none"``; default as the
     /// command line), ``disparity_correction`` (a fixed ``(offset, quadratic)`` in
     /// pixels instead), ``min_inliers``, ``seed`` (frame k uses seed + k), ``window``
-    /// (keyframes of the sliding-window bundle adjustment; 0, the default: frame to frame).
+    /// (keyframes of the sliding-window bundle adjustment; 0: frame to frame; default as the
+    /// command line, 10).
     #[new]
     #[pyo3(signature = (fx, fy, cx, cy, baseline, width, height, *, method = "pso", threshold = None,
         detector = "orb", refine = true, calibrate = None, disparity_correction = None,
-        min_inliers = None, seed = 0, window = 0))]
+        min_inliers = None, seed = 0, window = None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         fx: f64,
@@ -59,7 +60,7 @@ impl Odometry {
         disparity_correction: Option<(f64, f64)>,
         min_inliers: Option<usize>,
         seed: u64,
-        window: usize,
+        window: Option<usize>,
     ) -> PyResult<Self> {
         let camera = StereoCamera {
             rig: RectifiedStereo {
@@ -94,7 +95,7 @@ impl Odometry {
     #[staticmethod]
     #[pyo3(signature = (sequence_dir, *, method = "pso", threshold = None, detector = "orb",
         refine = true, calibrate = None, disparity_correction = None, min_inliers = None, seed = 0,
-        window = 0))]
+        window = None))]
     #[allow(clippy::too_many_arguments)]
     fn from_sequence(
         sequence_dir: PathBuf,
@@ -106,7 +107,7 @@ impl Odometry {
         disparity_correction: Option<(f64, f64)>,
         min_inliers: Option<usize>,
         seed: u64,
-        window: usize,
+        window: Option<usize>,
     ) -> PyResult<Self> {
         let seq = Sequence::open(&sequence_dir)?;
         let options = Options {
@@ -169,7 +170,7 @@ impl Odometry {
     #[staticmethod]
     #[pyo3(signature = (fx, fy, cx, cy, width, height, *, depth_coefficient = None,
         method = "pso", threshold = None, refine = true, min_inliers = None, seed = 0,
-        window = 0))]
+        window = None))]
     #[allow(clippy::too_many_arguments)]
     fn rgbd(
         fx: f64,
@@ -184,7 +185,7 @@ impl Odometry {
         refine: bool,
         min_inliers: Option<usize>,
         seed: u64,
-        window: usize,
+        window: Option<usize>,
     ) -> PyResult<Self> {
         let mut noise = RgbdNoise::default();
         noise.depth_coefficient = depth_coefficient.unwrap_or(noise.depth_coefficient);

@@ -25,7 +25,7 @@ use crate::sequence::Sequence;
 #[pyfunction]
 #[pyo3(signature = (sequence_dir, *, frame_period = 0.1, method = "pso", threshold = None,
     detector = "orb", refine = true, calibrate = None, disparity_correction = None,
-    min_inliers = None, seed = 0, window = 0))]
+    min_inliers = None, seed = 0, window = None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn odometry(
     py: Python<'_>,
@@ -39,7 +39,7 @@ pub(crate) fn odometry(
     disparity_correction: Option<(f64, f64)>,
     min_inliers: Option<usize>,
     seed: u64,
-    window: usize,
+    window: Option<usize>,
 ) -> PyResult<OdometryRun> {
     if !(frame_period.is_finite() && frame_period > 0.0) {
         return Err(PyValueError::new_err(

@@ -23,8 +23,8 @@ pub(crate) struct Options<'a> {
     pub(crate) disparity_correction: Option<(f64, f64)>,
     pub(crate) min_inliers: Option<usize>,
     pub(crate) seed: u64,
-    /// Keyframes of the sliding window (0: frame to frame).
-    pub(crate) window: usize,
+    /// Keyframes of the sliding window (0: frame to frame; `None`: the engine's default).
+    pub(crate) window: Option<usize>,
     /// An RGB-D camera with this depth noise (frames go to `track_rgbd`).
     pub(crate) rgbd: Option<RgbdNoise>,
 }
@@ -42,8 +42,10 @@ impl Options<'_> {
             refine: self.refine,
             seed: self.seed,
             ..OdometryConfig::default()
+        };
+        if let Some(k) = self.window {
+            c = c.with_window(k);
         }
-        .with_window(self.window);
         if let Some(n) = self.min_inliers {
             if n < 3 {
                 return Err(PyValueError::new_err(format!(

@@ -41,6 +41,12 @@ def test_streaming_matches_the_cli(kitti_seq2, swarmpose_bin, tmp_path):
     assert frames[0].status == "first"
     assert sum(f.tracked for f in frames) >= 45
     assert all(f.covariance is None or f.covariance.shape == (6, 6) for f in frames)
+    # The default window of 10 keyframes: each tracked frame is measured from the
+    # window's oldest keyframe, with the covariance of that motion.
+    for k, f in enumerate(frames[1:], start=1):
+        assert f.reference == max(0, k - 9)
+        assert f.measured_motion.shape == (4, 4)
+        assert np.all(np.linalg.eigvalsh(f.covariance) > 0)
 
     run = swarmpose.odometry(kitti_seq2)
     assert np.array_equal(run.poses, poses)
@@ -149,16 +155,18 @@ def test_evaluate_arrays():
 
 
 def test_window_matches_the_cli(kitti_seq2, swarmpose_bin, tmp_path):
-    """``window=K`` is the command line's ``--window K``: the same trajectory, and a
-    bad value is refused."""
+    """``window=K`` is the command line's ``--window K``: the same trajectory (another
+    one than the default window's), and a bad value is refused."""
     out = tmp_path / "cli"
     subprocess.run([str(swarmpose_bin), "odometry", str(kitti_seq2), "--out", str(out),
                     "--quiet", "--window", "5"], check=True, capture_output=True)
     cli = read_kitti(out / "trajectory.kitti.txt")
     run = swarmpose.odometry(kitti_seq2, window=5)
     assert np.max(np.abs(run.poses - cli)) < 1e-12
-    frame_to_frame = swarmpose.odometry(kitti_seq2)
-    assert np.max(np.abs(run.poses - frame_to_frame.poses)) > 1e-6
+    default = swarmpose.odometry(kitti_seq2)
+    assert np.max(np.abs(run.poses - default.poses)) > 1e-6
+    frame_to_frame = swarmpose.odometry(kitti_seq2, window=0)
+    assert all(f.reference == k for k, f in enumerate(frame_to_frame.frames[1:]))
     times = swarmpose.Odometry.from_sequence(kitti_seq2, window=5)
     seq = swarmpose.Sequence(kitti_seq2)
     for i in range(3):

@@ -161,7 +161,7 @@ class Odometry:
         disparity_correction: Optional[Tuple[float, float]] = None,
         min_inliers: Optional[int] = None,
         seed: int = 0,
-        window: int = 0,
+        window: Optional[int] = None,
     ) -> None: ...
     @staticmethod
     def from_sequence(
@@ -175,7 +175,7 @@ class Odometry:
         disparity_correction: Optional[Tuple[float, float]] = None,
         min_inliers: Optional[int] = None,
         seed: int = 0,
-        window: int = 0,
+        window: Optional[int] = None,
     ) -> "Odometry": ...
     def track(
         self, left: npt.NDArray[np.uint8], right: npt.NDArray[np.uint8], timestamp: float
@@ -196,7 +196,7 @@ class Odometry:
         refine: bool = True,
         min_inliers: Optional[int] = None,
         seed: int = 0,
-        window: int = 0,
+        window: Optional[int] = None,
     ) -> "Odometry":
         """An engine for an RGB-D camera; frames go to ``track_rgbd``."""
     def track_rgbd(
@@ -242,7 +242,7 @@ def odometry(
     disparity_correction: Optional[Tuple[float, float]] = None,
     min_inliers: Optional[int] = None,
     seed: int = 0,
-    window: int = 0,
+    window: Optional[int] = None,
 ) -> OdometryRun:
     """Runs a whole KITTI, Karlsruhe or EuRoC sequence directory, as ``swarmpose odometry``."""
 
