@@ -188,6 +188,8 @@ struct Scratch {
     gradient: Vec<Vector6<f64>>,
     /// `Σ w r²` of the last build (Huber-weighted squared whitened residuals).
     chi2: f64,
+    /// The robust cost `Σ ρ` at the last build's linearisation point.
+    cost: f64,
     /// The reduced system's pose-by-calibration blocks `S_ξc` (points eliminated), one
     /// per pose variable: how the calibration terms pull on each pose.
     pose_calibration: Vec<Matrix6xK>,
@@ -221,6 +223,7 @@ fn build(
     sc.gradient.clear();
     sc.gradient.resize(m, Vector6::zeros());
     sc.chi2 = 0.0;
+    sc.cost = 0.0;
     sc.pose_calibration.clear();
     sc.pose_calibration.resize(m, Matrix6xK::zeros());
     // Variable of keyframe slot `i`: slot 0 is fixed.
@@ -234,8 +237,9 @@ fn build(
         for (slot, z) in &t.obs {
             let j = linearize(model, (&sc.rel, n), anchor, *slot, p, z)?;
             let r2 = j.residual.norm_squared();
-            let (w, _) = huber(r2, k);
+            let (w, rho) = huber(r2, k);
             sc.chi2 += w * r2;
+            sc.cost += rho;
             let dpw = j.d_point.transpose() * w;
             hpp += dpw * j.d_point;
             gp += dpw * j.residual;
@@ -338,8 +342,7 @@ pub(crate) fn refine_window(
     tracks.retain(|t| t.point.z >= 0.0 && t.point.iter().all(|v| v.is_finite()));
     let observations = tracks.iter().map(|t| t.obs.len()).sum();
     let mut points: Vec<Vector3<f64>> = tracks.iter().map(|t| t.point).collect();
-    let mut current = cost(model, k, (&sc.rel, n), &tracks, &points);
-    if !current.is_finite() || tracks.is_empty() {
+    if tracks.is_empty() {
         return None;
     }
     let mut trial_rel = Vec::with_capacity(n * n);
@@ -349,7 +352,12 @@ pub(crate) fn refine_window(
     let mut covariance = None;
     'outer: for _ in 0..config.max_iterations {
         iterations += 1;
+        // The cost at the current state comes with its linearisation.
         let (s, g) = build(model, k, &poses, &tracks, &points, &mut sc)?;
+        let current = sc.cost;
+        if !current.is_finite() {
+            return None;
+        }
         if iterations == 1 {
             covariance = newest_covariance(
                 &s,
@@ -392,7 +400,6 @@ pub(crate) fn refine_window(
                 let done = current - c < 1e-6 * current;
                 poses = trial;
                 points.copy_from_slice(&trial_points);
-                current = c;
                 lambda = (lambda * 0.1).max(1e-9);
                 if done {
                     break 'outer;
