@@ -66,26 +66,34 @@ pub fn fast9(
     let offs: [isize; 16] = CIRCLE.map(|(dx, dy)| dy * w as isize + dx);
     let d = img.data;
     let mut candidates: Vec<Corner> = Vec::new();
+    let (x0, n) = (border, w - 2 * border);
+    let mut pass = vec![0u8; n];
     for y in border..h - border {
-        let up = &d[(y - 3) * w..(y - 2) * w];
-        let mid = &d[y * w..(y + 1) * w];
-        let down = &d[(y + 3) * w..(y + 4) * w];
-        for x in border..w - border {
-            // Quick rejection on the compass points 0, 4, 8, 12: an arc of 9 covers two
-            // circularly adjacent ones, both on the arc's side.
-            let c = mid[x];
+        // Quick rejection on the compass points 0, 4, 8, 12: an arc of 9 covers two
+        // circularly adjacent ones, both on the arc's side. Over the whole row first,
+        // on slices of one length (no bounds checks, vectorised).
+        let up = &d[(y - 3) * w + x0..][..n];
+        let down = &d[(y + 3) * w + x0..][..n];
+        let mid = &d[y * w + x0..][..n];
+        let right = &d[y * w + x0 + 3..][..n];
+        let left = &d[y * w + x0 - 3..][..n];
+        let pass = &mut pass[..n];
+        for k in 0..n {
+            let c = mid[k];
             let hi8 = c.saturating_add(threshold);
             let lo8 = c.saturating_sub(threshold);
-            let compass = [up[x], mid[x + 3], down[x], mid[x - 3]];
-            let (mut b4, mut d4) = (0u8, 0u8);
-            for (k, &p) in compass.iter().enumerate() {
-                b4 |= u8::from(p > hi8) << k;
-                d4 |= u8::from(p < lo8) << k;
-            }
-            let adjacent = |m: u8| m & ((m >> 1) | (m << 3)) & 0xf != 0;
-            if !adjacent(b4) && !adjacent(d4) {
-                continue;
-            }
+            let (u, r, dn, l) = (up[k], right[k], down[k], left[k]);
+            let (ub, rb, db, lb) = (u > hi8, r > hi8, dn > hi8, l > hi8);
+            let (ud, rd, dd, ld) = (u < lo8, r < lo8, dn < lo8, l < lo8);
+            let bright = (ub & rb) | (rb & db) | (db & lb) | (lb & ub);
+            let dark = (ud & rd) | (rd & dd) | (dd & ld) | (ld & ud);
+            pass[k] = u8::from(bright | dark);
+        }
+        for (k, _) in pass.iter().enumerate().filter(|(_, p)| **p != 0) {
+            let x = x0 + k;
+            let c = mid[k];
+            let hi8 = c.saturating_add(threshold);
+            let lo8 = c.saturating_sub(threshold);
             let i = y * w + x;
             let mut ring = [0u8; 16];
             let (mut bright, mut dark) = (0u32, 0u32);
