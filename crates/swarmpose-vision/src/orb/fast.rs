@@ -69,24 +69,56 @@ pub fn fast9(
     let (x0, n) = (border, w - 2 * border);
     let mut pass = vec![0u8; n];
     for y in border..h - border {
-        // Quick rejection on the compass points 0, 4, 8, 12: an arc of 9 covers two
-        // circularly adjacent ones, both on the arc's side. Over the whole row first,
-        // on slices of one length (no bounds checks, vectorised).
-        let up = &d[(y - 3) * w + x0..][..n];
-        let down = &d[(y + 3) * w + x0..][..n];
-        let mid = &d[y * w + x0..][..n];
-        let right = &d[y * w + x0 + 3..][..n];
-        let left = &d[y * w + x0 - 3..][..n];
+        // Quick rejection on the 8 even circle points (every other one, clockwise from
+        // the top): an arc of 9 of the 16 covers 4 or 5 consecutive even points, all on
+        // the arc's side. Over the whole row first, on slices of one length (no bounds
+        // checks, vectorised).
+        let row = |dy: isize, dx: isize| {
+            let start = (y as isize + dy) as usize * w + (x0 as isize + dx) as usize;
+            &d[start..][..n]
+        };
+        let (p0, p2, p4, p6) = (row(-3, 0), row(-2, 2), row(0, 3), row(2, 2));
+        let (p8, p10, p12, p14) = (row(3, 0), row(2, -2), row(0, -3), row(-2, -2));
+        let mid = row(0, 0);
         let pass = &mut pass[..n];
         for k in 0..n {
             let c = mid[k];
             let hi8 = c.saturating_add(threshold);
             let lo8 = c.saturating_sub(threshold);
-            let (u, r, dn, l) = (up[k], right[k], down[k], left[k]);
-            let (ub, rb, db, lb) = (u > hi8, r > hi8, dn > hi8, l > hi8);
-            let (ud, rd, dd, ld) = (u < lo8, r < lo8, dn < lo8, l < lo8);
-            let bright = (ub & rb) | (rb & db) | (db & lb) | (lb & ub);
-            let dark = (ud & rd) | (rd & dd) | (dd & ld) | (ld & ud);
+            let (a0, a1, a2, a3) = (p0[k], p2[k], p4[k], p6[k]);
+            let (a4, a5, a6, a7) = (p8[k], p10[k], p12[k], p14[k]);
+            let run4 = |m0: bool, m1, m2, m3, m4, m5, m6, m7| {
+                let (m01, m23, m45, m67) = (m0 & m1, m2 & m3, m4 & m5, m6 & m7);
+                let (m12, m34, m56, m70) = (m1 & m2, m3 & m4, m5 & m6, m7 & m0);
+                (m01 & m23)
+                    | (m12 & m34)
+                    | (m23 & m45)
+                    | (m34 & m56)
+                    | (m45 & m67)
+                    | (m56 & m70)
+                    | (m67 & m01)
+                    | (m70 & m12)
+            };
+            let bright = run4(
+                a0 > hi8,
+                a1 > hi8,
+                a2 > hi8,
+                a3 > hi8,
+                a4 > hi8,
+                a5 > hi8,
+                a6 > hi8,
+                a7 > hi8,
+            );
+            let dark = run4(
+                a0 < lo8,
+                a1 < lo8,
+                a2 < lo8,
+                a3 < lo8,
+                a4 < lo8,
+                a5 < lo8,
+                a6 < lo8,
+                a7 < lo8,
+            );
             pass[k] = u8::from(bright | dark);
         }
         for (k, _) in pass.iter().enumerate().filter(|(_, p)| **p != 0) {
@@ -206,6 +238,78 @@ mod tests {
         assert!(!has_run9(0b1111_1111));
         // Wrapping run: bits 12..16 and 0..4.
         assert!(has_run9(0xf00f | 0x0800));
+    }
+
+    /// FAST-9 by its definition at every pixel (no quick rejection), then the same
+    /// non-maximum suppression.
+    fn fast9_by_definition(img: GrayView<'_>, t: u8, border: usize) -> Vec<Corner> {
+        let (w, h) = (img.width, img.height);
+        let mut scores = vec![0u16; w * h];
+        for y in border..h - border {
+            for x in border..w - border {
+                let c = img.data[y * w + x];
+                let (hi, lo) = (c.saturating_add(t), c.saturating_sub(t));
+                let ring = CIRCLE.map(|(dx, dy)| {
+                    img.data[(y as isize + dy) as usize * w + (x as isize + dx) as usize]
+                });
+                let (mut b, mut d, mut sb, mut sd) = (0u32, 0u32, 0u32, 0u32);
+                for (k, &p) in ring.iter().enumerate() {
+                    b |= u32::from(p > hi) << k;
+                    d |= u32::from(p < lo) << k;
+                    sb += u32::from(p.saturating_sub(hi));
+                    sd += u32::from(lo.saturating_sub(p));
+                }
+                let s = match (has_run9(b), has_run9(d)) {
+                    (true, true) => sb.max(sd),
+                    (true, false) => sb,
+                    (false, true) => sd,
+                    (false, false) => continue,
+                };
+                scores[y * w + x] = s.clamp(1, u32::from(u16::MAX)) as u16;
+            }
+        }
+        let mut out = Vec::new();
+        for y in border..h - border {
+            for x in border..w - border {
+                let (i, s) = (y * w + x, scores[y * w + x]);
+                let before = [i - w - 1, i - w, i - w + 1, i - 1];
+                let after = [i + 1, i + w - 1, i + w, i + w + 1];
+                if s > 0
+                    && before.iter().all(|&j| scores[j] < s)
+                    && after.iter().all(|&j| scores[j] <= s)
+                {
+                    out.push(Corner { x, y, score: s });
+                }
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn quick_rejection_drops_no_corner() {
+        let (w, h) = (97, 61);
+        let mut st = 11u32;
+        let mut data: Vec<u8> = (0..w * h)
+            .map(|_| {
+                st = st.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                (st >> 24) as u8
+            })
+            .collect();
+        // Smooth half of it, so that there are both noise and blobs.
+        for i in (w..w * h / 2).rev() {
+            data[i] = (u16::from(data[i]) + u16::from(data[i - w])).div_ceil(2) as u8;
+        }
+        let img = GrayView {
+            width: w,
+            height: h,
+            data: &data,
+        };
+        for t in [1, 10, 20, 60, 250] {
+            let (mut s, mut out) = (Vec::new(), Vec::new());
+            fast9(img, t, 3, &mut s, &mut out);
+            assert!(t > 60 || out.len() > 20, "{} corners at {t}", out.len());
+            assert_eq!(out, fast9_by_definition(img, t, 3), "threshold {t}");
+        }
     }
 
     #[test]
