@@ -45,6 +45,31 @@ fn has_run9(mask: u32) -> bool {
     r != 0
 }
 
+/// True when `side` holds for 4 circularly consecutive points of 8.
+#[inline(always)]
+fn run4(p: [u8; 8], side: impl Fn(u8) -> bool) -> bool {
+    let [m0, m1, m2, m3, m4, m5, m6, m7] = [
+        side(p[0]),
+        side(p[1]),
+        side(p[2]),
+        side(p[3]),
+        side(p[4]),
+        side(p[5]),
+        side(p[6]),
+        side(p[7]),
+    ];
+    let (m01, m23, m45, m67) = (m0 & m1, m2 & m3, m4 & m5, m6 & m7);
+    let (m12, m34, m56, m70) = (m1 & m2, m3 & m4, m5 & m6, m7 & m0);
+    (m01 & m23)
+        | (m12 & m34)
+        | (m23 & m45)
+        | (m34 & m56)
+        | (m45 & m67)
+        | (m56 & m70)
+        | (m67 & m01)
+        | (m70 & m12)
+}
+
 /// FAST-9 corners at least `border` pixels (and at least 3) from every edge, after a
 /// 3x3 non-maximum suppression on the score. `scores` is scratch space reused between
 /// calls; corners are appended to `out` in raster order.
@@ -69,56 +94,28 @@ pub fn fast9(
     let (x0, n) = (border, w - 2 * border);
     let mut pass = vec![0u8; n];
     for y in border..h - border {
-        // Quick rejection on the 8 even circle points (every other one, clockwise from
-        // the top): an arc of 9 of the 16 covers 4 or 5 consecutive even points, all on
-        // the arc's side. Over the whole row first, on slices of one length (no bounds
-        // checks, vectorised).
+        // Quick rejection: an arc of 9 of the 16 circle points covers 4 or 5
+        // consecutive even points (every other one, clockwise from the top) and 4 or 5
+        // consecutive odd ones, all on the arc's side. Over the whole row first, on
+        // slices of one length (no bounds checks, vectorised).
         let row = |dy: isize, dx: isize| {
             let start = (y as isize + dy) as usize * w + (x0 as isize + dx) as usize;
             &d[start..][..n]
         };
         let (p0, p2, p4, p6) = (row(-3, 0), row(-2, 2), row(0, 3), row(2, 2));
         let (p8, p10, p12, p14) = (row(3, 0), row(2, -2), row(0, -3), row(-2, -2));
+        let (p1, p3, p5, p7) = (row(-3, 1), row(-1, 3), row(1, 3), row(3, 1));
+        let (p9, p11, p13, p15) = (row(3, -1), row(1, -3), row(-1, -3), row(-3, -1));
         let mid = row(0, 0);
         let pass = &mut pass[..n];
         for k in 0..n {
             let c = mid[k];
             let hi8 = c.saturating_add(threshold);
             let lo8 = c.saturating_sub(threshold);
-            let (a0, a1, a2, a3) = (p0[k], p2[k], p4[k], p6[k]);
-            let (a4, a5, a6, a7) = (p8[k], p10[k], p12[k], p14[k]);
-            let run4 = |m0: bool, m1, m2, m3, m4, m5, m6, m7| {
-                let (m01, m23, m45, m67) = (m0 & m1, m2 & m3, m4 & m5, m6 & m7);
-                let (m12, m34, m56, m70) = (m1 & m2, m3 & m4, m5 & m6, m7 & m0);
-                (m01 & m23)
-                    | (m12 & m34)
-                    | (m23 & m45)
-                    | (m34 & m56)
-                    | (m45 & m67)
-                    | (m56 & m70)
-                    | (m67 & m01)
-                    | (m70 & m12)
-            };
-            let bright = run4(
-                a0 > hi8,
-                a1 > hi8,
-                a2 > hi8,
-                a3 > hi8,
-                a4 > hi8,
-                a5 > hi8,
-                a6 > hi8,
-                a7 > hi8,
-            );
-            let dark = run4(
-                a0 < lo8,
-                a1 < lo8,
-                a2 < lo8,
-                a3 < lo8,
-                a4 < lo8,
-                a5 < lo8,
-                a6 < lo8,
-                a7 < lo8,
-            );
+            let even = [p0[k], p2[k], p4[k], p6[k], p8[k], p10[k], p12[k], p14[k]];
+            let odd = [p1[k], p3[k], p5[k], p7[k], p9[k], p11[k], p13[k], p15[k]];
+            let bright = run4(even, |p| p > hi8) & run4(odd, |p| p > hi8);
+            let dark = run4(even, |p| p < lo8) & run4(odd, |p| p < lo8);
             pass[k] = u8::from(bright | dark);
         }
         for (k, _) in pass.iter().enumerate().filter(|(_, p)| **p != 0) {
