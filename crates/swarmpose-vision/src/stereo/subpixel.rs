@@ -106,8 +106,11 @@ pub fn refine_disparity_lk(
             let lrow = &left.data[yy * left.width..(yy + 1) * left.width];
             let rrow = &right.data[yy * right.width..(yy + 1) * right.width];
             let at = |x: f32| {
-                let i = x as usize;
-                let f = x - i as f32;
+                // Through i32, whose conversions are cheaper: x is in [0, width) (the
+                // check above; a NaN gives 0 either way), so the same integer.
+                let t = x as i32;
+                let f = x - t as f32;
+                let i = t.unsigned_abs() as usize;
                 f32::from(rrow[i]) * (1.0 - f) + f32::from(rrow[i + 1]) * f
             };
             for (xx, &lv) in lrow.iter().enumerate().take(xl + r + 1).skip(xl - r) {
