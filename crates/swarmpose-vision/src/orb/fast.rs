@@ -173,10 +173,13 @@ pub fn harris(img: GrayView<'_>, x: usize, y: usize) -> f32 {
     let d = img.data;
     let (mut sxx, mut syy, mut sxy) = (0f32, 0f32, 0f32);
     for yy in y - 3..=y + 3 {
-        let row = yy * w;
-        for xx in x - 3..=x + 3 {
-            let gx = f32::from(d[row + xx + 1]) - f32::from(d[row + xx - 1]);
-            let gy = f32::from(d[row + w + xx]) - f32::from(d[row - w + xx]);
+        // The window's row with a pixel either side, and the rows above and below.
+        let here = &d[yy * w + x - 4..][..9];
+        let above = &d[(yy - 1) * w + x - 3..][..7];
+        let below = &d[(yy + 1) * w + x - 3..][..7];
+        for k in 0..7 {
+            let gx = f32::from(here[k + 2]) - f32::from(here[k]);
+            let gy = f32::from(below[k]) - f32::from(above[k]);
             sxx += gx * gx;
             syy += gy * gy;
             sxy += gx * gy;
