@@ -80,6 +80,19 @@ impl Reduced {
         self.correction_gradient += corr.transpose() * e * w;
     }
 
+    /// [`Reduced::add_direct`] for the pose blocks only (the correction's unchanged).
+    pub fn add_direct_pose(&mut self, w: f64, pose: &Matrix3x6, e: &Vector3<f64>) {
+        self.pose_pose += pose.transpose() * pose * w;
+        self.pose_gradient += pose.transpose() * e * w;
+    }
+
+    /// [`Reduced::eliminate`] for the pose blocks only (the correction's unchanged).
+    pub fn eliminate_pose(&mut self, b: &PointBlocks) {
+        let tp = b.pose.transpose() * b.pp_inv;
+        self.pose_pose -= tp * b.pose;
+        self.pose_gradient -= tp * b.gradient;
+    }
+
     /// Eliminates one point: subtracts `H_xp H_pp⁻¹ H_py` and `H_xp H_pp⁻¹ g_p`.
     pub fn eliminate(&mut self, b: &PointBlocks) {
         let tp = b.pose.transpose() * b.pp_inv;

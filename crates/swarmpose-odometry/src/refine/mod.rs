@@ -25,7 +25,7 @@ use nalgebra::{
 };
 
 use evidence::{PointBlocks, Reduced};
-use model::{Linearized, StereoModel, StereoObservation};
+use model::{Linearized, Matrix3xK, Parts, StereoModel, StereoObservation};
 
 /// Settings of the refinement.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -158,17 +158,19 @@ pub(crate) fn unit_quaternion(rot: &Matrix3<f64>) -> UnitQuaternion<f64> {
     UnitQuaternion::new_normalize(q.into_inner())
 }
 
-/// The two measurements of one point, linearised, or `None` if B cannot see it.
+/// The two measurements of one point, linearised (the Jacobians of `parts`), or `None`
+/// if B cannot see it.
 fn linearize(
     model: &StereoModel,
     pose: &Pose,
     p: &Vector3<f64>,
     a: &StereoObservation,
     b: &StereoObservation,
+    parts: Parts,
 ) -> Option<(Linearized, Linearized)> {
     Some((
-        model.in_reference(p, a),
-        model.in_current(&pose.rot, &pose.trans, p, b)?,
+        model.in_reference_parts(p, a, parts),
+        model.in_current_parts(&pose.rot, &pose.trans, p, b, parts)?,
     ))
 }
 
@@ -181,7 +183,7 @@ fn fit_point(
     b: &StereoObservation,
 ) -> Option<(Vector3<f64>, f64)> {
     for _ in 0..2 {
-        let (la, lb) = linearize(model, pose, &p, a, b)?;
+        let (la, lb) = linearize(model, pose, &p, a, b, Parts::Point)?;
         let h = la.d_point.transpose() * la.d_point + lb.d_point.transpose() * lb.d_point;
         let g = la.d_point.transpose() * la.residual + lb.d_point.transpose() * lb.residual;
         p -= h.try_inverse()? * g;
@@ -220,19 +222,30 @@ impl Problem<'_> {
     }
 
     /// The reduced system at `pose`, with each point's blocks for back-substitution;
-    /// `None` if a point left B's view or a block is singular.
+    /// `None` if a point left B's view or a block is singular. With `parts` other than
+    /// [`Parts::All`] only the pose blocks are computed (the correction's stay zero),
+    /// the same bit for bit.
     fn build(
         &self,
         pose: &Pose,
         points: &[Vector3<f64>],
         folds: Option<&[u8]>,
         blocks: &mut Vec<PointBlocks>,
+        parts: Parts,
     ) -> Option<[Reduced; 2]> {
         let k = self.config.huber_k;
         let mut reduced = [Reduced::default(); 2];
         blocks.clear();
+        let all = parts == Parts::All;
         for (&i, p) in self.active.iter().zip(points) {
-            let (la, lb) = linearize(self.model, pose, p, &self.reference[i], &self.current[i])?;
+            let (la, lb) = linearize(
+                self.model,
+                pose,
+                p,
+                &self.reference[i],
+                &self.current[i],
+                parts,
+            )?;
             let wa = huber_weight(la.residual.norm_squared(), k);
             let wb = huber_weight(lb.residual.norm_squared(), k);
             let hpp =
@@ -240,16 +253,26 @@ impl Problem<'_> {
             let b = PointBlocks {
                 pp_inv: hpp.try_inverse()?,
                 pose: lb.d_point.transpose() * lb.d_pose * wb,
-                correction: la.d_point.transpose() * la.d_correction * wa
-                    + lb.d_point.transpose() * lb.d_correction * wb,
+                correction: if all {
+                    la.d_point.transpose() * la.d_correction * wa
+                        + lb.d_point.transpose() * lb.d_correction * wb
+                } else {
+                    Matrix3xK::zeros()
+                },
                 gradient: la.d_point.transpose() * la.residual * wa
                     + lb.d_point.transpose() * lb.residual * wb,
             };
             let fold = folds.map_or(0, |f| usize::from(f[i] & 1));
             let r = &mut reduced[fold];
-            r.add_direct(wa, &la.d_pose, &la.d_correction, &la.residual);
-            r.add_direct(wb, &lb.d_pose, &lb.d_correction, &lb.residual);
-            r.eliminate(&b);
+            if all {
+                r.add_direct(wa, &la.d_pose, &la.d_correction, &la.residual);
+                r.add_direct(wb, &lb.d_pose, &lb.d_correction, &lb.residual);
+                r.eliminate(&b);
+            } else {
+                r.add_direct_pose(wa, &la.d_pose, &la.residual);
+                r.add_direct_pose(wb, &lb.d_pose, &lb.residual);
+                r.eliminate_pose(&b);
+            }
             blocks.push(b);
         }
         Some(reduced)
@@ -263,7 +286,7 @@ impl Problem<'_> {
         let mut trial = points.to_vec();
         for it in 0..self.config.max_iterations {
             let [r, _] = self
-                .build(pose, points, None, &mut blocks)
+                .build(pose, points, None, &mut blocks, Parts::PointPose)
                 .ok_or(RefineError::Singular)?;
             let (s, g) = (r.pose_pose, r.pose_gradient);
             let mut improved = false;
@@ -400,7 +423,7 @@ pub fn refine(
     }
     let mut blocks = Vec::with_capacity(points.len());
     let reduced = problem
-        .build(&pose, &points, folds, &mut blocks)
+        .build(&pose, &points, folds, &mut blocks, Parts::All)
         .ok_or(RefineError::Singular)?;
     let mut both = reduced[0];
     both += &reduced[1];
@@ -412,7 +435,7 @@ pub fn refine(
         .iter()
         .zip(&points)
         .filter_map(|(&i, p)| {
-            let (la, lb) = linearize(model, &pose, p, &reference[i], &current[i])?;
+            let (la, lb) = linearize(model, &pose, p, &reference[i], &current[i], Parts::Point)?;
             let k = config.huber_k;
             let (sa, sb) = (la.residual.norm_squared(), lb.residual.norm_squared());
             Some(huber_weight(sa, k) * sa + huber_weight(sb, k) * sb)

@@ -73,6 +73,18 @@ pub const FOCAL_TERM: usize = CORRECTION_TERMS;
 /// 3xK matrix, K the number of calibration terms.
 pub type Matrix3xK = SMatrix<f64, 3, CALIBRATION_TERMS>;
 
+/// Which Jacobians a linearisation computes (the residual and `∂e/∂p` always): the
+/// refinement's inner loops need fewer than the evidence.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Parts {
+    /// The point's only: fitting a point to a fixed pose.
+    Point,
+    /// The point's and the pose's: Levenberg-Marquardt on the pose.
+    PointPose,
+    /// Every Jacobian, with the calibration terms.
+    All,
+}
+
 /// Whitened residual and Jacobians of one measurement: `e = (z_pred − z) / σ`.
 #[derive(Debug, Clone, Copy)]
 pub struct Linearized {
@@ -192,6 +204,18 @@ impl StereoModel {
     /// The measurement in frame A of the point `p`: whitened residual and Jacobians.
     #[must_use]
     pub fn in_reference(&self, p: &Vector3<f64>, z: &StereoObservation) -> Linearized {
+        self.in_reference_parts(p, z, Parts::All)
+    }
+
+    /// [`StereoModel::in_reference`] computing only the Jacobians of `parts` (the others
+    /// zero); those computed are bit for bit the same.
+    #[inline]
+    pub(crate) fn in_reference_parts(
+        &self,
+        p: &Vector3<f64>,
+        z: &StereoObservation,
+        parts: Parts,
+    ) -> Linearized {
         let r = &self.rig;
         let c = &self.correction;
         let b = r.baseline_m;
@@ -205,12 +229,16 @@ impl StereoModel {
         );
         let w = self.whiten();
         let d_point = Matrix3::new(r.fx, 0.0, 0.0, 0.0, r.fy, 0.0, -sx, -sy, self.fb() + sx * b);
-        let d_correction = self.calibration_columns(x, y, xr, rho);
+        let d_correction = if parts == Parts::All {
+            Matrix3::from_diagonal(&w) * self.calibration_columns(x, y, xr, rho)
+        } else {
+            Matrix3xK::zeros()
+        };
         Linearized {
             residual: (pred - Vector3::new(z.u, z.v, z.d)).component_mul(&w),
             d_point: Matrix3::from_diagonal(&w) * d_point,
             d_pose: Matrix3x6::zeros(),
-            d_correction: Matrix3::from_diagonal(&w) * d_correction,
+            d_correction,
             d_h: Matrix3::zeros(),
         }
     }
@@ -224,6 +252,20 @@ impl StereoModel {
         trans: &Vector3<f64>,
         p: &Vector3<f64>,
         z: &StereoObservation,
+    ) -> Option<Linearized> {
+        self.in_current_parts(rot, trans, p, z, Parts::All)
+    }
+
+    /// [`StereoModel::in_current`] computing only the Jacobians of `parts` (the others
+    /// zero); those computed are bit for bit the same.
+    #[inline]
+    pub(crate) fn in_current_parts(
+        &self,
+        rot: &Matrix3<f64>,
+        trans: &Vector3<f64>,
+        p: &Vector3<f64>,
+        z: &StereoObservation,
+        parts: Parts,
     ) -> Option<Linearized> {
         let r = &self.rig;
         let c = &self.correction;
@@ -263,21 +305,30 @@ impl StereoModel {
         let mut d_point = dh * dh_dp;
         // The direct dependence of d on ρ, through fx b ρ / h_z and x_r.
         d_point[(2, 2)] += self.fb() * iz + sx * b * iz;
-        let mut dh_dxi = Matrix3x6::zeros();
-        dh_dxi
-            .fixed_view_mut::<3, 3>(0, 0)
-            .copy_from(&(Matrix3::identity() * rho));
-        dh_dxi
-            .fixed_view_mut::<3, 3>(0, 3)
-            .copy_from(&(-h.cross_matrix()));
-        let d_correction = self.calibration_columns(xn, yn, xr, rho * iz);
         let w = Matrix3::from_diagonal(&self.whiten());
+        let d_pose = if parts == Parts::Point {
+            Matrix3x6::zeros()
+        } else {
+            let mut dh_dxi = Matrix3x6::zeros();
+            dh_dxi
+                .fixed_view_mut::<3, 3>(0, 0)
+                .copy_from(&(Matrix3::identity() * rho));
+            dh_dxi
+                .fixed_view_mut::<3, 3>(0, 3)
+                .copy_from(&(-h.cross_matrix()));
+            w * dh * dh_dxi
+        };
+        let (d_correction, d_h) = if parts == Parts::All {
+            (w * self.calibration_columns(xn, yn, xr, rho * iz), w * dh)
+        } else {
+            (Matrix3xK::zeros(), Matrix3::zeros())
+        };
         Some(Linearized {
             residual: w * (pred - Vector3::new(z.u, z.v, z.d)),
             d_point: w * d_point,
-            d_pose: w * dh * dh_dxi,
-            d_correction: w * d_correction,
-            d_h: w * dh,
+            d_pose,
+            d_correction,
+            d_h,
         })
     }
 }

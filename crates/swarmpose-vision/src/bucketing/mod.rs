@@ -42,10 +42,13 @@ pub fn bucket_indices(
         let cy = ((k.y.max(0.0) as usize) / ch).min(rows - 1);
         cy * cols + cx
     };
+    // Each keypoint's cell once (not in every comparison). The order is total (ties by
+    // index), so an unstable sort gives the same order.
+    let cells: Vec<usize> = keypoints.iter().map(cell_of).collect();
     let mut order: Vec<usize> = (0..keypoints.len()).collect();
-    order.sort_by(|&a, &b| {
-        cell_of(&keypoints[a])
-            .cmp(&cell_of(&keypoints[b]))
+    order.sort_unstable_by(|&a, &b| {
+        cells[a]
+            .cmp(&cells[b])
             .then(keypoints[b].response.total_cmp(&keypoints[a].response))
             .then(a.cmp(&b))
     });
@@ -53,7 +56,7 @@ pub fn bucket_indices(
     let mut current = usize::MAX;
     let mut count = 0;
     for i in order {
-        let c = cell_of(&keypoints[i]);
+        let c = cells[i];
         if c != current {
             current = c;
             count = 0;

@@ -240,28 +240,53 @@ pub fn blur5(img: GrayView<'_>, tmp: &mut Vec<u16>, out: &mut Vec<u8>) {
         return;
     }
     let d = img.data;
-    for y in 0..h {
-        let row = &d[y * w..(y + 1) * w];
-        let trow = &mut tmp[y * w..(y + 1) * w];
-        for (x, t) in trow.iter_mut().enumerate() {
-            let at = |dx: isize| -> u16 {
-                let xx = (x as isize + dx).clamp(0, w as isize - 1) as usize;
-                u16::from(row[xx])
-            };
-            *t = at(-2) + 4 * at(-1) + 6 * at(0) + 4 * at(1) + at(2);
+    for (row, trow) in d.chunks_exact(w).zip(tmp.chunks_exact_mut(w)) {
+        let at = |x: usize, dx: isize| -> u16 {
+            let xx = (x as isize + dx).clamp(0, w as isize - 1) as usize;
+            u16::from(row[xx])
+        };
+        let edge = |x: usize| at(x, -2) + 4 * at(x, -1) + 6 * at(x, 0) + 4 * at(x, 1) + at(x, 2);
+        if w < 5 {
+            for (x, t) in trow.iter_mut().enumerate() {
+                *t = edge(x);
+            }
+            continue;
+        }
+        // Clamped at the two pixels of each end; the interior on shifted slices of one
+        // length (no clamps, no bounds checks).
+        for x in [0, 1, w - 2, w - 1] {
+            trow[x] = edge(x);
+        }
+        let n = w - 4;
+        let (r0, r1, r2, r3, r4) = (
+            &row[..n],
+            &row[1..][..n],
+            &row[2..][..n],
+            &row[3..][..n],
+            &row[4..][..n],
+        );
+        let inner = &mut trow[2..][..n];
+        for x in 0..n {
+            inner[x] = u16::from(r0[x])
+                + 4 * u16::from(r1[x])
+                + 6 * u16::from(r2[x])
+                + 4 * u16::from(r3[x])
+                + u16::from(r4[x]);
         }
     }
-    for y in 0..h {
-        let r = |dy: isize| (y as isize + dy).clamp(0, h as isize - 1) as usize * w;
+    for (y, orow) in out.chunks_exact_mut(w).enumerate() {
+        let r = |dy: isize| {
+            let yy = (y as isize + dy).clamp(0, h as isize - 1) as usize;
+            &tmp[yy * w..][..w]
+        };
         let (a, b, c, e, f) = (r(-2), r(-1), r(0), r(1), r(2));
-        let orow = &mut out[y * w..(y + 1) * w];
-        for (x, o) in orow.iter_mut().enumerate() {
-            let s = u32::from(tmp[a + x])
-                + 4 * u32::from(tmp[b + x])
-                + 6 * u32::from(tmp[c + x])
-                + 4 * u32::from(tmp[e + x])
-                + u32::from(tmp[f + x]);
-            *o = ((s + 128) >> 8) as u8;
+        for x in 0..w {
+            let s = u32::from(a[x])
+                + 4 * u32::from(b[x])
+                + 6 * u32::from(c[x])
+                + 4 * u32::from(e[x])
+                + u32::from(f[x]);
+            orow[x] = ((s + 128) >> 8) as u8;
         }
     }
 }
@@ -280,6 +305,38 @@ mod tests {
         let (mut t, mut o) = (Vec::new(), Vec::new());
         blur5(flat.view(), &mut t, &mut o);
         assert!(o.iter().all(|&v| v == 77));
+    }
+
+    #[test]
+    fn blur_matches_the_clamped_definition() {
+        for (w, h) in [(1, 1), (3, 2), (4, 7), (5, 5), (13, 9)] {
+            let mut s = 7u32;
+            let data: Vec<u8> = (0..w * h)
+                .map(|_| {
+                    s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                    (s >> 24) as u8
+                })
+                .collect();
+            let at = |x: isize, y: isize| {
+                let (x, y) = (x.clamp(0, w as isize - 1), y.clamp(0, h as isize - 1));
+                u32::from(data[y as usize * w + x as usize])
+            };
+            let k = [1, 4, 6, 4, 1];
+            let img = GrayImage::from_raw(w, h, data.clone()).expect("size");
+            let (mut t, mut o) = (Vec::new(), Vec::new());
+            blur5(img.view(), &mut t, &mut o);
+            for y in 0..h as isize {
+                for x in 0..w as isize {
+                    let mut sum = 0;
+                    for (j, kj) in k.iter().enumerate() {
+                        for (i, ki) in k.iter().enumerate() {
+                            sum += kj * ki * at(x + i as isize - 2, y + j as isize - 2);
+                        }
+                    }
+                    assert_eq!(u32::from(o[y as usize * w + x as usize]), (sum + 128) >> 8);
+                }
+            }
+        }
     }
 
     #[test]

@@ -45,6 +45,31 @@ fn has_run9(mask: u32) -> bool {
     r != 0
 }
 
+/// True when `side` holds for 4 circularly consecutive points of 8.
+#[inline(always)]
+fn run4(p: [u8; 8], side: impl Fn(u8) -> bool) -> bool {
+    let [m0, m1, m2, m3, m4, m5, m6, m7] = [
+        side(p[0]),
+        side(p[1]),
+        side(p[2]),
+        side(p[3]),
+        side(p[4]),
+        side(p[5]),
+        side(p[6]),
+        side(p[7]),
+    ];
+    let (m01, m23, m45, m67) = (m0 & m1, m2 & m3, m4 & m5, m6 & m7);
+    let (m12, m34, m56, m70) = (m1 & m2, m3 & m4, m5 & m6, m7 & m0);
+    (m01 & m23)
+        | (m12 & m34)
+        | (m23 & m45)
+        | (m34 & m56)
+        | (m45 & m67)
+        | (m56 & m70)
+        | (m67 & m01)
+        | (m70 & m12)
+}
+
 /// FAST-9 corners at least `border` pixels (and at least 3) from every edge, after a
 /// 3x3 non-maximum suppression on the score. `scores` is scratch space reused between
 /// calls; corners are appended to `out` in raster order.
@@ -66,26 +91,38 @@ pub fn fast9(
     let offs: [isize; 16] = CIRCLE.map(|(dx, dy)| dy * w as isize + dx);
     let d = img.data;
     let mut candidates: Vec<Corner> = Vec::new();
+    let (x0, n) = (border, w - 2 * border);
+    let mut pass = vec![0u8; n];
     for y in border..h - border {
-        let up = &d[(y - 3) * w..(y - 2) * w];
-        let mid = &d[y * w..(y + 1) * w];
-        let down = &d[(y + 3) * w..(y + 4) * w];
-        for x in border..w - border {
-            // Quick rejection on the compass points 0, 4, 8, 12: an arc of 9 covers two
-            // circularly adjacent ones, both on the arc's side.
-            let c = mid[x];
+        // Quick rejection: an arc of 9 of the 16 circle points covers 4 or 5
+        // consecutive even points (every other one, clockwise from the top) and 4 or 5
+        // consecutive odd ones, all on the arc's side. Over the whole row first, on
+        // slices of one length (no bounds checks, vectorised).
+        let row = |dy: isize, dx: isize| {
+            let start = (y as isize + dy) as usize * w + (x0 as isize + dx) as usize;
+            &d[start..][..n]
+        };
+        let (p0, p2, p4, p6) = (row(-3, 0), row(-2, 2), row(0, 3), row(2, 2));
+        let (p8, p10, p12, p14) = (row(3, 0), row(2, -2), row(0, -3), row(-2, -2));
+        let (p1, p3, p5, p7) = (row(-3, 1), row(-1, 3), row(1, 3), row(3, 1));
+        let (p9, p11, p13, p15) = (row(3, -1), row(1, -3), row(-1, -3), row(-3, -1));
+        let mid = row(0, 0);
+        let pass = &mut pass[..n];
+        for k in 0..n {
+            let c = mid[k];
             let hi8 = c.saturating_add(threshold);
             let lo8 = c.saturating_sub(threshold);
-            let compass = [up[x], mid[x + 3], down[x], mid[x - 3]];
-            let (mut b4, mut d4) = (0u8, 0u8);
-            for (k, &p) in compass.iter().enumerate() {
-                b4 |= u8::from(p > hi8) << k;
-                d4 |= u8::from(p < lo8) << k;
-            }
-            let adjacent = |m: u8| m & ((m >> 1) | (m << 3)) & 0xf != 0;
-            if !adjacent(b4) && !adjacent(d4) {
-                continue;
-            }
+            let even = [p0[k], p2[k], p4[k], p6[k], p8[k], p10[k], p12[k], p14[k]];
+            let odd = [p1[k], p3[k], p5[k], p7[k], p9[k], p11[k], p13[k], p15[k]];
+            let bright = run4(even, |p| p > hi8) & run4(odd, |p| p > hi8);
+            let dark = run4(even, |p| p < lo8) & run4(odd, |p| p < lo8);
+            pass[k] = u8::from(bright | dark);
+        }
+        for (k, _) in pass.iter().enumerate().filter(|(_, p)| **p != 0) {
+            let x = x0 + k;
+            let c = mid[k];
+            let hi8 = c.saturating_add(threshold);
+            let lo8 = c.saturating_sub(threshold);
             let i = y * w + x;
             let mut ring = [0u8; 16];
             let (mut bright, mut dark) = (0u32, 0u32);
@@ -136,10 +173,13 @@ pub fn harris(img: GrayView<'_>, x: usize, y: usize) -> f32 {
     let d = img.data;
     let (mut sxx, mut syy, mut sxy) = (0f32, 0f32, 0f32);
     for yy in y - 3..=y + 3 {
-        let row = yy * w;
-        for xx in x - 3..=x + 3 {
-            let gx = f32::from(d[row + xx + 1]) - f32::from(d[row + xx - 1]);
-            let gy = f32::from(d[row + w + xx]) - f32::from(d[row - w + xx]);
+        // The window's row with a pixel either side, and the rows above and below.
+        let here = &d[yy * w + x - 4..][..9];
+        let above = &d[(yy - 1) * w + x - 3..][..7];
+        let below = &d[(yy + 1) * w + x - 3..][..7];
+        for k in 0..7 {
+            let gx = f32::from(here[k + 2]) - f32::from(here[k]);
+            let gy = f32::from(below[k]) - f32::from(above[k]);
             sxx += gx * gx;
             syy += gy * gy;
             sxy += gx * gy;
@@ -198,6 +238,78 @@ mod tests {
         assert!(!has_run9(0b1111_1111));
         // Wrapping run: bits 12..16 and 0..4.
         assert!(has_run9(0xf00f | 0x0800));
+    }
+
+    /// FAST-9 by its definition at every pixel (no quick rejection), then the same
+    /// non-maximum suppression.
+    fn fast9_by_definition(img: GrayView<'_>, t: u8, border: usize) -> Vec<Corner> {
+        let (w, h) = (img.width, img.height);
+        let mut scores = vec![0u16; w * h];
+        for y in border..h - border {
+            for x in border..w - border {
+                let c = img.data[y * w + x];
+                let (hi, lo) = (c.saturating_add(t), c.saturating_sub(t));
+                let ring = CIRCLE.map(|(dx, dy)| {
+                    img.data[(y as isize + dy) as usize * w + (x as isize + dx) as usize]
+                });
+                let (mut b, mut d, mut sb, mut sd) = (0u32, 0u32, 0u32, 0u32);
+                for (k, &p) in ring.iter().enumerate() {
+                    b |= u32::from(p > hi) << k;
+                    d |= u32::from(p < lo) << k;
+                    sb += u32::from(p.saturating_sub(hi));
+                    sd += u32::from(lo.saturating_sub(p));
+                }
+                let s = match (has_run9(b), has_run9(d)) {
+                    (true, true) => sb.max(sd),
+                    (true, false) => sb,
+                    (false, true) => sd,
+                    (false, false) => continue,
+                };
+                scores[y * w + x] = s.clamp(1, u32::from(u16::MAX)) as u16;
+            }
+        }
+        let mut out = Vec::new();
+        for y in border..h - border {
+            for x in border..w - border {
+                let (i, s) = (y * w + x, scores[y * w + x]);
+                let before = [i - w - 1, i - w, i - w + 1, i - 1];
+                let after = [i + 1, i + w - 1, i + w, i + w + 1];
+                if s > 0
+                    && before.iter().all(|&j| scores[j] < s)
+                    && after.iter().all(|&j| scores[j] <= s)
+                {
+                    out.push(Corner { x, y, score: s });
+                }
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn quick_rejection_drops_no_corner() {
+        let (w, h) = (97, 61);
+        let mut st = 11u32;
+        let mut data: Vec<u8> = (0..w * h)
+            .map(|_| {
+                st = st.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                (st >> 24) as u8
+            })
+            .collect();
+        // Smooth half of it, so that there are both noise and blobs.
+        for i in (w..w * h / 2).rev() {
+            data[i] = (u16::from(data[i]) + u16::from(data[i - w])).div_ceil(2) as u8;
+        }
+        let img = GrayView {
+            width: w,
+            height: h,
+            data: &data,
+        };
+        for t in [1, 10, 20, 60, 250] {
+            let (mut s, mut out) = (Vec::new(), Vec::new());
+            fast9(img, t, 3, &mut s, &mut out);
+            assert!(t > 60 || out.len() > 20, "{} corners at {t}", out.len());
+            assert_eq!(out, fast9_by_definition(img, t, 3), "threshold {t}");
+        }
     }
 
     #[test]

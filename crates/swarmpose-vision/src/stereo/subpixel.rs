@@ -106,14 +106,38 @@ pub fn refine_disparity_lk(
             let lrow = &left.data[yy * left.width..(yy + 1) * left.width];
             let rrow = &right.data[yy * right.width..(yy + 1) * right.width];
             let at = |x: f32| {
-                let i = x as usize;
-                let f = x - i as f32;
+                // Through i32, whose conversions are cheaper: x is in [0, width) (the
+                // check above; a NaN gives 0 either way), so the same integer.
+                let t = x as i32;
+                let f = x - t as f32;
+                let i = t.unsigned_abs() as usize;
                 f32::from(rrow[i]) * (1.0 - f) + f32::from(rrow[i + 1]) * f
             };
             for (xx, &lv) in lrow.iter().enumerate().take(xl + r + 1).skip(xl - r) {
                 let xr = xx as f32 - d;
-                let e = f32::from(lv) - at(xr);
-                let g = 0.5 * (at(xr + 1.0) - at(xr - 1.0));
+                let (xp, xm) = (xr + 1.0, xr - 1.0);
+                let t = xr as i32;
+                // When xr ± 1 are exact (the differences below are exact for xr ≥ 1,
+                // by Sterbenz), the three samples share the pixel pair and the fraction
+                // (x − trunc(x) is exact): the same values from 4 pixels and one
+                // conversion.
+                let (c, p, m) = if t >= 1 && xp - xr == 1.0 && xr - xm == 1.0 {
+                    let f = xr - t as f32;
+                    let i = t.unsigned_abs() as usize;
+                    let v = &rrow[i - 1..=i + 2];
+                    let (v0, v1, v2, v3) = (
+                        f32::from(v[0]),
+                        f32::from(v[1]),
+                        f32::from(v[2]),
+                        f32::from(v[3]),
+                    );
+                    let g = 1.0 - f;
+                    (v1 * g + v2 * f, v2 * g + v3 * f, v0 * g + v1 * f)
+                } else {
+                    (at(xr), at(xp), at(xm))
+                };
+                let e = f32::from(lv) - c;
+                let g = 0.5 * (p - m);
                 eg += e * g;
                 gg += g * g;
             }
@@ -231,6 +255,107 @@ mod tests {
             let d = refine_disparity_lk(l, r, 40, 10, p, 3, 8).expect("lk");
             assert!((d - true_d).abs() < 0.05, "{true_d}: parabola {p}, lk {d}");
         }
+    }
+
+    /// [`refine_disparity_lk`] with every sample taken on its own, as defined.
+    fn lk_by_definition(
+        left: GrayView<'_>,
+        right: GrayView<'_>,
+        xl: usize,
+        y: usize,
+        d0: f32,
+        r: usize,
+    ) -> Option<f32> {
+        let mut d = d0;
+        for _ in 0..8 {
+            let x0 = xl as f32 - d - r as f32 - 1.0;
+            let x1 = xl as f32 - d + r as f32 + 1.0;
+            if x0 < 0.0 || x1 + 1.0 >= right.width as f32 {
+                return None;
+            }
+            let (mut eg, mut gg) = (0f32, 0f32);
+            for yy in y - r..=y + r {
+                let rrow = &right.data[yy * right.width..(yy + 1) * right.width];
+                let at = |x: f32| {
+                    let i = x as usize;
+                    let f = x - i as f32;
+                    f32::from(rrow[i]) * (1.0 - f) + f32::from(rrow[i + 1]) * f
+                };
+                for xx in xl - r..=xl + r {
+                    let xr = xx as f32 - d;
+                    let e = f32::from(left.data[yy * left.width + xx]) - at(xr);
+                    let g = 0.5 * (at(xr + 1.0) - at(xr - 1.0));
+                    eg += e * g;
+                    gg += g * g;
+                }
+            }
+            if gg < 1e-3 {
+                return None;
+            }
+            let step = -eg / gg;
+            d += step;
+            if (d - d0).abs() > 1.0 {
+                return None;
+            }
+            if step.abs() < 1e-3 {
+                break;
+            }
+        }
+        Some(d)
+    }
+
+    /// Bit for bit the definition, also where `x − d ± 1` round (next to powers of two).
+    #[test]
+    fn gauss_newton_disparity_is_the_definition() {
+        let (w, h) = (1100usize, 9usize);
+        let mut s = 3u32;
+        let mut noise = || {
+            s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            (s >> 28) as f32
+        };
+        let f = |x: f32| 128.0 + 60.0 * (x * 0.45).sin() + 30.0 * (x * 0.17 + 1.0).cos();
+        let left: Vec<u8> = (0..w * h)
+            .map(|i| (f((i % w) as f32) + noise()).round() as u8)
+            .collect();
+        let right: Vec<u8> = (0..w * h)
+            .map(|i| (f((i % w) as f32 + 7.3) + noise()).round() as u8)
+            .collect();
+        let (l, r) = (
+            GrayView {
+                width: w,
+                height: h,
+                data: &left,
+            },
+            GrayView {
+                width: w,
+                height: h,
+                data: &right,
+            },
+        );
+        let mut found = 0;
+        for xl in (5..w - 5)
+            .step_by(3)
+            .chain([12, 13, 20, 21, 36, 37, 68, 69, 1031, 1032])
+        {
+            for d0 in [
+                0.3f32,
+                7.3,
+                7.000_001,
+                8.999_999,
+                2.0 - 1e-6,
+                1.5,
+                xl as f32 - 4.000_000_5,
+            ] {
+                let got = refine_disparity_lk(l, r, xl, 4, d0, 3, 8);
+                assert_eq!(
+                    got.map(f32::to_bits),
+                    lk_by_definition(l, r, xl, 4, d0, 3).map(f32::to_bits),
+                    "xl {xl}, d0 {d0}"
+                );
+                found += usize::from(got.is_some());
+            }
+        }
+        assert!(found > 500, "{found}");
     }
 
     /// A 2D pattern whose right image is shifted by a disparity and a known row offset.

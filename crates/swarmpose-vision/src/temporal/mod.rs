@@ -4,6 +4,8 @@
 pub mod subpixel;
 pub mod template;
 
+use std::cmp::Ordering::Greater;
+
 use crate::features::{Descriptor, Keypoint};
 
 /// Settings of [`mutual_matches`].
@@ -32,46 +34,97 @@ impl Default for TemporalConfig {
     }
 }
 
-/// For each item of `a`, its best match in `b` and the two best distances. With a
-/// window, `b` is scanned by column through a sorted index (only the columns within
-/// the window).
-fn nearest<D: Descriptor>(
+/// Best match so far and the two best distances.
+type Best = (usize, f32, f32);
+
+/// Indices of `kps` sorted by column (stable), and the sorted columns.
+fn by_column(kps: &[Keypoint]) -> (Vec<usize>, Vec<f32>) {
+    let mut order: Vec<usize> = (0..kps.len()).collect();
+    order.sort_by(|&i, &j| kps[i].x.total_cmp(&kps[j].x));
+    let xs = order.iter().map(|&i| kps[i].x).collect();
+    (order, xs)
+}
+
+/// `(index, distance)` offered to a best-two search: the first of equal distances wins.
+#[inline]
+fn offer(best: &mut Best, j: usize, d: f32) {
+    if d < best.1 {
+        *best = (j, d, best.1);
+    } else if d < best.2 {
+        best.2 = d;
+    }
+}
+
+/// For each item of `a`, its best match in `b` and the two best distances, and the same
+/// for each item of `b` in `a`. With a window, an item of one set sees those of the
+/// other whose column (found through a sorted index) and row are within the window of
+/// its own. Each distance is computed once for both directions; each item sees its
+/// candidates in the order of the other set's column index, as a search of one direction
+/// at a time would.
+fn nearest_both<D: Descriptor>(
     a_kps: &[Keypoint],
     a: &[D],
     b_kps: &[Keypoint],
     b: &[D],
     window: Option<f32>,
-) -> Vec<Option<(usize, f32, f32)>> {
-    let mut order: Vec<usize> = (0..b.len()).collect();
-    order.sort_by(|&i, &j| b_kps[i].x.total_cmp(&b_kps[j].x));
-    let xs: Vec<f32> = order.iter().map(|&i| b_kps[i].x).collect();
-    a.iter()
-        .zip(a_kps)
-        .map(|(da, ka)| {
-            let (lo, hi) = match window {
-                Some(w) => (
-                    xs.partition_point(|&x| x < ka.x - w),
-                    xs.partition_point(|&x| x <= ka.x + w),
-                ),
-                None => (0, xs.len()),
-            };
-            let mut best = (usize::MAX, f32::INFINITY, f32::INFINITY);
-            for &j in &order[lo..hi] {
-                if let Some(w) = window
-                    && (ka.y - b_kps[j].y).abs() > w
-                {
-                    continue;
-                }
-                let d = da.distance(&b[j]);
-                if d < best.1 {
-                    best = (j, d, best.1);
-                } else if d < best.2 {
-                    best.2 = d;
-                }
+) -> (Vec<Option<Best>>, Vec<Option<Best>>) {
+    let (order_a, xs_a) = by_column(a_kps);
+    let (order_b, xs_b) = by_column(b_kps);
+    // The range of a's sorted positions that each item of b sees.
+    let a_range: Vec<(usize, usize)> = match window {
+        Some(w) => b_kps
+            .iter()
+            .map(|kb| {
+                (
+                    xs_a.partition_point(|&x| x < kb.x - w),
+                    xs_a.partition_point(|&x| x <= kb.x + w),
+                )
+            })
+            .collect(),
+        None => vec![(0, xs_a.len()); b_kps.len()],
+    };
+    // Items of b in column order, contiguous.
+    let b_sorted: Vec<(usize, f32, &D)> = order_b.iter().map(|&j| (j, b_kps[j].y, &b[j])).collect();
+    let none = (usize::MAX, f32::INFINITY, f32::INFINITY);
+    let mut best_a = vec![none; a.len()];
+    let mut best_b = vec![none; b.len()];
+    for (pos, &i) in order_a.iter().enumerate() {
+        let (ka, da) = (&a_kps[i], &a[i]);
+        let (lo, hi, scan) = match window {
+            Some(w) => {
+                let (lo, hi) = (
+                    xs_b.partition_point(|&x| x < ka.x - w),
+                    xs_b.partition_point(|&x| x <= ka.x + w),
+                );
+                // Wider by a pixel, for the items of b that see this one through their
+                // own rounding of the window.
+                let scan = (
+                    xs_b.partition_point(|&x| x < ka.x - w - 1.0).min(lo),
+                    xs_b.partition_point(|&x| x <= ka.x + w + 1.0).max(hi),
+                );
+                (lo, hi, scan)
             }
-            (best.0 != usize::MAX).then_some(best)
-        })
-        .collect()
+            None => (0, b.len(), (0, b.len())),
+        };
+        let best = &mut best_a[i];
+        for (k, &(j, yb, db)) in b_sorted.iter().enumerate().take(scan.1).skip(scan.0) {
+            let (ra, rb) = a_range[j];
+            // Not beyond the window (a NaN row is not beyond it, as before).
+            let rows = window.is_none_or(|w| (ka.y - yb).abs().partial_cmp(&w) != Some(Greater));
+            let a_sees = rows && k >= lo && k < hi;
+            let b_sees = rows && pos >= ra && pos < rb;
+            // Without branches on the window (they are unpredictable): a distance out
+            // of the window is infinite, which changes no best.
+            let d = da.distance(db);
+            offer(best, j, if a_sees { d } else { f32::INFINITY });
+            offer(&mut best_b[j], i, if b_sees { d } else { f32::INFINITY });
+        }
+    }
+    let found = |m: Best| (m.0 != usize::MAX).then_some(m);
+    (
+        best_a.into_iter().map(found).collect(),
+        best_b.into_iter().map(found).collect(),
+    )
 }
 
 /// Mutual nearest neighbours between features `a` and `b` (keypoints and descriptors,
@@ -85,8 +138,7 @@ pub fn mutual_matches<D: Descriptor>(
     b: &[D],
     config: &TemporalConfig,
 ) -> Vec<(usize, usize)> {
-    let ab = nearest(a_kps, a, b_kps, b, config.max_displacement_px);
-    let ba = nearest(b_kps, b, a_kps, a, config.max_displacement_px);
+    let (ab, ba) = nearest_both(a_kps, a, b_kps, b, config.max_displacement_px);
     let pass = |m: (usize, f32, f32)| m.1 <= config.max_distance && m.1 < config.ratio * m.2;
     ab.iter()
         .enumerate()
@@ -125,6 +177,59 @@ mod tests {
             angle: 0.0,
             response: 1.0,
             octave: 0,
+        }
+    }
+
+    /// The search of one direction at a time, by its definition.
+    fn nearest_one_way(
+        a_kps: &[Keypoint],
+        a: &[BinaryDescriptor],
+        b_kps: &[Keypoint],
+        b: &[BinaryDescriptor],
+        window: Option<f32>,
+    ) -> Vec<Option<Best>> {
+        let (order, _) = by_column(b_kps);
+        a.iter()
+            .zip(a_kps)
+            .map(|(da, ka)| {
+                let mut best = (usize::MAX, f32::INFINITY, f32::INFINITY);
+                for &j in &order {
+                    let kb = &b_kps[j];
+                    if let Some(w) = window
+                        && (kb.x < ka.x - w || kb.x > ka.x + w || (ka.y - kb.y).abs() > w)
+                    {
+                        continue;
+                    }
+                    offer(&mut best, j, da.distance(&b[j]));
+                }
+                (best.0 != usize::MAX).then_some(best)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn both_directions_at_once_match_one_at_a_time() {
+        let mut s = 5u32;
+        let mut next = || {
+            s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            s >> 8
+        };
+        let mut set = |n: usize| -> (Vec<Keypoint>, Vec<BinaryDescriptor>) {
+            (0..n)
+                .map(|_| {
+                    // Few distinct bits (many equal distances) and quarter-pixel columns.
+                    let mut k = kp((next() % 400) as f32 * 0.25);
+                    k.y = (next() % 60) as f32 * 0.5;
+                    (k, BinaryDescriptor([(next() % 8) as u8; 32]))
+                })
+                .unzip()
+        };
+        let (ka, a) = set(300);
+        let (kb, b) = set(250);
+        for window in [None, Some(0.25), Some(7.5), Some(20.0), Some(1000.0)] {
+            let (ab, ba) = nearest_both(&ka, &a, &kb, &b, window);
+            assert_eq!(ab, nearest_one_way(&ka, &a, &kb, &b, window), "{window:?}");
+            assert_eq!(ba, nearest_one_way(&kb, &b, &ka, &a, window), "{window:?}");
         }
     }
 
