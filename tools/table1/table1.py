@@ -25,7 +25,7 @@ METHODS = [
     ("robust PSO (default)", []),
 ]
 VARIANTS = [
-    ("default calibration (principal-point+yaw)", []),
+    ("default (window of 10, calibration principal-point+yaw)", []),
     ("no correction (--calibrate none)", ["--calibrate", "none"]),
     ("constant only (--calibrate principal-point)", ["--calibrate", "principal-point"]),
     ("yaw, roll and pitch too", ["--calibrate", "principal-point+yaw+roll+pitch"]),
@@ -33,6 +33,8 @@ VARIANTS = [
     ("evidence memory 3 s", ["--calibration-memory", "3"]),
     ("all evidence kept (--calibration-memory inf)", ["--calibration-memory", "inf"]),
     ("SURF front end", ["--detector", "surf"]),
+    ("frame to frame, no window (--window 0)", ["--window", "0"]),
+    ("window of 20 keyframes (--window 20)", ["--window", "20"]),
 ]
 
 
