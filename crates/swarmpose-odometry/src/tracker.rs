@@ -342,7 +342,6 @@ impl<D: Descriptor> Tracker<D> {
                     (za.u as f32, za.v as f32),
                     b,
                     (zb.u as f32, zb.v as f32),
-                    4,
                     10,
                     2.0,
                 ) {

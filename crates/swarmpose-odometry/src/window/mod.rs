@@ -282,7 +282,7 @@ impl Window {
                             at(&l.current),
                             ALIGN_ITERATIONS,
                             ALIGN_MAX_MOVE_PX,
-                            ALIGN_MIN_NCC,
+                            Some(ALIGN_MIN_NCC),
                         )
                     });
                     match found {

@@ -76,9 +76,10 @@ impl PatchTemplate {
     /// Where the patch appears in `image`, starting the search at `start` (pixels): the
     /// position minimising `Σ (I(p + w) − T(w))²`, or `None` when the patch leaves the
     /// image, the iterations do not settle (to 0.01 px within `iterations`), the position
-    /// moves more than `max_move_px` from `start`, or the patch found differs from the
-    /// template more than its contrast allows (zero-mean normalised cross-correlation
-    /// below `min_ncc`: the appearance has changed since the track began).
+    /// moves more than `max_move_px` from `start`, or, with `min_ncc`, the patch found
+    /// differs from the template more than its contrast allows (zero-mean normalised
+    /// cross-correlation below `min_ncc`: the appearance has changed since the template
+    /// was taken).
     #[must_use]
     pub fn align(
         &self,
@@ -86,7 +87,7 @@ impl PatchTemplate {
         start: (f32, f32),
         iterations: usize,
         max_move_px: f32,
-        min_ncc: f32,
+        min_ncc: Option<f32>,
     ) -> Option<(f32, f32)> {
         let r = TEMPLATE_RADIUS as f32;
         let (hxx, hxy, hyy) = self.tensor;
@@ -109,6 +110,9 @@ impl PatchTemplate {
                 return None;
             }
             if dx.hypot(dy) < 0.01 {
+                let Some(min_ncc) = min_ncc else {
+                    return Some((px, py));
+                };
                 sample_patch(image, px - r, py - r, N, &mut patch)?;
                 return (ncc(&patch, &self.values) >= min_ncc).then_some((px, py));
             }
@@ -168,7 +172,7 @@ mod tests {
         for shift in [(0.3f32, -0.2f32), (1.37, -0.62), (-1.1, 0.9)] {
             let img = image(w, h, shift);
             let (x, y) = t
-                .align(view(&img, w, h), (40.0, 30.0), 20, 2.0, 0.9)
+                .align(view(&img, w, h), (40.0, 30.0), 20, 2.0, Some(0.9))
                 .expect("found");
             assert!(
                 (x - 40.0 - shift.0).abs() < 0.05 && (y - 30.0 - shift.1).abs() < 0.05,
@@ -188,7 +192,7 @@ mod tests {
         let t = PatchTemplate::sample(view(&first, w, h), (40.0, 30.0)).expect("textured");
         let noise: Vec<u8> = (0..w * h).map(|i| ((i * 7919) % 251) as u8).collect();
         assert!(
-            t.align(view(&noise, w, h), (40.0, 30.0), 20, 2.0, 0.9)
+            t.align(view(&noise, w, h), (40.0, 30.0), 20, 2.0, Some(0.9))
                 .is_none()
         );
         assert!(PatchTemplate::sample(view(&first, w, h), (2.0, 2.0)).is_none());
