@@ -6,6 +6,7 @@ use swarmpose_core::{Correspondences, Estimator};
 use swarmpose_vision::frontend::{DisparityCorrection, FrameMatches};
 
 use crate::refine::model::StereoObservation;
+use crate::window::Link;
 
 /// The measurements of the matches in the reference frame A and the current frame B,
 /// and the fold of each (alternate vertical stripes of B's image).
@@ -45,6 +46,29 @@ pub(crate) fn observations(m: &FrameMatches, stripe_px: f64) -> Observations {
         current,
         folds,
     }
+}
+
+/// The window's links of the inlier matches `inliers` (indices into `obs`) of `m`: the
+/// features' indices in both frames, the reference's measurement, the current frame's
+/// patch-aligned measurement and its detected keypoint.
+pub(crate) fn window_links(m: &FrameMatches, obs: &Observations, inliers: &[usize]) -> Vec<Link> {
+    inliers
+        .iter()
+        .map(|&k| {
+            let s = obs.source[k];
+            Link {
+                reference_feature: m.dst_index[s],
+                current_feature: m.src_index[s],
+                reference: obs.reference[k],
+                current: obs.current[k],
+                current_keypoint: StereoObservation {
+                    u: f64::from(m.src_pixels[s].0),
+                    v: f64::from(m.src_pixels[s].1),
+                    d: m.src_disparities_px[s],
+                },
+            }
+        })
+        .collect()
 }
 
 /// The estimator's motion (pose of B in A) on the matches' 3D points with `correction`

@@ -26,15 +26,15 @@ use swarmpose_vision::temporal::subpixel::align_patch;
 
 use crate::config::{Calibration, OdometryConfig};
 use crate::error::OdometryError;
-use crate::estimate::{initial_motion, observations};
+use crate::estimate::{initial_motion, observations, window_links};
 use crate::frontend::ms;
 use crate::intake::{StereoCamera, check_timestamp};
 use crate::record::{Counts, FrameResult, StageTimes, Status};
-use crate::refine::evidence::{MatrixK, Reduced};
+use crate::refine::evidence::MatrixK;
 use crate::refine::model::{PixelNoise, StereoModel, StereoObservation};
 use crate::refine::{Refined, refine};
 use crate::selfcal::{CorrectionModel, Decision, SelfCalibration};
-use crate::window::{Images, Link, Window, WindowMotion};
+use crate::window::{Images, Window, WindowMotion};
 
 /// The frame that the next one is matched to.
 #[derive(Debug, Clone)]
@@ -81,30 +81,6 @@ const CORRECTION_TOLERANCE_PX: f64 = 0.05;
 
 /// Most refinements of a pair again under the correction its own evidence leads to.
 const FIXED_POINT_ITERATIONS: usize = 4;
-
-/// The pair's motion covariance `covariance` (from the measurements) with the
-/// calibration's added: the motion moves with the calibration terms as
-/// `∂ξ/∂c = −S_ξξ⁻¹ S_ξc` (the reduced normal equations of both folds), so their
-/// covariance `calibration` adds `G Σ_c Gᵀ`.
-fn with_calibration(
-    covariance: &Matrix6<f64>,
-    reduced: &[Reduced; 2],
-    calibration: &MatrixK,
-) -> Matrix6<f64> {
-    let mut both = reduced[0];
-    both += &reduced[1];
-    let Some(inv) = both.pose_pose.try_inverse() else {
-        return *covariance;
-    };
-    let g = inv * both.pose_correction;
-    let added = g * calibration * g.transpose();
-    let out = covariance + (added + added.transpose()) * 0.5;
-    if out.iter().all(|v| v.is_finite()) {
-        out
-    } else {
-        *covariance
-    }
-}
 
 /// `rig` with its focal length changed by `focal_px` pixels of `fx`, `fy` in proportion.
 fn focal_changed(rig: &RectifiedStereo, focal_px: f64) -> RectifiedStereo {
@@ -426,35 +402,15 @@ impl<D: Descriptor> Tracker<D> {
             let (refined, correction, focal_px, model) = best;
             let calibration_covariance = self.calibration_covariance();
             measured.motion = refined.motion;
-            measured.covariance = Some(with_calibration(
-                &refined.covariance,
-                &refined.reduced,
-                &calibration_covariance,
-            ));
+            measured.covariance =
+                Some(refined.covariance_with_calibration(&calibration_covariance));
             measured.inliers = refined.inliers.len();
             measured.correction = correction;
             measured.focal_px = focal_px;
             measured.model = model;
             if self.window.enabled() {
                 let t = Instant::now();
-                let links: Vec<Link> = refined
-                    .inliers
-                    .iter()
-                    .map(|&k| {
-                        let s = obs.source[k];
-                        Link {
-                            reference_feature: m.dst_index[s],
-                            current_feature: m.src_index[s],
-                            reference: obs.reference[k],
-                            current: obs.current[k],
-                            current_keypoint: StereoObservation {
-                                u: f64::from(m.src_pixels[s].0),
-                                v: f64::from(m.src_pixels[s].1),
-                                d: m.src_disparities_px[s],
-                            },
-                        }
-                    })
-                    .collect();
+                let links = window_links(&m, &obs, &refined.inliers);
                 let images = match (reference.left.as_ref(), left) {
                     (Some(a), Some(b)) => Some(Images {
                         reference: a.view(),

@@ -104,6 +104,29 @@ pub struct Refined {
     pub reduced: [Reduced; 2],
 }
 
+impl Refined {
+    /// The motion's covariance with the calibration's added: the motion moves with the
+    /// calibration terms `c` as `∂ξ/∂c = −S_ξξ⁻¹ S_ξc` (the reduced normal equations of
+    /// both folds), so their covariance `calibration` (pixels², [`evidence::MatrixK`])
+    /// adds `G Σ_c Gᵀ`.
+    #[must_use]
+    pub fn covariance_with_calibration(&self, calibration: &evidence::MatrixK) -> Matrix6<f64> {
+        let mut both = self.reduced[0];
+        both += &self.reduced[1];
+        let Some(inv) = both.pose_pose.try_inverse() else {
+            return self.covariance;
+        };
+        let g = inv * both.pose_correction;
+        let added = g * calibration * g.transpose();
+        let out = self.covariance + (added + added.transpose()) * 0.5;
+        if out.iter().all(|v| v.is_finite()) {
+            out
+        } else {
+            self.covariance
+        }
+    }
+}
+
 /// Huber weight of a squared whitened norm `s2`.
 fn huber_weight(s2: f64, k: f64) -> f64 {
     if s2 <= k * k { 1.0 } else { k / s2.sqrt() }
