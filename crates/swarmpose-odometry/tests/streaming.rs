@@ -144,7 +144,10 @@ fn window_motion_covariance_is_honest() {
 }
 
 /// Frames without features are marked (constant velocity, then lost after the
-/// prediction horizon), keep the chain, and tracking resumes on the next good frames.
+/// prediction horizon), keep the chain, and tracking resumes on the next good frames;
+/// frames with few features (a keyframe with few points for the window) are tracked or
+/// marked, and the frames after them are on the true path. Frame to frame and with the
+/// window.
 #[test]
 fn frames_without_texture_are_marked_and_tracking_recovers() {
     for keyframes in [0, 10] {
@@ -159,10 +162,13 @@ fn texture_gaps(config: OdometryConfig) {
     let mut tracker = seq.tracker(config);
     let mut statuses = Vec::new();
     for k in 0..40 {
-        // Frames 10-11 and 20-34 (1.5 s, longer than the 1 s horizon) have no texture.
+        // Frames 10-11 and 20-34 (1.5 s, longer than the 1 s horizon) have no texture;
+        // frames 5-7 keep only 25 of their features (a keyframe with few points).
         let blank = (10..12).contains(&k) || (20..35).contains(&k);
         let frame = if blank {
             StereoFrame::default()
+        } else if (5..8).contains(&k) {
+            sparse(seq.frame(k), 25)
         } else {
             seq.frame(k)
         };
@@ -170,6 +176,11 @@ fn texture_gaps(config: OdometryConfig) {
             .track(frame, None, seq.timestamp_s(k), StageTimes::default())
             .expect("frame");
         statuses.push(r.status.clone());
+        if k == 9 {
+            // Tracked again after the sparse frames, on the true path.
+            let err = (r.pose.translation.vector - seq.pose(k).translation.vector).norm();
+            assert!(err < 0.05, "frame 9 {err} m from the truth");
+        }
         if k == 12 {
             // Matched to frame 9 across the two blank frames: the pose is right again.
             assert_eq!(r.reference, Some(9));
@@ -177,6 +188,14 @@ fn texture_gaps(config: OdometryConfig) {
             assert!(err < 0.05, "frame 12 {err} m from the truth");
         }
     }
+    assert!(
+        statuses[5..8]
+            .iter()
+            .all(|s| s.is_tracked() || matches!(s, Status::ConstantVelocity(_))),
+        "{:?}",
+        &statuses[5..8]
+    );
+    assert!(statuses[8..10].iter().all(Status::is_tracked));
     assert!(
         matches!(statuses[10], Status::ConstantVelocity(_)),
         "{:?}",
@@ -192,6 +211,20 @@ fn texture_gaps(config: OdometryConfig) {
     );
     assert!(statuses[35].is_tracked(), "{:?}", statuses[35]);
     assert!(statuses[36..].iter().all(Status::is_tracked));
+}
+
+/// The first `n` features of `frame`.
+fn sparse<D>(mut frame: StereoFrame<D>, n: usize) -> StereoFrame<D> {
+    frame.left_keypoints.truncate(n);
+    frame.left_descriptors.truncate(n);
+    frame.right_keypoints.truncate(n);
+    frame.right_descriptors.truncate(n);
+    frame.points.truncate(n);
+    frame.disparities_px.truncate(n);
+    frame.row_offsets_px.truncate(n);
+    frame.sigmas_m.truncate(n);
+    frame.covariances.truncate(n);
+    frame
 }
 
 /// Timestamps that do not increase are refused, and the state is unchanged.
