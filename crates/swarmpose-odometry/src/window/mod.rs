@@ -6,10 +6,11 @@
 //! starts a new one. A track is one 3D point, anchored by inverse depth in the first
 //! keyframe of the window that sees it ([`crate::refine::model`]), and it is re-estimated
 //! with every new observation. Its measurement in each frame is where the image patch of
-//! the frame where it began appears (a [`PatchTemplate`] aligned to a fraction of a
-//! pixel), so that every frame measures the same physical point without the errors of
-//! the detected keypoints (whole pixels, moving with the corner's apparent size); a track
-//! whose patch is not found again ends.
+//! the frame where it began appears (a [`PatchTemplate`] aligned under an affine warp, to
+//! a fraction of a pixel), so that every frame measures the same physical point without
+//! the errors of the detected keypoints (whole pixels, moving with the corner's apparent
+//! size) and without the bias a translation-only alignment takes from the patch's growing
+//! scale and shear; a track whose patch is not found again ends.
 //!
 //! **Keyframes.** The engine measures each frame against the previous one, so every tracked
 //! frame is a keyframe: the window holds the last [`WindowConfig::keyframes`] tracked
@@ -84,7 +85,7 @@ pub struct Link {
     pub current_keypoint: StereoObservation,
 }
 
-/// Iterations of a template's alignment (as the pair's).
+/// Iterations of a template's (affine) alignment.
 const ALIGN_ITERATIONS: usize = 10;
 /// Largest move of a template's alignment from the pair's measurement, pixels (as the
 /// pair's).
@@ -234,8 +235,8 @@ impl Window {
     /// anything to the pair (or the refinement failed; the pair's pose stands then).
     ///
     /// With `images`, a track's measurement in each frame is where the patch of the frame
-    /// where it began appears ([`PatchTemplate`]): the same physical point in every
-    /// frame. A track whose patch is not found again ends there, and its feature begins a
+    /// where it began appears ([`PatchTemplate::align_affine`]): the same physical point
+    /// in every frame. A track whose patch is not found again ends there, and its feature begins a
     /// new track at its detected keypoint. Without images, the detected keypoints.
     pub fn add(
         &mut self,
@@ -279,7 +280,7 @@ impl Window {
                 (Some(&t), None) => (t, l.current_keypoint),
                 (Some(&t), Some(im)) => {
                     let found = self.templates.get(&t).and_then(|tpl| {
-                        tpl.align(
+                        tpl.align_affine(
                             im.current,
                             at(&l.current),
                             ALIGN_ITERATIONS,

@@ -9,10 +9,14 @@
 //! frame. Aligning every frame to the *first* frame's patch measures the same physical
 //! point in every frame, so the errors neither accumulate nor repeat: what is left is the
 //! alignment's own noise and the first keypoint's offset, which is common to all the
-//! track's measurements (the point is where that patch's centre is).
+//! track's measurements (the point is where that patch's centre is). Over a track the
+//! patch grows and shears as the camera moves; [`PatchTemplate::align_affine`] follows
+//! that, where a translation-only alignment ([`PatchTemplate::align`]) is pulled off
+//! the centre by it.
 
 use crate::features::GrayView;
-use crate::image::sample_patch;
+use crate::image::{sample_bilinear, sample_patch};
+use nalgebra::{Matrix3, SMatrix, SVector};
 
 /// Half the side of the aligned patch, pixels (a 9x9 patch, as the frame-to-frame
 /// alignment of the odometry's refinement).
@@ -121,6 +125,81 @@ impl PatchTemplate {
     }
 }
 
+impl PatchTemplate {
+    /// Where the patch appears in `image` under an affine warp (inverse compositional
+    /// Lucas-Kanade on the 6 parameters of `x ↦ A x + t` about the patch centre), starting
+    /// at `start` with `A = I`: the position of the centre, or `None` as for
+    /// [`PatchTemplate::align`], or when the warp's area changes by more than a factor of 2.
+    #[must_use]
+    pub fn align_affine(
+        &self,
+        image: GrayView<'_>,
+        start: (f32, f32),
+        iterations: usize,
+        max_move_px: f32,
+        min_ncc: Option<f32>,
+    ) -> Option<(f32, f32)> {
+        let r = TEMPLATE_RADIUS as f32;
+        let coords = |k: usize| ((k % N) as f32 - r, (k / N) as f32 - r);
+        let mut h = SMatrix::<f32, 6, 6>::zeros();
+        for k in 0..N * N {
+            let (x, y) = coords(k);
+            let (gx, gy) = (self.gx[k], self.gy[k]);
+            let sd = SVector::<f32, 6>::from([gx * x, gx * y, gy * x, gy * y, gx, gy]);
+            h += sd * sd.transpose();
+        }
+        let h_inv = h.try_inverse()?;
+        let mut m = Matrix3::<f32>::new(1.0, 0.0, start.0, 0.0, 1.0, start.1, 0.0, 0.0, 1.0);
+        let mut patch = [0f32; N * N];
+        for _ in 0..iterations {
+            let mut b = SVector::<f32, 6>::zeros();
+            for (k, sample) in patch.iter_mut().enumerate() {
+                let (x, y) = coords(k);
+                let u = m[(0, 0)] * x + m[(0, 1)] * y + m[(0, 2)];
+                let v = m[(1, 0)] * x + m[(1, 1)] * y + m[(1, 2)];
+                let i = sample_bilinear(image, u, v)?;
+                *sample = i;
+                let e = i - self.values[k];
+                let (gx, gy) = (self.gx[k], self.gy[k]);
+                b += SVector::<f32, 6>::from([gx * x, gx * y, gy * x, gy * y, gx, gy]) * e;
+            }
+            let dp = h_inv * b;
+            let w = Matrix3::<f32>::new(
+                1.0 + dp[0],
+                dp[1],
+                dp[4],
+                dp[2],
+                1.0 + dp[3],
+                dp[5],
+                0.0,
+                0.0,
+                1.0,
+            );
+            m *= w.try_inverse()?;
+            let det = m[(0, 0)] * m[(1, 1)] - m[(0, 1)] * m[(1, 0)];
+            if !(0.5..=2.0).contains(&det) {
+                return None;
+            }
+            let (px, py) = (m[(0, 2)], m[(1, 2)]);
+            if (px - start.0).hypot(py - start.1) > max_move_px {
+                return None;
+            }
+            let linear = dp[0]
+                .abs()
+                .max(dp[1].abs())
+                .max(dp[2].abs())
+                .max(dp[3].abs());
+            if dp[4].hypot(dp[5]) < 0.01 && linear * r < 0.01 {
+                let Some(min_ncc) = min_ncc else {
+                    return Some((px, py));
+                };
+                return (ncc(&patch, &self.values) >= min_ncc).then_some((px, py));
+            }
+        }
+        None
+    }
+}
+
 /// Zero-mean normalised cross-correlation of two patches (0 when one is flat).
 fn ncc(a: &[f32; N * N], b: &[f32; N * N]) -> f32 {
     let n = (N * N) as f32;
@@ -179,6 +258,42 @@ mod tests {
                 "shift {shift:?}: found ({x}, {y})"
             );
         }
+    }
+
+    /// A patch seen 8 % larger, slightly sheared and shifted is found by the affine
+    /// alignment, to a fraction of a pixel, from a start one pixel off.
+    #[test]
+    fn an_affine_copy_is_found() {
+        let (w, h) = (80usize, 60usize);
+        let pattern = |x: f32, y: f32| {
+            128.0 + 60.0 * (0.31 * x).sin() * (0.23 * y).cos() + 30.0 * (0.17 * (x + y)).sin()
+        };
+        let first: Vec<u8> = (0..h)
+            .flat_map(|y| (0..w).map(move |x| pattern(x as f32, y as f32).round() as u8))
+            .collect();
+        // The second image shows the first through x' = c + A (x - c) + t.
+        let (c, t) = ((40.0f32, 30.0f32), (0.7f32, -0.4f32));
+        let a = [[1.08f32, 0.03], [-0.02, 1.06]];
+        let det = a[0][0] * a[1][1] - a[0][1] * a[1][0];
+        let second: Vec<u8> = (0..h)
+            .flat_map(|y| (0..w).map(move |x| (x as f32, y as f32)))
+            .map(|(x, y)| {
+                let (dx, dy) = (x - c.0 - t.0, y - c.1 - t.1);
+                let sx = (a[1][1] * dx - a[0][1] * dy) / det + c.0;
+                let sy = (-a[1][0] * dx + a[0][0] * dy) / det + c.1;
+                pattern(sx, sy).round() as u8
+            })
+            .collect();
+        let tpl = PatchTemplate::sample(view(&first, w, h), c).expect("textured");
+        let (x, y) = tpl
+            .align_affine(view(&second, w, h), (c.0 + 1.5, c.1), 30, 3.0, Some(0.9))
+            .expect("found");
+        assert!(
+            (x - c.0 - t.0).abs() < 0.05 && (y - c.1 - t.1).abs() < 0.05,
+            "found ({x}, {y}), expected ({}, {})",
+            c.0 + t.0,
+            c.1 + t.1
+        );
     }
 
     /// A flat patch is no template, a patch that is not there is not found, and a patch
