@@ -92,10 +92,9 @@ const ALIGN_ITERATIONS: usize = 10;
 const ALIGN_MAX_MOVE_PX: f32 = 2.0;
 /// Smallest normalised cross-correlation of an aligned template with the image: below,
 /// the patch has changed too much since the track began (scale, occlusion) and the track
-/// ends. 0.7 and 0.9 gave the same figures on the real sequences (within 0.01 points of
-/// drift) and a mean drift of 0.068 % and 0.056 % on the synthetic suite (0.060 % here);
-/// 0.9 gives 0.058 % on the built-in street (0.090 % here). Set before those runs and kept
-/// (docs/window.md).
+/// ends. Set before any run; with a translation-only alignment 0.7 and 0.9 gave the
+/// same figures on the real sequences (within 0.01 points of drift) and suite means of
+/// 0.068 % and 0.056 % (0.060 % at 0.8; docs/window.md).
 const ALIGN_MIN_NCC: f32 = 0.8;
 
 /// The left images of the reference and the current frame, for the tracks' templates.
