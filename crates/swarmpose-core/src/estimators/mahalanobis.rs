@@ -92,28 +92,13 @@ pub fn refine_mahalanobis(
                 let Some(w) = information(&pose, i) else {
                     continue;
                 };
-                let q = (pose * data.src()[i]).coords;
-                let r = data.dst()[i].coords - q;
-                let mut j = Matrix3x6::<f64>::zeros();
-                j.fixed_view_mut::<3, 3>(0, 0).copy_from(&q.cross_matrix());
-                j.fixed_view_mut::<3, 3>(0, 3)
-                    .copy_from(&(-Matrix3::identity()));
-                h += j.transpose() * w * j;
-                g += j.transpose() * w * r;
+                add_point(&mut h, &mut g, &pose, data, i, &w);
             }
-            let Some(delta) = h.lu().solve(&(-g)) else {
+            let Some((moved, step)) = gauss_newton_step(&pose, &h, &g) else {
                 break;
             };
-            if !delta.iter().all(|v| v.is_finite()) {
-                break;
-            }
-            let dr = UnitQuaternion::from_scaled_axis(delta.fixed_rows::<3>(0).into_owned());
-            let dt = delta.fixed_rows::<3>(3).into_owned();
-            pose = Isometry3::from_parts(
-                Translation3::from(dr * pose.translation.vector + dt),
-                dr * pose.rotation,
-            );
-            if delta.norm() < 1e-10 {
+            pose = moved;
+            if step < 1e-10 {
                 break;
             }
         }
@@ -128,6 +113,48 @@ pub fn refine_mahalanobis(
         return Err(too_few(inliers.len()));
     }
     Ok((pose, inliers))
+}
+
+/// Adds correspondence `i` of `data`, weighted by the 3x3 information `w` (1/m²), to the
+/// normal equations `h`, `g` of a Gauss-Newton step on `pose` (the motion `dst = R src + t`)
+/// perturbed on the left by `(ω, ν)` (radians, metres, in the destination frame): residual
+/// `r = dst − pose·src`, Jacobian `[[q]×, −I]` with `q = pose·src`.
+pub(crate) fn add_point(
+    h: &mut Matrix6<f64>,
+    g: &mut Vector6<f64>,
+    pose: &Isometry3<f64>,
+    data: &Correspondences,
+    i: usize,
+    w: &Matrix3<f64>,
+) {
+    let q = (pose * data.src()[i]).coords;
+    let r = data.dst()[i].coords - q;
+    let mut j = Matrix3x6::<f64>::zeros();
+    j.fixed_view_mut::<3, 3>(0, 0).copy_from(&q.cross_matrix());
+    j.fixed_view_mut::<3, 3>(0, 3)
+        .copy_from(&(-Matrix3::identity()));
+    *h += j.transpose() * w * j;
+    *g += j.transpose() * w * r;
+}
+
+/// `pose` moved by the solution `δ = (ω, ν)` of `h δ = −g` ([`add_point`]'s
+/// perturbation), and `|δ|`; `None` when `h` is singular or the step is not finite.
+pub(crate) fn gauss_newton_step(
+    pose: &Isometry3<f64>,
+    h: &Matrix6<f64>,
+    g: &Vector6<f64>,
+) -> Option<(Isometry3<f64>, f64)> {
+    let delta = h.lu().solve(&(-g))?;
+    if !delta.iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    let dr = UnitQuaternion::from_scaled_axis(delta.fixed_rows::<3>(0).into_owned());
+    let dt = delta.fixed_rows::<3>(3).into_owned();
+    let moved = Isometry3::from_parts(
+        Translation3::from(dr * pose.translation.vector + dt),
+        dr * pose.rotation,
+    );
+    Some((moved, delta.norm()))
 }
 
 #[cfg(test)]

@@ -38,10 +38,9 @@
 //! `f` by `k²` and `α` by `k⁻²`, leaves `β`), and the tests are in nats, so the choice and
 //! the fit do not depend on the unit.
 
-use nalgebra::{
-    Isometry3, Matrix3, Matrix3x6, Matrix6, Point3, Translation3, UnitQuaternion, Vector3,
-};
+use nalgebra::{Isometry3, Matrix3, Matrix6, Point3, Vector3};
 
+use super::mahalanobis::{self, add_point};
 use super::mixture::outlier_volume;
 use crate::geometry::{Correspondences, MIN_CORRESPONDENCES};
 
@@ -387,26 +386,16 @@ fn gauss_newton_step(
         if row.weight < MIN_WEIGHT {
             continue;
         }
-        let q = (pose * data.src()[i]).coords;
-        let r = data.dst()[i].coords - q;
-        let mut j = Matrix3x6::<f64>::zeros();
-        j.fixed_view_mut::<3, 3>(0, 0).copy_from(&q.cross_matrix());
-        j.fixed_view_mut::<3, 3>(0, 3)
-            .copy_from(&(-Matrix3::identity()));
-        let w = row.information * row.weight;
-        h += j.transpose() * w * j;
-        g += j.transpose() * w * r;
+        add_point(
+            &mut h,
+            &mut g,
+            pose,
+            data,
+            i,
+            &(row.information * row.weight),
+        );
     }
-    let delta = h.lu().solve(&(-g))?;
-    if !delta.iter().all(|v| v.is_finite()) {
-        return None;
-    }
-    let dr = UnitQuaternion::from_scaled_axis(delta.fixed_rows::<3>(0).into_owned());
-    let dt = delta.fixed_rows::<3>(3).into_owned();
-    Some(Isometry3::from_parts(
-        Translation3::from(dr * pose.translation.vector + dt),
-        dr * pose.rotation,
-    ))
+    mahalanobis::gauss_newton_step(pose, &h, &g).map(|(moved, _)| moved)
 }
 
 /// The isotropic M step: `2 f = Σ w |e|² / (3 Σ w)`.
@@ -515,7 +504,7 @@ fn scoring_step(
 
 #[cfg(test)]
 mod tests {
-    use nalgebra::Vector3;
+    use nalgebra::{Translation3, Vector3};
 
     use super::*;
     use crate::estimators::test_scenes::stereo_scene;
