@@ -141,12 +141,14 @@ impl PatchTemplate {
     ) -> Option<(f32, f32)> {
         let r = TEMPLATE_RADIUS as f32;
         let coords = |k: usize| ((k % N) as f32 - r, (k / N) as f32 - r);
+        // The steepest-descent images `∇T ∂W/∂p`, once per call.
+        let mut sd = [SVector::<f32, 6>::zeros(); N * N];
         let mut h = SMatrix::<f32, 6, 6>::zeros();
-        for k in 0..N * N {
+        for (k, sd) in sd.iter_mut().enumerate() {
             let (x, y) = coords(k);
             let (gx, gy) = (self.gx[k], self.gy[k]);
-            let sd = SVector::<f32, 6>::from([gx * x, gx * y, gy * x, gy * y, gx, gy]);
-            h += sd * sd.transpose();
+            *sd = SVector::<f32, 6>::from([gx * x, gx * y, gy * x, gy * y, gx, gy]);
+            h += *sd * sd.transpose();
         }
         let h_inv = h.try_inverse()?;
         let mut m = Matrix3::<f32>::new(1.0, 0.0, start.0, 0.0, 1.0, start.1, 0.0, 0.0, 1.0);
@@ -160,8 +162,7 @@ impl PatchTemplate {
                 let i = sample_bilinear(image, u, v)?;
                 *sample = i;
                 let e = i - self.values[k];
-                let (gx, gy) = (self.gx[k], self.gy[k]);
-                b += SVector::<f32, 6>::from([gx * x, gx * y, gy * x, gy * y, gx, gy]) * e;
+                b += sd[k] * e;
             }
             let dp = h_inv * b;
             let w = Matrix3::<f32>::new(
