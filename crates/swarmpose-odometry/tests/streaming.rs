@@ -59,40 +59,13 @@ fn memory_does_not_grow_over_2000_frames() {
 #[test]
 fn motion_covariance_is_honest() {
     for (seed, sigma_px) in [(11u64, 0.5), (12, 1.0)] {
-        let mut config = FeatureSequenceConfig {
-            seed,
-            ..FeatureSequenceConfig::default()
-        };
-        config.noise.position_px = sigma_px;
-        config.noise.disparity_px = sigma_px / 2.0;
-        let seq = FeatureSequence::new(config);
-        let mut tracker = seq.tracker(OdometryConfig::default().with_window(0));
-        let mut nees = Vec::new();
-        for k in 0..251 {
-            let r = tracker
-                .track(
-                    seq.frame(k),
-                    None,
-                    seq.timestamp_s(k),
-                    StageTimes::default(),
-                )
-                .expect("frame");
-            let (Some(cov), Some(reference)) = (r.covariance, r.reference) else {
-                continue;
-            };
-            assert_eq!(reference + 1, k, "frame to frame");
-            let truth = seq.pose(k - 1).inverse() * seq.pose(k);
-            let e = common::motion_error(&r.motion, &truth);
-            let info = cov.try_inverse().expect("positive definite");
-            nees.push((e.transpose() * info * e)[0]);
-        }
-        let mean = nees.iter().sum::<f64>() / nees.len() as f64;
-        eprintln!(
-            "pixel noise {sigma_px} px: mean NEES {mean:.2} over {} motions",
-            nees.len()
+        assert_honest_covariance(
+            &format!("pixel noise {sigma_px} px"),
+            &noisy_stream(seed, sigma_px),
+            OdometryConfig::default().with_window(0),
+            |k| k - 1,
+            false,
         );
-        assert!(nees.len() >= 200);
-        assert!((4.5..=7.5).contains(&mean), "mean NEES {mean:.2}");
     }
 }
 
@@ -107,40 +80,61 @@ fn motion_covariance_is_honest() {
 fn window_motion_covariance_is_honest() {
     for keyframes in [5, 10] {
         for (seed, sigma_px) in [(11u64, 0.5), (12, 1.0)] {
-            let mut config = FeatureSequenceConfig {
-                seed,
-                ..FeatureSequenceConfig::default()
-            };
-            config.noise.position_px = sigma_px;
-            config.noise.disparity_px = sigma_px / 2.0;
-            let seq = FeatureSequence::new(config);
-            let mut tracker = seq.tracker(OdometryConfig::default().with_window(keyframes));
-            let mut nees = Vec::new();
-            common::stream(&seq, &mut tracker, 251, |k, r| {
-                if k < 2 {
-                    return;
-                }
-                let cov = r.covariance.expect("a covariance with every tracked frame");
-                let reference = r.reference.expect("tracked");
-                assert_eq!(
-                    reference,
-                    k.saturating_sub(keyframes - 1),
-                    "the oldest keyframe"
-                );
-                let truth = seq.pose(reference).inverse() * seq.pose(k);
-                let e = common::motion_error(&r.measured_motion, &truth);
-                let info = cov.try_inverse().expect("positive definite");
-                nees.push((e.transpose() * info * e)[0]);
-            });
-            let mean = nees.iter().sum::<f64>() / nees.len() as f64;
-            eprintln!(
-                "window {keyframes}, pixel noise {sigma_px} px: mean NEES {mean:.2} over {} motions",
-                nees.len()
+            assert_honest_covariance(
+                &format!("window {keyframes}, pixel noise {sigma_px} px"),
+                &noisy_stream(seed, sigma_px),
+                OdometryConfig::default().with_window(keyframes),
+                |k| k.saturating_sub(keyframes - 1),
+                true,
             );
-            assert!(nees.len() >= 200);
-            assert!((4.5..=7.5).contains(&mean), "mean NEES {mean:.2}");
         }
     }
+}
+
+/// The default feature stream with pixel noise `sigma_px` on the positions and half of it
+/// on the disparities.
+fn noisy_stream(seed: u64, sigma_px: f64) -> FeatureSequence {
+    let mut config = FeatureSequenceConfig {
+        seed,
+        ..FeatureSequenceConfig::default()
+    };
+    config.noise.position_px = sigma_px;
+    config.noise.disparity_px = sigma_px / 2.0;
+    FeatureSequence::new(config)
+}
+
+/// Streams frames 0-250 of `seq` through an engine with `config`: each frame k >= 2 with
+/// a covariance (every one when `every_frame`) must be measured from `reference(k)`, and
+/// the mean NEES of its measured motion must lie in [4.5, 7.5] over at least 200 frames.
+fn assert_honest_covariance(
+    label: &str,
+    seq: &FeatureSequence,
+    config: OdometryConfig,
+    reference: impl Fn(usize) -> usize,
+    every_frame: bool,
+) {
+    let mut tracker = seq.tracker(config);
+    let mut nees = Vec::new();
+    common::stream(seq, &mut tracker, 251, |k, r| {
+        if k < 1 || (every_frame && k < 2) {
+            return;
+        }
+        let cov = match r.covariance {
+            Some(cov) => cov,
+            None if every_frame => panic!("frame {k}: no covariance"),
+            None => return,
+        };
+        let from = r.reference.expect("tracked");
+        assert_eq!(from, reference(k), "frame {k}: the reference");
+        let truth = seq.pose(from).inverse() * seq.pose(k);
+        let e = common::motion_error(&r.measured_motion, &truth);
+        let info = cov.try_inverse().expect("positive definite");
+        nees.push((e.transpose() * info * e)[0]);
+    });
+    let mean = nees.iter().sum::<f64>() / nees.len() as f64;
+    eprintln!("{label}: mean NEES {mean:.2} over {} motions", nees.len());
+    assert!(nees.len() >= 200);
+    assert!((4.5..=7.5).contains(&mean), "{label}: mean NEES {mean:.2}");
 }
 
 /// Frames without features are marked (constant velocity, then lost after the
