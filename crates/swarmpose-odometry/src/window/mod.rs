@@ -329,8 +329,8 @@ impl Window {
             }
         }
         self.newest_tracks = tracks;
-        let live: std::collections::HashSet<u32> = self.newest_tracks.values().copied().collect();
-        self.templates.retain(|t, _| live.contains(t));
+        // `used` holds the tracks of the newest frame: the live ones.
+        self.templates.retain(|t, _| used.contains(t));
         self.frames.push_back(current);
         while self.frames.len() > self.config.keyframes {
             self.frames.pop_front();
