@@ -36,7 +36,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     fe.temporal.max_distance = env("TDIST", fe.temporal.max_distance as f64) as f32;
     fe.temporal.circular_check = env("CIRC", 0.0) > 0.5;
     fe.temporal.max_displacement_px = Some(env("WIN", 150.0) as f32);
-    fe.stereo.max_depth_m = env("MAXZ", 80.0);
+    fe.stereo.min_point_disparity_px = env("MIND", 5.0) as f32;
     fe.stereo.disparity_offset_px = env("DOFF", 0.0) as f32;
     fe.stereo.gauss_newton = env("GN", 1.0) > 0.5;
     fe.stereo.subpixel_radius = env("SUBR", 3.0) as usize;

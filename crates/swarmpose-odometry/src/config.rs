@@ -90,7 +90,8 @@ pub struct OdometryConfig {
     pub refinement: RefineConfig,
     /// Settings of the self-calibration.
     pub selfcal: SelfCalConfig,
-    /// The sliding window of keyframes refined together (default: none).
+    /// The sliding window of keyframes refined together (default: 10 keyframes,
+    /// [`WindowConfig::default`]).
     pub window: WindowConfig,
 }
 

@@ -32,3 +32,56 @@ fn synthetic_sequence_is_followed() {
     assert!(drift <= 0.1, "drift {drift:.3} %");
     assert!(e.eq20_rms < 0.001);
 }
+
+/// The same images with the rig's baseline given in millimetres instead of metres: the
+/// same motions, their translations and covariances in millimetres, the same decision.
+#[test]
+fn results_do_not_depend_on_the_unit_of_the_baseline() {
+    use swarmpose_odometry::Odometry;
+    use swarmpose_odometry::batch::{camera_of, collect};
+
+    let seq = SyntheticSequence::new(10, 0.8, 1f64.to_radians());
+    let run = |scale: f64| {
+        let mut camera = camera_of(&seq);
+        camera.rig.baseline_m *= scale;
+        let mut odo = Odometry::new(camera, OdometryConfig::default()).expect("engine");
+        let results = collect(&seq, &mut odo, 0.1).expect("odometry");
+        (results, *odo.calibration())
+    };
+    let (metres, decision_m) = run(1.0);
+    let (millimetres, decision_mm) = run(1000.0);
+    assert_eq!(decision_m.model, decision_mm.model);
+    assert_eq!(metres.len(), millimetres.len());
+    for (a, b) in metres.iter().zip(&millimetres) {
+        assert_eq!(a.status, b.status, "frame {}", a.index);
+        assert_eq!(a.counts.inliers, b.counts.inliers, "frame {}", a.index);
+        let angle = a.pose.rotation.angle_to(&b.pose.rotation);
+        let offset = (a.pose.translation.vector - b.pose.translation.vector / 1000.0).norm();
+        eprintln!(
+            "frame {}: rotation {angle:.2e} rad, position {offset:.2e} m",
+            a.index
+        );
+        assert!(
+            angle < 1e-6,
+            "frame {}: rotations differ by {angle:e} rad",
+            a.index
+        );
+        assert!(
+            offset < 1e-6,
+            "frame {}: positions differ by {offset:e} m",
+            a.index
+        );
+        if let (Some(ca), Some(cb)) = (&a.covariance, &b.covariance) {
+            // Translation block in m² against mm²; rotation block the same.
+            let t = (ca[(0, 0)] - cb[(0, 0)] * 1e-6).abs() / ca[(0, 0)];
+            let r = (ca[(5, 5)] - cb[(5, 5)]).abs() / ca[(5, 5)];
+            assert!(
+                t < 1e-4 && r < 1e-4,
+                "frame {}: covariances {t:e} {r:e}",
+                a.index
+            );
+        } else {
+            assert_eq!(a.covariance.is_some(), b.covariance.is_some());
+        }
+    }
+}

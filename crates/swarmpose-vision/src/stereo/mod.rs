@@ -38,8 +38,12 @@ pub struct StereoConfig {
     /// Added to every measured disparity before triangulation, pixels (default 0): corrects a
     /// calibration whose right principal point is off.
     pub disparity_offset_px: f32,
-    /// Points deeper than this are dropped, metres (default 80).
-    pub max_depth_m: f64,
+    /// Points whose (corrected) disparity is below this are dropped, pixels (default 5):
+    /// their relative depth error `σ_d / d` is above 5 % at the default disparity noise,
+    /// and a disparity bias of `b` px scales their depth by `b / d`. A disparity, not a
+    /// depth, so that which points are kept does not depend on the unit of the baseline
+    /// or on the size of the scene (a rig calibrated in millimetres keeps the same points).
+    pub min_point_disparity_px: f32,
     /// Assumed standard deviation of a disparity, pixels, for the per-point noise
     /// (default 0.25).
     pub disparity_sigma_px: f64,
@@ -63,7 +67,7 @@ impl Default for StereoConfig {
             left_right_check: true,
             subpixel_radius: 3,
             gauss_newton: true,
-            max_depth_m: 80.0,
+            min_point_disparity_px: 5.0,
             disparity_offset_px: 0.0,
             disparity_sigma_px: 0.25,
             position_sigma_px: 0.5,
@@ -230,7 +234,7 @@ pub fn match_stereo<D: Descriptor>(
         else {
             continue;
         };
-        if point.z > config.max_depth_m {
+        if disparity < config.min_point_disparity_px {
             continue;
         }
         let measure = config.row_offset_stride > 0 && out.len() % config.row_offset_stride == 0;
