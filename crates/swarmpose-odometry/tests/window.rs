@@ -63,7 +63,11 @@ fn window_beats_frame_to_frame_on_karlsruhe() {
     assert!(b < a, "ATE {b:.3} % with the window, {a:.3} % without");
 }
 
-/// The still EuRoC clip: with the window the camera stays within 3 mm of where it started.
+/// The still EuRoC clip: with the window the camera stays within 3 mm of where it started;
+/// no frame moves enough to be a keyframe, so every frame is measured from the first, and
+/// the path ends closer to its start than frame to frame's (which adds the noise of every
+/// pair). The ground truth (Vicon) itself moves up to 2.6 mm here (PROVENANCE.md), so the
+/// end point is compared with the start, not with the ground truth.
 #[test]
 fn window_keeps_a_still_camera_still() {
     let name = "euroc_v1_01_easy_micro";
@@ -72,17 +76,27 @@ fn window_keeps_a_still_camera_still() {
     };
     let seq = open(&dir).expect("open");
     let win = common::run_sequence(seq.as_ref(), with_window(10));
+    let f2f = common::run_sequence(seq.as_ref(), with_window(0));
     let worst = win
         .poses()
         .iter()
         .map(|p| p.translation.vector.norm())
         .fold(0.0, f64::max);
+    let end = |r: &common::Run| r.poses().last().map_or(0.0, |p| p.translation.vector.norm());
+    let (end_win, end_f2f) = (end(&win), end(&f2f));
     eprintln!(
-        "{name}: window of 10, farthest from the start {:.2} mm",
-        1e3 * worst
+        "{name}: window of 10, farthest from the start {:.2} mm, ends {:.2} mm from it; \
+         frame to frame ends {:.2} mm from it",
+        1e3 * worst,
+        1e3 * end_win,
+        1e3 * end_f2f
     );
     assert_eq!(win.untracked(), 0);
     assert!(worst <= 0.003, "{worst} m");
+    for r in &win.results[1..] {
+        assert_eq!(r.reference, Some(0), "frame {}", r.index);
+    }
+    assert!(end_win < end_f2f, "{end_win} m against {end_f2f} m");
 }
 
 /// One thread and two threads give the same trajectory with the window on.

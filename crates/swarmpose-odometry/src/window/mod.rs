@@ -12,10 +12,16 @@
 //! size) and without the bias a translation-only alignment takes from the patch's growing
 //! scale and shear; a track whose patch is not found again ends.
 //!
-//! **Keyframes.** The engine measures each frame against the previous one, so every tracked
-//! frame is a keyframe: the window holds the last [`WindowConfig::keyframes`] tracked
-//! frames, in order, without a gap. A frame that is not tracked (constant velocity, lost)
-//! empties the window; it starts again from the next tracked pair.
+//! **Keyframes.** The engine measures each frame against the previous one, and the window
+//! holds the last [`WindowConfig::keyframes`] keyframes and the newest frame. The newest
+//! frame becomes a keyframe when its measurements have moved beyond their noise since the
+//! last keyframe, or when that keyframe no longer holds most of its tracks
+//! ([`is_keyframe`]); otherwise it is refined with the window, its pose given out, and it
+//! leaves the window when the next frame arrives. A camera that stands still (or creeps)
+//! is then measured against one keyframe instead of adding the noise of every pair to its
+//! path, and how often keyframes come does not follow the frame rate alone. A frame that is
+//! not tracked (constant velocity, lost) empties the window; it starts again from the next
+//! tracked pair.
 //!
 //! **Refinement** ([`solve`]). The poses of the window's keyframes except the oldest (held
 //! fixed: it fixes the gauge) and the points of every track seen at least twice are
@@ -115,6 +121,9 @@ pub(crate) struct Keyframe {
     pub pose_cw: Isometry3<f64>,
     /// Its measurements, each of one track.
     pub observations: Vec<(u32, StereoObservation)>,
+    /// True for a keyframe; false for the newest frame when it is not one (it leaves
+    /// the window when the next frame arrives).
+    pub keyframe: bool,
 }
 
 /// What one refinement of the window did.
@@ -128,6 +137,8 @@ pub struct WindowReport {
     pub observations: usize,
     /// Levenberg-Marquardt iterations.
     pub iterations: usize,
+    /// True when the newest frame became a keyframe ([`is_keyframe`]).
+    pub keyframe: bool,
     /// Covariance of the newest keyframe's pose relative to the oldest (fixed) one, from
     /// the window's information: see [`WindowMotion::covariance`].
     pub covariance: Option<Matrix6<f64>>,
@@ -255,6 +266,7 @@ impl Window {
                 index: reference_index,
                 pose_cw: reference_pose.inverse(),
                 observations: Vec::new(),
+                keyframe: true,
             });
         }
         // The pair's motion, from the window's own (refined) pose of the reference.
@@ -267,6 +279,7 @@ impl Window {
             index,
             pose_cw: start.inverse(),
             observations: Vec::with_capacity(links.len()),
+            keyframe: false,
         };
         let mut tracks = HashMap::with_capacity(links.len());
         let mut used = std::collections::HashSet::with_capacity(links.len());
@@ -331,11 +344,22 @@ impl Window {
         self.newest_tracks = tracks;
         // `used` holds the tracks of the newest frame: the live ones.
         self.templates.retain(|t, _| used.contains(t));
+        // The previous frame leaves unless it is a keyframe: its tracks go on in this one.
+        let dropped = self.frames.back().is_some_and(|f| !f.keyframe);
+        if dropped {
+            self.frames.pop_back();
+        }
+        current.keyframe = self
+            .frames
+            .back()
+            .is_none_or(|last| is_keyframe(last, &current, &model.noise));
         self.frames.push_back(current);
         while self.frames.len() > self.config.keyframes {
             self.frames.pop_front();
         }
-        if self.frames.len() < 3 {
+        // Two frames that are a pair add nothing to the pair's refinement; two that are
+        // not (the newest measured from a frame that left) do.
+        if self.frames.len() < 3 && !dropped {
             return None;
         }
         let report = solve::refine_window(
@@ -355,6 +379,49 @@ impl Window {
         };
         Some((newest.pose_cw.inverse(), report, measured))
     }
+}
+
+/// Median change of a frame's measurements since the last keyframe, in standard
+/// deviations of a difference of two measurements (`√2 σ` for `u`, `v` and `d`), above
+/// which the frame is a keyframe: noise alone gives a median of about 1.5 (the χ
+/// distribution with 3 degrees of freedom), a move of 3 is about 2 px in the image at the
+/// default 0.5 px. Set a priori, not measured on any sequence.
+pub const KEYFRAME_MIN_MOVE: f64 = 3.0;
+
+/// True when `current` is to be a keyframe after `last` (the window's newest keyframe):
+/// fewer than half of `current`'s measurements are of tracks `last` sees (the window would
+/// lose them), or their median change since `last`, whitened by the noise of a difference
+/// of two measurements, is above [`KEYFRAME_MIN_MOVE`] (the frame adds a view the window
+/// does not have).
+#[must_use]
+pub(crate) fn is_keyframe(
+    last: &Keyframe,
+    current: &Keyframe,
+    noise: &crate::refine::model::PixelNoise,
+) -> bool {
+    let seen: HashMap<u32, StereoObservation> = last.observations.iter().copied().collect();
+    let (sp, sd) = (
+        std::f64::consts::SQRT_2 * noise.position_px,
+        std::f64::consts::SQRT_2 * noise.disparity_px,
+    );
+    let mut moves: Vec<f64> = current
+        .observations
+        .iter()
+        .filter_map(|(t, z)| {
+            seen.get(t).map(|y| {
+                (((z.u - y.u) / sp).powi(2)
+                    + ((z.v - y.v) / sp).powi(2)
+                    + ((z.d - y.d) / sd).powi(2))
+                .sqrt()
+            })
+        })
+        .collect();
+    if moves.is_empty() || 2 * moves.len() < current.observations.len() {
+        return true;
+    }
+    let mid = moves.len() / 2;
+    let (_, median, _) = moves.select_nth_unstable_by(mid, f64::total_cmp);
+    *median > KEYFRAME_MIN_MOVE
 }
 
 #[cfg(test)]

@@ -417,6 +417,7 @@ pub(crate) fn refine_window(
         tracks: tracks.len(),
         observations,
         iterations,
+        keyframe: frames.last().is_some_and(|f| f.keyframe),
         covariance,
     })
 }
