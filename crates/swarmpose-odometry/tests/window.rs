@@ -82,7 +82,11 @@ fn window_keeps_a_still_camera_still() {
         .iter()
         .map(|p| p.translation.vector.norm())
         .fold(0.0, f64::max);
-    let end = |r: &common::Run| r.poses().last().map_or(0.0, |p| p.translation.vector.norm());
+    let end = |r: &common::Run| {
+        r.poses()
+            .last()
+            .map_or(0.0, |p| p.translation.vector.norm())
+    };
     let (end_win, end_f2f) = (end(&win), end(&f2f));
     eprintln!(
         "{name}: window of 10, farthest from the start {:.2} mm, ends {:.2} mm from it; \
