@@ -146,4 +146,10 @@ pub struct FrameResult {
     pub focal_px: f64,
     /// The model of that correction.
     pub correction_model: CorrectionModel,
+    /// True when the frame is a keyframe: with the sliding window, when it became one of
+    /// the window's keyframes ([`crate::window`]: it moved beyond the measurement noise
+    /// since the last one, or lost most of its tracks); without it, every frame that
+    /// later frames are measured from (the first and every tracked frame). False for a
+    /// frame that was not tracked.
+    pub keyframe: bool,
 }

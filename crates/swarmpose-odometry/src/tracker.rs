@@ -66,6 +66,8 @@ struct Measured {
     motion: Isometry3<f64>,
     covariance: Option<Matrix6<f64>>,
     window: Option<WindowMotion>,
+    /// The frame is a keyframe of the window (always without the window).
+    keyframe: bool,
     inliers: usize,
     correction: DisparityCorrection,
     focal_px: f64,
@@ -292,6 +294,7 @@ impl<D: Descriptor> Tracker<D> {
             motion: start,
             covariance: None,
             window: None,
+            keyframe: true,
             inliers: est_inliers,
             correction,
             focal_px,
@@ -441,6 +444,7 @@ impl<D: Descriptor> Tracker<D> {
                     measured.covariance = None;
                     measured.window = Some(window);
                 }
+                measured.keyframe = self.window.newest_is_keyframe();
                 times.window_ms = ms(t);
             }
         }
@@ -490,6 +494,7 @@ impl<D: Descriptor> Tracker<D> {
             correction,
             focal_px,
             correction_model,
+            keyframe: false,
         };
         let Some(last) = self.last else {
             // The first frame: the origin.
@@ -498,6 +503,7 @@ impl<D: Descriptor> Tracker<D> {
                 timestamp_s,
             });
             if enough_points {
+                result.keyframe = true;
                 self.set_reference(frame, left, Isometry3::identity(), timestamp_s, index);
             } else {
                 result.status = Status::Lost(too_few());
@@ -535,6 +541,7 @@ impl<D: Descriptor> Tracker<D> {
                     }
                 }
                 result.status = Status::Tracked;
+                result.keyframe = m.keyframe;
                 result.correction = m.correction;
                 result.focal_px = m.focal_px;
                 result.correction_model = m.model;

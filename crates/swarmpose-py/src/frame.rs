@@ -128,6 +128,15 @@ impl Frame {
         Ok(d)
     }
 
+    /// True when the frame is a keyframe: with the sliding window, one of the window's
+    /// keyframes (it moved beyond the measurement noise since the last one, or lost most
+    /// of its tracks); without it, every frame later frames are measured from. False for
+    /// a frame that was not tracked.
+    #[getter]
+    fn keyframe(&self) -> bool {
+        self.result.keyframe
+    }
+
     /// The change of the rig's focal length applied to this frame, pixels of ``fx``
     /// (``fy`` in proportion; 0 unless self-calibration chose the ``focal-length`` cause).
     #[getter]

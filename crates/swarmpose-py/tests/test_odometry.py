@@ -42,7 +42,11 @@ def test_streaming_matches_the_cli(kitti_seq2, swarmpose_bin, tmp_path):
     assert sum(f.tracked for f in frames) >= 45
     assert all(f.covariance is None or f.covariance.shape == (6, 6) for f in frames)
     # The default window of 10 keyframes: each tracked frame is measured from the
-    # window's oldest keyframe, with the covariance of that motion.
+    # window's oldest keyframe, with the covariance of that motion; driving at 10 Hz,
+    # every frame moves enough to be a keyframe (the CLI's frames.csv says the same).
+    cli_keyframes = [line.rstrip().split(",")[-1] == "1"
+                     for line in (out / "frames.csv").read_text().splitlines()[1:]]
+    assert [f.keyframe for f in frames] == cli_keyframes == [True] * 51
     for k, f in enumerate(frames[1:], start=1):
         assert f.reference == max(0, k - 9)
         assert f.measured_motion.shape == (4, 4)

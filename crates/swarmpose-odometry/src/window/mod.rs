@@ -16,7 +16,7 @@
 //! holds the last [`WindowConfig::keyframes`] keyframes and the newest frame. The newest
 //! frame becomes a keyframe when its measurements have moved beyond their noise since the
 //! last keyframe, or when that keyframe no longer holds most of its tracks
-//! ([`is_keyframe`]); otherwise it is refined with the window, its pose given out, and it
+//! ([`KEYFRAME_MIN_MOVE`]); otherwise it is refined with the window, its pose given out, and it
 //! leaves the window when the next frame arrives. A camera that stands still (or creeps)
 //! is then measured against one keyframe instead of adding the noise of every pair to its
 //! path, and how often keyframes come does not follow the frame rate alone. A frame that is
@@ -137,7 +137,7 @@ pub struct WindowReport {
     pub observations: usize,
     /// Levenberg-Marquardt iterations.
     pub iterations: usize,
-    /// True when the newest frame became a keyframe ([`is_keyframe`]).
+    /// True when the newest frame became a keyframe ([`KEYFRAME_MIN_MOVE`]).
     pub keyframe: bool,
     /// Covariance of the newest keyframe's pose relative to the oldest (fixed) one, from
     /// the window's information: see [`WindowMotion::covariance`].
@@ -209,6 +209,13 @@ impl Window {
     #[must_use]
     pub fn len(&self) -> usize {
         self.frames.len()
+    }
+
+    /// True when the newest frame held is a keyframe ([`KEYFRAME_MIN_MOVE`]); false when it is
+    /// not, or the window is empty.
+    #[must_use]
+    pub fn newest_is_keyframe(&self) -> bool {
+        self.frames.back().is_some_and(|f| f.keyframe)
     }
 
     /// True when no keyframe is held.
