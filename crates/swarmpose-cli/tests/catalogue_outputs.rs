@@ -206,7 +206,9 @@ fn runs_that_track_nothing_are_not_usable() {
     let stdout = String::from_utf8_lossy(&out.stdout);
     let last = stdout.lines().last().unwrap_or_default();
     assert!(
-        last.ends_with("(3 frames: 0 of 2 motions tracked, 0 at constant velocity, 3 lost)"),
+        last.ends_with(
+            "(3 frames: 0 of 2 motions tracked, 0 at constant velocity, 3 lost, 0 keyframes)"
+        ),
         "{stdout}"
     );
     let traj = std::fs::read_to_string(out_dir.join("trajectory.kitti.txt")).expect("trajectory");

@@ -132,12 +132,15 @@ pub struct Summary {
     pub constant_velocity: usize,
     /// Frames lost (a first frame without enough points included).
     pub lost: usize,
+    /// Keyframes ([`FrameResult::keyframe`]).
+    pub keyframes: usize,
 }
 
 impl Summary {
     /// Counts one more frame.
     pub fn add(&mut self, r: &FrameResult) {
         self.frames += 1;
+        self.keyframes += usize::from(r.keyframe);
         match r.status {
             Status::First => {}
             Status::Tracked => self.tracked += 1,
@@ -162,16 +165,17 @@ impl Summary {
         }
     }
 
-    /// `N frames: T of M motions tracked, C at constant velocity, L lost`.
+    /// `N frames: T of M motions tracked, C at constant velocity, L lost, K keyframes`.
     #[must_use]
     pub fn text(&self) -> String {
         format!(
-            "{} frames: {} of {} motions tracked, {} at constant velocity, {} lost",
+            "{} frames: {} of {} motions tracked, {} at constant velocity, {} lost, {} keyframes",
             self.frames,
             self.tracked,
             self.motions(),
             self.constant_velocity,
-            self.lost
+            self.lost,
+            self.keyframes
         )
     }
 }
