@@ -242,8 +242,10 @@ impl Odometry {
     ///
     /// # Errors
     /// [`OdometryError::Frame`] for images that do not fit the camera (size, empty, left
-    /// and right different) or a timestamp that does not increase; the engine's state
-    /// is then unchanged and the next frame can be given. [`OdometryError::Camera`] for
+    /// and right different), left and right images that look exchanged (few stereo
+    /// matches, and many with the images the other way round), or a timestamp that does
+    /// not increase; the engine's state is then unchanged and the next frame can be
+    /// given. [`OdometryError::Camera`] for
     /// an RGB-D engine.
     pub fn track(&mut self, input: StereoInput<'_>) -> Result<FrameResult, OdometryError> {
         self.track_timed(input, 0.0)
@@ -270,7 +272,7 @@ impl Odometry {
             ..StageTimes::default()
         };
         with_inner!(&mut self.inner, f, t => {
-            let frame = stereo_frame(f.as_ref(), input.left, input.right, &mut times);
+            let frame = stereo_frame(f.as_ref(), input.left, input.right, &mut times)?;
             t.track(frame, Some(input.left), input.timestamp_s, times)
         })
     }
@@ -375,7 +377,7 @@ impl Odometry {
                                 frame.left.view(),
                                 frame.right.view(),
                                 &mut times,
-                            );
+                            )?;
                             Ok((features, frame, times))
                         });
                         let failed = front.is_err();

@@ -9,6 +9,7 @@ use swarmpose_vision::features::{FeatureExtractor, GrayView};
 use swarmpose_vision::frontend::{Frontend, StereoFrame};
 use swarmpose_vision::stereo::RectifiedStereo;
 
+use crate::error::OdometryError;
 use crate::intake::DepthView;
 use crate::record::StageTimes;
 use crate::refine::model::PixelNoise;
@@ -18,21 +19,47 @@ pub(crate) fn ms(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
 }
 
+/// A frame whose stereo points are fewer than this share of its left features is
+/// checked for images given the wrong way round (on the shared sequences every frame
+/// has at least 0.40; a pair given the wrong way round, 0.03).
+const EXCHANGED_CHECK_SHARE: f64 = 0.25;
+/// The images are taken as given the wrong way round when exchanging them gives at
+/// least this many times the stereo matches, and at least [`EXCHANGED_MIN_MATCHES`].
+const EXCHANGED_RATIO: usize = 4;
+/// See [`EXCHANGED_RATIO`].
+const EXCHANGED_MIN_MATCHES: usize = 50;
+
 /// The triangulated features of a stereo frame, timing features and stereo matching.
+///
+/// # Errors
+/// [`OdometryError::Frame`] when the left and right images look exchanged: few stereo
+/// matches as given, and many with the images the other way round.
 pub(crate) fn stereo_frame<E: FeatureExtractor>(
     frontend: &Frontend<E>,
     left: GrayView<'_>,
     right: GrayView<'_>,
     times: &mut StageTimes,
-) -> StereoFrame<E::Descriptor> {
+) -> Result<StereoFrame<E::Descriptor>, OdometryError> {
     let t = Instant::now();
     let lf = frontend.extract(left);
     let rf = frontend.extract_right(right);
     times.features_ms = ms(t);
     let t = Instant::now();
     let frame = frontend.stereo_from_features(&lf, &rf, left, right);
+    if (frame.len() as f64) < EXCHANGED_CHECK_SHARE * lf.len() as f64 {
+        let exchanged = frontend.exchanged_stereo_matches(&lf, &rf, left, right);
+        if exchanged >= EXCHANGED_MIN_MATCHES && exchanged >= EXCHANGED_RATIO * frame.len() {
+            return Err(OdometryError::Frame {
+                message: format!(
+                    "the left and right images look exchanged: {} stereo matches as given, \
+                     {exchanged} with the two images the other way round",
+                    frame.len()
+                ),
+            });
+        }
+    }
     times.stereo_ms = ms(t);
-    frame
+    Ok(frame)
 }
 
 /// The noise model of an RGB-D camera: Khoshelham and Elberink's Kinect depth noise

@@ -1,5 +1,6 @@
 //! Bad input to the engine: frames of another size than the camera, an empty image,
-//! left and right of different sizes, a buffer shorter than its size says, timestamps
+//! left and right of different sizes, left and right exchanged, a buffer shorter than its
+//! size says, timestamps
 //! that do not increase, a camera that is not one, and a frame with no texture. Each is
 //! a clear error (the engine's state unchanged) or a visible status, never a panic; the
 //! engine goes on with the next good frames.
@@ -30,7 +31,11 @@ fn bad_frames_are_refused_and_the_engine_goes_on() {
     let small = GrayImage::new(100, 80);
     let empty = GrayImage::new(0, 0);
     let f1 = seq.frame(1).expect("frame");
-    let cases: [(StereoInput<'_>, &str); 5] = [
+    let cases: [(StereoInput<'_>, &str); 6] = [
+        (
+            input(&f1.right, &f1.left, 0.1),
+            "the left and right images look exchanged",
+        ),
         (
             input(&small, &small, 0.1),
             "the left image is 100x80, but the camera's images are 480x288",

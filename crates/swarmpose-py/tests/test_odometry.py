@@ -126,6 +126,18 @@ def test_bad_frames_leave_the_engine_usable():
     assert second.index == 1
 
 
+def test_images_given_the_wrong_way_round(kitti_seq2):
+    """A pair whose left and right images are exchanged raises, and the engine takes the
+    pair the right way round next."""
+    seq = swarmpose.Sequence(kitti_seq2)
+    odo = swarmpose.Odometry.from_sequence(kitti_seq2)
+    left, right = seq[0]
+    with pytest.raises(ValueError) as e:
+        odo.track(right, left, 0.0)
+    assert str(e.value).startswith("the left and right images look exchanged: ")
+    assert odo.track(left, right, 0.0).status == "first"
+
+
 def test_paths_that_do_not_exist(tmp_path):
     missing = tmp_path / "nowhere"
     with pytest.raises(FileNotFoundError) as e:

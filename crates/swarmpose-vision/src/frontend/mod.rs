@@ -301,6 +301,21 @@ impl<E: FeatureExtractor> Frontend<E> {
         f
     }
 
+    /// The number of stereo matches with the roles of the images exchanged (the right
+    /// image's features matched as the left ones, and the other way round): on a pair
+    /// whose images were given the wrong way round it is the number the pair would have,
+    /// and far more than [`Frontend::stereo_from_features`] finds.
+    #[must_use]
+    pub fn exchanged_stereo_matches(
+        &self,
+        left: &Features<E::Descriptor>,
+        right: &Features<E::Descriptor>,
+        left_img: GrayView<'_>,
+        right_img: GrayView<'_>,
+    ) -> usize {
+        match_stereo(right, left, right_img, left_img, &self.rig, &self.stereo).len()
+    }
+
     /// One stereo frame: extract in both images, match, triangulate.
     #[must_use]
     pub fn stereo_frame(
