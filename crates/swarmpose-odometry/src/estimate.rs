@@ -48,6 +48,23 @@ pub(crate) fn observations(m: &FrameMatches, stripe_px: f64) -> Observations {
     }
 }
 
+/// Median image motion, pixels, of the measurements `inliers` (indices into `obs`)
+/// between the reference and the current frame; 0 for none.
+pub(crate) fn median_flow_px(obs: &Observations, inliers: &[usize]) -> f64 {
+    let mut flows: Vec<f64> = inliers
+        .iter()
+        .map(|&k| {
+            let (a, b) = (&obs.reference[k], &obs.current[k]);
+            (b.u - a.u).hypot(b.v - a.v)
+        })
+        .collect();
+    if flows.is_empty() {
+        return 0.0;
+    }
+    let mid = flows.len() / 2;
+    *flows.select_nth_unstable_by(mid, f64::total_cmp).1
+}
+
 /// The window's links of the inlier matches `inliers` (indices into `obs`) of `m`: the
 /// features' indices in both frames, the reference's measurement, the current frame's
 /// patch-aligned measurement and its detected keypoint.

@@ -6,7 +6,10 @@
 //! `ψ` of the right camera, and terms in `x`, `y`, `x y`). Such an error bends the
 //! triangulated scene, so the same points seen from two places no longer fit one rigid
 //! motion: the reprojection cost of a moving pair depends on `δ`. A pair without
-//! translation says nothing about it, and needs no special case: its information is 0.
+//! translation says nothing about it: its information is 0. A pair whose features moved
+//! by less than a pixel adds no rigidity evidence at all (the tracker's
+//! `MIN_EVIDENCE_FLOW_PX`): there the front end's own sub-pixel errors are as large as
+//! the motion and bend the pair like a disparity offset.
 //!
 //! **Two kinds of evidence.** A rotation of the right camera also moves its image points
 //! vertically, which every stereo match measures directly, frame by frame and without
@@ -408,12 +411,7 @@ impl SelfCalibration {
         if !(scale2.is_finite() && scale2 > 0.0) {
             return &self.decision;
         }
-        let keep = (-dt_s.max(0.0) / self.config.memory_s).exp();
-        if keep.is_finite() && keep < 1.0 {
-            for q in std::iter::once(&mut self.joint).chain(self.folds.iter_mut()) {
-                q.scale(keep);
-            }
-        }
+        self.fade(dt_s);
         let at = vector_of(at, focal_px);
         let mut both = reduced[0];
         both += &reduced[1];
@@ -434,6 +432,26 @@ impl SelfCalibration {
         self.decision.pairs += 1;
         self.decide();
         &self.decision
+    }
+
+    /// A pair that adds no rigidity evidence (it moved too little to say anything about
+    /// the calibration), `dt_s` seconds after its reference: the evidence so far fades
+    /// over that time, and the decision is taken again (the rows may have changed).
+    pub fn add_pair_without_evidence(&mut self, dt_s: f64) -> &Decision {
+        self.fade(dt_s);
+        self.decide();
+        &self.decision
+    }
+
+    /// Fades the rigidity evidence over `dt_s` seconds (the time constant
+    /// [`SelfCalConfig::memory_s`]).
+    fn fade(&mut self, dt_s: f64) {
+        let keep = (-dt_s.max(0.0) / self.config.memory_s).exp();
+        if keep.is_finite() && keep < 1.0 {
+            for q in std::iter::once(&mut self.joint).chain(self.folds.iter_mut()) {
+                q.scale(keep);
+            }
+        }
     }
 
     fn decide(&mut self) {

@@ -36,6 +36,8 @@ use crate::refine::{Refined, refine};
 use crate::selfcal::{CorrectionModel, Decision, SelfCalibration};
 use crate::window::{Images, Window, WindowMotion};
 
+mod calibrate;
+
 /// The frame that the next one is matched to.
 #[derive(Debug, Clone)]
 struct Reference<D> {
@@ -76,13 +78,6 @@ struct Measured {
     ref_timestamp_s: f64,
     ref_index: usize,
 }
-
-/// A new correction that moves no disparity by more than this, pixels, does not call
-/// for a second refinement of the pair.
-const CORRECTION_TOLERANCE_PX: f64 = 0.05;
-
-/// Most refinements of a pair again under the correction its own evidence leads to.
-const FIXED_POINT_ITERATIONS: usize = 4;
 
 /// `rig` with its focal length changed by `focal_px` pixels of `fx`, `fy` in proportion.
 fn focal_changed(rig: &RectifiedStereo, focal_px: f64) -> RectifiedStereo {
@@ -225,32 +220,6 @@ impl<D: Descriptor> Tracker<D> {
         }
     }
 
-    /// Largest change, pixels, of the correction and the focal length (`a` and `b`, each
-    /// with its focal length change) over the image's columns.
-    fn correction_change(
-        &self,
-        (a, fa): (&DisparityCorrection, f64),
-        (b, fb): (&DisparityCorrection, f64),
-    ) -> f64 {
-        let r = &self.camera.rig;
-        let (w, h) = (self.camera.width as f64, self.camera.height as f64);
-        let mut diff = b.coefficients();
-        for (d, a) in diff.iter_mut().zip(a.coefficients()) {
-            *d -= a;
-        }
-        let diff = DisparityCorrection::from_coefficients(diff);
-        // At the corners and edge midpoints of the image.
-        let xs = [-r.cx / r.fx, 0.0, (w - r.cx) / r.fx];
-        let ys = [-r.cy / r.fy, 0.0, (h - r.cy) / r.fy];
-        let disparity = xs
-            .iter()
-            .flat_map(|x| ys.iter().map(move |y| diff.at_normalised(*x, *y).abs()))
-            .fold(0.0, f64::max);
-        // A focal length change moves a pixel at normalised x by Δf x.
-        let focal = xs.iter().map(|x| x.abs()).fold(0.0, f64::max) * (fb - fa).abs();
-        disparity.max(focal)
-    }
-
     /// The motion of `frame` from the reference, or why there is none.
     fn measure(
         &mut self,
@@ -355,48 +324,10 @@ impl<D: Descriptor> Tracker<D> {
         let mut best: (Refined, DisparityCorrection, f64, CorrectionModel) =
             (refined, correction, focal_px, model);
         if needs_evidence {
-            // The row offsets of the current frame's confirmed matches.
-            let rows = best.0.inliers.iter().map(|&k| {
-                let j = m.src_index[obs.source[k]];
-                let kp = &frame.left_keypoints[j];
-                (
-                    f64::from(kp.x),
-                    f64::from(kp.y),
-                    f64::from(frame.disparities_px[j]),
-                    frame.row_offsets_px.get(j).copied().unwrap_or(f32::NAN),
-                )
-            });
-            self.selfcal
-                .add_rows(rows, &self.camera.rig, self.camera.width);
-            // The pair's evidence depends on the correction it is computed under (its
-            // inliers are gated and weighted under it), so it is computed again under
-            // the correction it leads to, until the two agree (a fixed point per pair).
+            let mut selfcal = std::mem::take(&mut self.selfcal);
             let dt_s = timestamp_s - ref_timestamp_s;
-            let before = self.selfcal.clone();
-            let mut cal = before.clone();
-            cal.add_pair(&best.0.reduced, &best.1, best.2, best.0.scale2, dt_s);
-            for _ in 0..FIXED_POINT_ITERATIONS {
-                let d = *cal.decision();
-                let change = self.correction_change((&best.1, best.2), (&d.correction, d.focal_px));
-                if change <= CORRECTION_TOLERANCE_PX {
-                    break;
-                }
-                let Ok(r) = refine(
-                    &self.model(d.correction, d.focal_px),
-                    &self.config.refinement,
-                    &obs.reference,
-                    &obs.current,
-                    Some(&obs.folds),
-                    &best.0.motion,
-                    min,
-                ) else {
-                    break;
-                };
-                best = (r, d.correction, d.focal_px, d.model);
-                cal = before.clone();
-                cal.add_pair(&best.0.reduced, &best.1, best.2, best.0.scale2, dt_s);
-            }
-            self.selfcal = cal;
+            best = self.self_calibrate(&mut selfcal, frame, &m, &obs, best, dt_s, min);
+            self.selfcal = selfcal;
         }
         times.calibrate_ms += ms(t);
         if self.config.refine {
