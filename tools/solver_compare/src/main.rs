@@ -248,6 +248,9 @@ fn run() -> Result<(), String> {
         run_swarmpose(&p, n, args.reps, &conv)?,
         run_swarmpose(&p, 10, args.reps, "10 iterations")?,
         run_swarmpose(&p, 1, args.reps, "1 iteration (engine default)")?,
+        // No iteration: what `add` costs around the solver (linking, the keyframe test,
+        // gathering the tracks, the points' pre-fit).
+        run_swarmpose(&p, 0, args.reps, "0 iterations (no LM step)")?,
     ];
     #[cfg(feature = "apex")]
     {

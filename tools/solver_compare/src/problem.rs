@@ -3,7 +3,7 @@
 //! with a few per cent of gross outliers, and the drifting initial poses a chain of pair
 //! motions would give. Every random choice comes from one seeded generator.
 
-use nalgebra::{Isometry3, Matrix3, Point3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Matrix3, Point3, Rotation3, Translation3, UnitQuaternion, Vector3};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
@@ -216,9 +216,10 @@ pub fn pose_cw(pose_wc: &Isometry3<f64>) -> PoseCw {
     )
 }
 
-/// The camera-in-world pose of a `T_kw`.
+/// The camera-in-world pose of a `T_kw` (the rotation converted exactly, not by
+/// nalgebra's iterative `from_matrix`).
 pub fn pose_wc((rot, trans): &PoseCw) -> Isometry3<f64> {
-    let q = UnitQuaternion::from_matrix(rot);
+    let q = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(*rot));
     Isometry3::from_parts(Translation3::from(*trans), q).inverse()
 }
 
