@@ -86,7 +86,9 @@ pub struct OdometryArgs {
     pub no_refine: bool,
 
     /// Refine the last K keyframes and the feature tracks they share together (a sliding
-    /// window bundle adjustment; 0: frame to frame only; 2 is frame to frame again).
+    /// window bundle adjustment; 0: frame to frame only; 2 is frame to frame again). A
+    /// frame becomes a keyframe when its features moved beyond their noise since the last
+    /// one or it lost most of that one's tracks.
     #[arg(long, value_name = "K", default_value_t = swarmpose_odometry::window::WindowConfig::default().keyframes)]
     pub window: usize,
 
