@@ -13,7 +13,7 @@
 //! scale and shear; a track whose patch is not found again ends.
 //!
 //! **Keyframes.** The engine measures each frame against the previous one, and the window
-//! holds the last [`WindowConfig::keyframes`] keyframes and the newest frame. The newest
+//! holds [`WindowConfig::keyframes`] frames: the newest and the keyframes before it. The newest
 //! frame becomes a keyframe when its measurements have moved beyond their noise since the
 //! last keyframe, or when that keyframe no longer holds most of its tracks
 //! ([`KEYFRAME_MIN_MOVE`]); otherwise it is refined with the window, its pose given out, and it
