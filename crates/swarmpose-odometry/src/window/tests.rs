@@ -24,28 +24,53 @@ fn measure(m: &StereoModel, pose: &Isometry3<f64>, pw: &Point3<f64>) -> Option<S
     })
 }
 
+/// `n` random points (seed `seed`), metres: `x` within `±half_width_m`, `y` in [-3, 2)
+/// (y down), `z` in [4, `max_depth_m`).
+fn random_points(seed: u64, n: usize, half_width_m: f64, max_depth_m: f64) -> Vec<Point3<f64>> {
+    random_points_from(
+        &mut ChaCha8Rng::seed_from_u64(seed),
+        n,
+        half_width_m,
+        max_depth_m,
+    )
+}
+
+/// [`random_points`] drawn from `rng`.
+fn random_points_from(
+    rng: &mut ChaCha8Rng,
+    n: usize,
+    half_width_m: f64,
+    max_depth_m: f64,
+) -> Vec<Point3<f64>> {
+    (0..n)
+        .map(|_| {
+            Point3::new(
+                rng.random_range(-half_width_m..half_width_m),
+                rng.random_range(-3.0..2.0),
+                rng.random_range(4.0..max_depth_m),
+            )
+        })
+        .collect()
+}
+
+/// The error the window is given on each frame's pose: 1 cm sideways, 0.05 degree of yaw.
+fn drift_error() -> Isometry3<f64> {
+    Isometry3::from_parts(
+        Translation3::new(0.01, 0.0, 0.0),
+        UnitQuaternion::from_axis_angle(&Vector3::y_axis(), 0.05f64.to_radians()),
+    )
+}
+
 /// A camera driving forward 1 m a frame and turning 1 degree, among 300 random points;
 /// the window is given poses that drift by 1 cm and 0.05 degree a frame.
 fn drive(keyframes: usize, frames: usize) -> (Vec<Isometry3<f64>>, Vec<Isometry3<f64>>) {
     let m = model();
-    let mut rng = ChaCha8Rng::seed_from_u64(7);
-    let points: Vec<Point3<f64>> = (0..300)
-        .map(|_| {
-            Point3::new(
-                rng.random_range(-15.0..15.0),
-                rng.random_range(-3.0..2.0),
-                rng.random_range(4.0..40.0),
-            )
-        })
-        .collect();
+    let points = random_points(7, 300, 15.0, 40.0);
     let step = Isometry3::from_parts(
         Translation3::new(0.0, 0.0, 1.0),
         UnitQuaternion::from_axis_angle(&Vector3::y_axis(), 1f64.to_radians()),
     );
-    let error = Isometry3::from_parts(
-        Translation3::new(0.01, 0.0, 0.0),
-        UnitQuaternion::from_axis_angle(&Vector3::y_axis(), 0.05f64.to_radians()),
-    );
+    let error = drift_error();
     let mut window = Window::new(WindowConfig {
         keyframes,
         max_iterations: 20,
@@ -151,19 +176,8 @@ fn a_gap_starts_the_window_again() {
 fn a_still_camera_is_measured_against_one_keyframe() {
     let m = model();
     let mut rng = ChaCha8Rng::seed_from_u64(3);
-    let points: Vec<Point3<f64>> = (0..200)
-        .map(|_| {
-            Point3::new(
-                rng.random_range(-10.0..10.0),
-                rng.random_range(-3.0..2.0),
-                rng.random_range(4.0..30.0),
-            )
-        })
-        .collect();
-    let error = Isometry3::from_parts(
-        Translation3::new(0.01, 0.0, 0.0),
-        UnitQuaternion::from_axis_angle(&Vector3::y_axis(), 0.05f64.to_radians()),
-    );
+    let points = random_points_from(&mut rng, 200, 10.0, 30.0);
+    let error = drift_error();
     let id = Isometry3::identity();
     let mut window = Window::new(WindowConfig::default());
     let mut given = id;
