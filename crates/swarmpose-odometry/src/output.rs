@@ -24,14 +24,15 @@ use crate::selfcal::Decision;
 pub const FRAMES_HEADER: &str = "frame,timestamp_s,status,reference,left_features,\
 right_features,stereo_points,matches,inliers,load_ms,features_ms,stereo_ms,match_ms,\
 estimate_ms,refine_ms,calibrate_ms,window_ms,total_ms,tx,ty,tz,qw,qx,qy,qz,x,y,z,correction_model,\
-correction_offset_px,correction_quadratic_px,focal_correction_px,keyframe";
+correction_offset_px,correction_quadratic_px,focal_correction_px,keyframe,ambiguous";
 
 /// One row of `frames.csv` (no line end): the frame, its timestamp, status
 /// (`first`, `tracked`, `constant-velocity (why)`, `lost (why)`), the frame its motion
 /// was measured from, counts, time per stage (ms), the motion from the previous frame
 /// (`T_{k-1,k}`: translation metres and quaternion), the position of the camera, and the
 /// disparity correction and the change of the focal length (pixels of `fx`) applied, and
-/// whether the frame is a keyframe (1 or 0, [`FrameResult::keyframe`]).
+/// whether the frame is a keyframe (1 or 0, [`FrameResult::keyframe`]) and whether its
+/// motion was ambiguous (1 or 0, [`FrameResult::ambiguous`]).
 #[must_use]
 pub fn frames_row(r: &FrameResult) -> String {
     let t = r.motion.translation.vector;
@@ -43,7 +44,7 @@ pub fn frames_row(r: &FrameResult) -> String {
     let reference = r.reference.map_or_else(String::new, |i| i.to_string());
     format!(
         "{},{:.6},\"{status}\",{reference},{},{},{},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},\
-         {:.6},{:.6},{:.6},{:.9},{:.9},{:.9},{:.9},{:.6},{:.6},{:.6},{},{:.4},{:.4},{:.4},{}",
+         {:.6},{:.6},{:.6},{:.9},{:.9},{:.9},{:.9},{:.6},{:.6},{:.6},{},{:.4},{:.4},{:.4},{},{}",
         r.index,
         r.timestamp_s,
         c.left_features,
@@ -75,6 +76,7 @@ pub fn frames_row(r: &FrameResult) -> String {
         r.correction.quadratic_px,
         r.focal_px,
         u8::from(r.keyframe),
+        u8::from(r.ambiguous),
     )
 }
 
@@ -134,6 +136,8 @@ pub struct Summary {
     pub lost: usize,
     /// Keyframes ([`FrameResult::keyframe`]).
     pub keyframes: usize,
+    /// Frames whose motion was ambiguous ([`FrameResult::ambiguous`]).
+    pub ambiguous: usize,
 }
 
 impl Summary {
@@ -141,6 +145,7 @@ impl Summary {
     pub fn add(&mut self, r: &FrameResult) {
         self.frames += 1;
         self.keyframes += usize::from(r.keyframe);
+        self.ambiguous += usize::from(r.ambiguous);
         match r.status {
             Status::First => {}
             Status::Tracked => self.tracked += 1,
@@ -165,10 +170,11 @@ impl Summary {
         }
     }
 
-    /// `N frames: T of M motions tracked, C at constant velocity, L lost, K keyframes`.
+    /// `N frames: T of M motions tracked, C at constant velocity, L lost, K keyframes`,
+    /// and `, A ambiguous` when there were any.
     #[must_use]
     pub fn text(&self) -> String {
-        format!(
+        let mut s = format!(
             "{} frames: {} of {} motions tracked, {} at constant velocity, {} lost, {} keyframes",
             self.frames,
             self.tracked,
@@ -176,7 +182,11 @@ impl Summary {
             self.constant_velocity,
             self.lost,
             self.keyframes
-        )
+        );
+        if self.ambiguous > 0 {
+            s.push_str(&format!(", {} ambiguous", self.ambiguous));
+        }
+        s
     }
 }
 

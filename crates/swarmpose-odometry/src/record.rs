@@ -152,4 +152,11 @@ pub struct FrameResult {
     /// later frames are measured from (the first and every tracked frame). False for a
     /// frame that was not tracked.
     pub keyframe: bool,
+    /// True when the estimator found two distinct motions with comparable support (at
+    /// least its ambiguity ratio, a half by default: a large moving object, or a scene
+    /// that repeats). The motion taken is the one nearer the constant-velocity prediction
+    /// (the one with more support when there is no recent motion to predict from); the
+    /// pose may still be that of the other motion, so treat it with care. Only the robust
+    /// PSO (`pso`) looks for a second motion.
+    pub ambiguous: bool,
 }

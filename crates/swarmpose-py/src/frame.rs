@@ -137,6 +137,14 @@ impl Frame {
         self.result.keyframe
     }
 
+    /// True when the estimator found two distinct motions with comparable support (a
+    /// large moving object, a repeating scene): the one nearer the constant-velocity
+    /// prediction was taken, but the pose may be the other's; treat it with care.
+    #[getter]
+    fn ambiguous(&self) -> bool {
+        self.result.ambiguous
+    }
+
     /// The change of the rig's focal length applied to this frame, pixels of ``fx``
     /// (``fy`` in proportion; 0 unless self-calibration chose the ``focal-length`` cause).
     #[getter]

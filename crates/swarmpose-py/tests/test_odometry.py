@@ -44,9 +44,12 @@ def test_streaming_matches_the_cli(kitti_seq2, swarmpose_bin, tmp_path):
     # The default window of 10 keyframes: each tracked frame is measured from the
     # window's oldest keyframe, with the covariance of that motion; driving at 10 Hz,
     # every frame moves enough to be a keyframe (the CLI's frames.csv says the same).
-    cli_keyframes = [line.rstrip().split(",")[-1] == "1"
-                     for line in (out / "frames.csv").read_text().splitlines()[1:]]
+    rows = [line.rstrip().split(",") for line in (out / "frames.csv").read_text().splitlines()]
+    assert rows[0][-2:] == ["keyframe", "ambiguous"]
+    cli_keyframes = [row[-2] == "1" for row in rows[1:]]
     assert [f.keyframe for f in frames] == cli_keyframes == [True] * 51
+    # A static scene: no frame saw two motions.
+    assert [f.ambiguous for f in frames] == [row[-1] == "1" for row in rows[1:]] == [False] * 51
     for k, f in enumerate(frames[1:], start=1):
         assert f.reference == max(0, k - 9)
         assert f.measured_motion.shape == (4, 4)

@@ -46,7 +46,9 @@ a TUM RGB-D directory (see `swarmpose correspondences --help`). Outputs in --out
 frame by frame as the run goes: trajectory.kitti.txt (KITTI poses), trajectory.tum.txt \
 (timestamp tx ty tz qx qy qz qw), frames.csv (per frame: status, reference frame, counts, \
 time per stage in ms, the motion from the previous frame, the position, the disparity \
-correction, and 1 for a keyframe of the sliding window), motion_covariance.csv (each tracked frame's measured motion from its \
+correction, 1 for a keyframe of the sliding window, and 1 for an ambiguous motion: two distinct \
+motions with comparable support, such as a truck ahead keeping pace, of which the one nearer the \
+constant-velocity prediction was taken), motion_covariance.csv (each tracked frame's measured motion from its \
 reference frame and the motion's 6x6 covariance, see its header). At the end: calibration.json (the self-calibration's decision and evidence), \
 trajectory.png/.svg (top view against the ground truth: figure 17) and, with ground truth, \
 errors.png, groundtruth.kitti.txt, groundtruth.tum.txt and evaluation.json.

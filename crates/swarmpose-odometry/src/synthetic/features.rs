@@ -22,6 +22,8 @@ use crate::intake::StereoCamera;
 use crate::refine::model::PixelNoise;
 use crate::tracker::Tracker;
 
+use super::vehicle::Vehicle;
+
 /// Length of a path segment of constant curvature, metres.
 const SEGMENT_M: f64 = 80.0;
 /// Length of a landmark cell along the path, metres.
@@ -62,6 +64,8 @@ pub struct FeatureSequenceConfig {
     pub landmarks_per_cell: usize,
     /// Seed of the world and of the noise (default 0).
     pub seed: u64,
+    /// A vehicle driving ahead in the camera's lane (default none).
+    pub vehicle: Option<Vehicle>,
 }
 
 impl Default for FeatureSequenceConfig {
@@ -88,6 +92,7 @@ impl Default for FeatureSequenceConfig {
             f_yaw_px: 0.0,
             landmarks_per_cell: 40,
             seed: 0,
+            vehicle: None,
         }
     }
 }
@@ -238,28 +243,40 @@ impl FeatureSequence {
         let mut out = StereoFrame::default();
         let (w, h) = (c.size.0 as f64, c.size.1 as f64);
         let fb = rig.fx * rig.baseline_m;
-        for (j, l) in landmarks.iter().enumerate() {
-            let p = pose_inv * l.world;
+        // A measurement `(u, v, d, row offset)` of a point of the left camera frame, if
+        // it is seen.
+        let measure = |rng: &mut ChaCha8Rng, p: &Point3<f64>| -> Option<[f64; 4]> {
             if p.z < 2.0 || p.z > 100.0 {
-                continue;
+                return None;
             }
-            let (u, v) = rig.project_left(&p);
+            let (u, v) = rig.project_left(p);
             if !(4.0..w - 4.0).contains(&u) || !(4.0..h - 4.0).contains(&v) {
-                continue;
+                return None;
             }
             // The right camera's errors, on its normalised coordinates.
             let xr = (p.x - rig.baseline_m) / p.z;
             let yn = p.y / p.z;
             let delta = c.principal_point_px - c.f_yaw_px * (1.0 + xr * xr);
-            let d = fb / p.z - delta + gauss(&mut rng, c.noise.disparity_px);
+            let d = fb / p.z - delta + gauss(rng, c.noise.disparity_px);
             if d < 0.5 {
+                return None;
+            }
+            let row = -c.f_yaw_px * xr * yn + gauss(rng, c.noise.disparity_px);
+            Some([
+                u + gauss(rng, c.noise.position_px),
+                v + gauss(rng, c.noise.position_px),
+                d,
+                row,
+            ])
+        };
+        for (j, l) in landmarks.iter().enumerate() {
+            let p = pose_inv * l.world;
+            if c.vehicle.is_some_and(|car| car.hides(k, rig, &p)) {
                 continue;
             }
-            let row = -c.f_yaw_px * xr * yn + gauss(&mut rng, c.noise.disparity_px);
-            let (u, v) = (
-                u + gauss(&mut rng, c.noise.position_px),
-                v + gauss(&mut rng, c.noise.position_px),
-            );
+            let Some([u, v, d, row]) = measure(&mut rng, &p) else {
+                continue;
+            };
             let mut descriptor = if rng.random_bool(c.mismatch_share) {
                 landmarks
                     [(j + 1 + rng.random_range(0..landmarks.len().max(2) - 1)) % landmarks.len()]
@@ -272,6 +289,19 @@ impl FeatureSequence {
                 descriptor[bit / 8] ^= 1 << (bit % 8);
             }
             push(&mut out, rig, u, v, d, row, descriptor, &c.noise);
+        }
+        if let Some(car) = &c.vehicle {
+            for f in car.features(k, c.seed) {
+                let Some([u, v, d, row]) = measure(&mut rng, &f.camera) else {
+                    continue;
+                };
+                let mut descriptor = f.descriptor;
+                for _ in 0..DESCRIPTOR_NOISE_BITS {
+                    let bit = rng.random_range(0..256usize);
+                    descriptor[bit / 8] ^= 1 << (bit % 8);
+                }
+                push(&mut out, rig, u, v, d, row, descriptor, &c.noise);
+            }
         }
         for _ in 0..c.clutter {
             let u = rng.random_range(4.0..w - 4.0);

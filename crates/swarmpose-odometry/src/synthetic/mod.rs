@@ -2,9 +2,10 @@
 //! sequence, so that odometry runs with no data: a street of textured planes (ground,
 //! two house fronts, a far wall) rendered by the vision crate's ray caster from a stereo
 //! rig driving along a known, gently turning path. [`features`]: a stream of triangulated
-//! features without images, of any length.
+//! features without images, of any length, optionally with a [`vehicle`] ahead.
 
 pub mod features;
+pub mod vehicle;
 
 use std::path::{Path, PathBuf};
 

@@ -36,6 +36,7 @@ use crate::refine::{Refined, refine};
 use crate::selfcal::{CorrectionModel, Decision, SelfCalibration};
 use crate::window::{Images, Window, WindowMotion};
 
+mod ambiguity;
 mod calibrate;
 
 /// The frame that the next one is matched to.
@@ -70,6 +71,8 @@ struct Measured {
     window: Option<WindowMotion>,
     /// The frame is a keyframe of the window (always without the window).
     keyframe: bool,
+    /// The estimator found two distinct motions ([`crate::estimate::Initial`]).
+    ambiguous: bool,
     inliers: usize,
     correction: DisparityCorrection,
     focal_px: f64,
@@ -220,6 +223,18 @@ impl<D: Descriptor> Tracker<D> {
         }
     }
 
+    /// The constant-velocity motion from the reference, taken at `ref_timestamp_s`, to a
+    /// frame taken at `timestamp_s`: the last tracked motion scaled to that time span, if
+    /// it is recent ([`OdometryConfig::max_prediction_s`]).
+    fn prediction(&self, ref_timestamp_s: f64, timestamp_s: f64) -> Option<Isometry3<f64>> {
+        let v = self.velocity?;
+        let recent = self
+            .last_tracked_s
+            .is_some_and(|t| timestamp_s - t <= self.config.max_prediction_s);
+        (recent && v.dt_s > 0.0)
+            .then(|| scale_motion(&v.motion, (timestamp_s - ref_timestamp_s) / v.dt_s))
+    }
+
     /// The motion of `frame` from the reference, or why there is none.
     fn measure(
         &mut self,
@@ -248,23 +263,27 @@ impl<D: Descriptor> Tracker<D> {
         let focal_px = self.focal_px();
         let t = Instant::now();
         let seed = self.config.seed.wrapping_add(index as u64);
+        let prediction = self.prediction(ref_timestamp_s, timestamp_s);
         let est = initial_motion(
             &m,
             &correction,
             1.0 + focal_px / self.camera.rig.fx,
-            self.camera.rig.baseline_m,
+            &focal_changed(&self.camera.rig, focal_px),
             self.estimator.as_ref(),
             seed,
             min,
+            prediction.as_ref(),
         );
         times.estimate_ms = ms(t);
-        let (start, est_inliers) = est?;
+        let initial = est?;
+        let start = initial.motion;
         let mut measured = Measured {
             motion: start,
             covariance: None,
             window: None,
             keyframe: true,
-            inliers: est_inliers,
+            ambiguous: initial.ambiguous,
+            inliers: initial.inliers,
             correction,
             focal_px,
             model,
@@ -309,8 +328,9 @@ impl<D: Descriptor> Tracker<D> {
             obs.folds.truncate(keep);
             obs.source.truncate(keep);
         }
-        let refined = refine(
-            &self.model(correction, focal_px),
+        let model_now = self.model(correction, focal_px);
+        let mut refined = refine(
+            &model_now,
             &self.config.refinement,
             &obs.reference,
             &obs.current,
@@ -319,6 +339,27 @@ impl<D: Descriptor> Tracker<D> {
             min,
         )
         .map_err(|e| format!("refinement: {e}"))?;
+        if let Some(p) = prediction.as_ref()
+            && let Some(second) = ambiguity::second_motion(
+                &model_now,
+                &self.config.refinement,
+                (&obs.reference, &obs.current, &obs.folds),
+                &refined,
+                p,
+                min,
+            )
+        {
+            measured.ambiguous = true;
+            if ambiguity::prediction_prefers(
+                &model_now,
+                (&obs.reference, &obs.current),
+                &refined,
+                &second,
+                p,
+            ) {
+                refined = second;
+            }
+        }
         times.refine_ms = ms(t);
         let t = Instant::now();
         let mut best: (Refined, DisparityCorrection, f64, CorrectionModel) =
@@ -426,6 +467,7 @@ impl<D: Descriptor> Tracker<D> {
             focal_px,
             correction_model,
             keyframe: false,
+            ambiguous: false,
         };
         let Some(last) = self.last else {
             // The first frame: the origin.
@@ -473,6 +515,7 @@ impl<D: Descriptor> Tracker<D> {
                 }
                 result.status = Status::Tracked;
                 result.keyframe = m.keyframe;
+                result.ambiguous = m.ambiguous;
                 result.correction = m.correction;
                 result.focal_px = m.focal_px;
                 result.correction_model = m.model;

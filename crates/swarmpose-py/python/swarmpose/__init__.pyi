@@ -142,6 +142,9 @@ class Frame:
     def correction_model(self) -> str: ...
     @property
     def keyframe(self) -> bool: ...
+    @property
+    def ambiguous(self) -> bool:
+        """Two distinct motions had comparable support; the one nearer the constant-velocity prediction was taken."""
 
 class Odometry:
     """Streaming stereo visual odometry: one rectified pair in, its pose out."""
