@@ -65,10 +65,13 @@ fn window_beats_frame_to_frame_on_karlsruhe() {
 
 /// The still EuRoC clip: with the window the camera stays within 3 mm of where it started;
 /// no frame moves enough to be a keyframe (one loses enough tracks), every frame is
-/// measured from the first, and
-/// the path ends closer to its start than frame to frame's (which adds the noise of every
-/// pair). The ground truth (Vicon) itself moves up to 2.6 mm here (PROVENANCE.md), so the
-/// end point is compared with the start, not with the ground truth.
+/// measured from the first, and the estimate wanders no farther from its start than frame
+/// to frame's (which adds the noise of every pair). The ground truth (Vicon) itself moves
+/// up to 2.6 mm here (PROVENANCE.md), so the estimate is compared with the start, not
+/// with the ground truth. The farthest excursion over the clip, not the end point: a
+/// random walk's end can come back by chance (with the exposure-blind alignment of
+/// 2026-11-25 frame to frame ended 0.09 mm from its start, having been 0.32 mm away; the
+/// window ended 0.25 mm away, at most 0.26 mm).
 #[test]
 fn window_keeps_a_still_camera_still() {
     let name = "euroc_v1_01_easy_micro";
@@ -78,23 +81,25 @@ fn window_keeps_a_still_camera_still() {
     let seq = open(&dir).expect("open");
     let win = common::run_sequence(seq.as_ref(), with_window(10));
     let f2f = common::run_sequence(seq.as_ref(), with_window(0));
-    let worst = win
-        .poses()
-        .iter()
-        .map(|p| p.translation.vector.norm())
-        .fold(0.0, f64::max);
+    let farthest = |r: &common::Run| {
+        r.poses()
+            .iter()
+            .map(|p| p.translation.vector.norm())
+            .fold(0.0, f64::max)
+    };
     let end = |r: &common::Run| {
         r.poses()
             .last()
             .map_or(0.0, |p| p.translation.vector.norm())
     };
-    let (end_win, end_f2f) = (end(&win), end(&f2f));
+    let (worst, worst_f2f) = (farthest(&win), farthest(&f2f));
     eprintln!(
         "{name}: window of 10, farthest from the start {:.2} mm, ends {:.2} mm from it; \
-         frame to frame ends {:.2} mm from it",
+         frame to frame {:.2} mm and {:.2} mm",
         1e3 * worst,
-        1e3 * end_win,
-        1e3 * end_f2f
+        1e3 * end(&win),
+        1e3 * worst_f2f,
+        1e3 * end(&f2f)
     );
     assert_eq!(win.untracked(), 0);
     assert!(worst <= 0.003, "{worst} m");
@@ -107,7 +112,7 @@ fn window_keeps_a_still_camera_still() {
     assert!(keyframes <= 3, "{keyframes} keyframes");
     // Frame to frame, every frame is measured from the previous one.
     assert!(f2f.results.iter().all(|r| r.keyframe));
-    assert!(end_win < end_f2f, "{end_win} m against {end_f2f} m");
+    assert!(worst <= worst_f2f, "{worst} m against {worst_f2f} m");
 }
 
 /// One thread and two threads give the same trajectory with the window on.

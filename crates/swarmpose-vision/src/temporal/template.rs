@@ -27,7 +27,9 @@ const SIDE: usize = 2 * TEMPLATE_RADIUS + 3;
 const N: usize = 2 * TEMPLATE_RADIUS + 1;
 
 /// The image patch around a keypoint of the frame where a track began, with its
-/// gradients (inverse compositional Lucas-Kanade, translation only).
+/// gradients (inverse compositional Lucas-Kanade). The alignments are blind to a change
+/// of exposure between the frames (`I ≈ g T + b`): their steps see only the part of the
+/// error outside the span of the template and the constant patch ([`project_out`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct PatchTemplate {
     values: [f32; N * N],
@@ -35,6 +37,14 @@ pub struct PatchTemplate {
     gy: [f32; N * N],
     /// The structure tensor `Σ ∇I ∇Iᵀ`: `(xx, xy, yy)`.
     tensor: (f32, f32, f32),
+    /// The gradients with their components along the exposure changes projected out
+    /// ([`project_out`]), and their structure tensor `(xx, xy, yy)`: the translation's
+    /// Gauss-Newton steps.
+    pgx: [f32; N * N],
+    pgy: [f32; N * N],
+    ptensor: (f32, f32, f32),
+    /// The template less its mean, of unit norm ([`unit_contrast`]).
+    contrast: [f32; N * N],
 }
 
 impl PatchTemplate {
@@ -51,6 +61,10 @@ impl PatchTemplate {
             gx: [0.0; N * N],
             gy: [0.0; N * N],
             tensor: (0.0, 0.0, 0.0),
+            pgx: [0.0; N * N],
+            pgy: [0.0; N * N],
+            ptensor: (0.0, 0.0, 0.0),
+            contrast: [0.0; N * N],
         };
         let (mut hxx, mut hxy, mut hyy) = (0f32, 0f32, 0f32);
         for j in 0..N {
@@ -74,11 +88,30 @@ impl PatchTemplate {
             return None;
         }
         t.tensor = (hxx, hxy, hyy);
+        t.contrast = unit_contrast(&t.values)?;
+        let mut g = [SVector::<f32, 2>::zeros(); N * N];
+        for (k, g) in g.iter_mut().enumerate() {
+            *g = SVector::<f32, 2>::new(t.gx[k], t.gy[k]);
+        }
+        project_out(&mut g, &t.contrast);
+        let (mut pxx, mut pxy, mut pyy) = (0f32, 0f32, 0f32);
+        for (k, g) in g.iter().enumerate() {
+            t.pgx[k] = g.x;
+            t.pgy[k] = g.y;
+            pxx += g.x * g.x;
+            pxy += g.x * g.y;
+            pyy += g.y * g.y;
+        }
+        if pxx * pyy - pxy * pxy <= 0.0 {
+            return None;
+        }
+        t.ptensor = (pxx, pxy, pyy);
         Some(t)
     }
 
     /// Where the patch appears in `image`, starting the search at `start` (pixels): the
-    /// position minimising `Σ (I(p + w) − T(w))²`, or `None` when the patch leaves the
+    /// position minimising `min_{g,b} Σ (I(p + w) − g T(w) − b)²` (an exposure change
+    /// between the images does not move it), or `None` when the patch leaves the
     /// image, the iterations do not settle (to 0.01 px within `iterations`), the position
     /// moves more than `max_move_px` from `start`, or, with `min_ncc`, the patch found
     /// differs from the template more than its contrast allows (zero-mean normalised
@@ -94,14 +127,14 @@ impl PatchTemplate {
         min_ncc: Option<f32>,
     ) -> Option<(f32, f32)> {
         let r = TEMPLATE_RADIUS as f32;
-        let (hxx, hxy, hyy) = self.tensor;
+        let (hxx, hxy, hyy) = self.ptensor;
         let det = hxx * hyy - hxy * hxy;
         let mut patch = [0f32; N * N];
         let (mut px, mut py) = start;
         for _ in 0..iterations {
             sample_patch(image, px - r, py - r, N, &mut patch)?;
             let (mut ex, mut ey) = (0f32, 0f32);
-            for (((p, t), gx), gy) in patch.iter().zip(&self.values).zip(&self.gx).zip(&self.gy) {
+            for (((p, t), gx), gy) in patch.iter().zip(&self.values).zip(&self.pgx).zip(&self.pgy) {
                 let e = p - t;
                 ex += gx * e;
                 ey += gy * e;
@@ -143,26 +176,28 @@ impl PatchTemplate {
         let coords = |k: usize| ((k % N) as f32 - r, (k / N) as f32 - r);
         // The steepest-descent images `∇T ∂W/∂p`, once per call.
         let mut sd = [SVector::<f32, 6>::zeros(); N * N];
-        let mut h = SMatrix::<f32, 6, 6>::zeros();
         for (k, sd) in sd.iter_mut().enumerate() {
             let (x, y) = coords(k);
             let (gx, gy) = (self.gx[k], self.gy[k]);
             *sd = SVector::<f32, 6>::from([gx * x, gx * y, gy * x, gy * y, gx, gy]);
-            h += *sd * sd.transpose();
         }
+        project_out(&mut sd, &self.contrast);
+        let h = sd
+            .iter()
+            .fold(SMatrix::<f32, 6, 6>::zeros(), |h, v| h + *v * v.transpose());
         let h_inv = h.try_inverse()?;
         let mut m = Matrix3::<f32>::new(1.0, 0.0, start.0, 0.0, 1.0, start.1, 0.0, 0.0, 1.0);
         let mut patch = [0f32; N * N];
         for _ in 0..iterations {
-            let mut b = SVector::<f32, 6>::zeros();
             for (k, sample) in patch.iter_mut().enumerate() {
                 let (x, y) = coords(k);
                 let u = m[(0, 0)] * x + m[(0, 1)] * y + m[(0, 2)];
                 let v = m[(1, 0)] * x + m[(1, 1)] * y + m[(1, 2)];
-                let i = sample_bilinear(image, u, v)?;
-                *sample = i;
-                let e = i - self.values[k];
-                b += sd[k] * e;
+                *sample = sample_bilinear(image, u, v)?;
+            }
+            let mut b = SVector::<f32, 6>::zeros();
+            for (k, i) in patch.iter().enumerate() {
+                b += sd[k] * (i - self.values[k]);
             }
             let dp = h_inv * b;
             let w = Matrix3::<f32>::new(
@@ -198,6 +233,38 @@ impl PatchTemplate {
             }
         }
         None
+    }
+}
+
+/// The patch's values less their mean, scaled to unit norm (`None` for a flat patch):
+/// with the constant patch, an orthogonal basis of the exposure changes `g T + b`.
+fn unit_contrast(values: &[f32; N * N]) -> Option<[f32; N * N]> {
+    let mean = values.iter().sum::<f32>() / (N * N) as f32;
+    let mut out = values.map(|v| v - mean);
+    let norm = out.iter().map(|v| v * v).sum::<f32>().sqrt();
+    if norm <= 0.0 {
+        return None;
+    }
+    for v in &mut out {
+        *v /= norm;
+    }
+    Some(out)
+}
+
+/// `images` (one steepest-descent vector per pixel) less their components along the
+/// constant patch and along `contrast` (the template's [`unit_contrast`]): the
+/// Gauss-Newton steps they give ignore any change `g T + b` of the image's exposure
+/// (Baker and Matthews' "project out" alignment with a linear appearance model).
+fn project_out<const P: usize>(images: &mut [SVector<f32, P>; N * N], contrast: &[f32; N * N]) {
+    let n = (N * N) as f32;
+    let mean = images.iter().sum::<SVector<f32, P>>() / n;
+    let along = images
+        .iter()
+        .zip(contrast)
+        .map(|(v, c)| *v * *c)
+        .sum::<SVector<f32, P>>();
+    for (v, c) in images.iter_mut().zip(contrast) {
+        *v -= mean + along * *c;
     }
 }
 
@@ -258,6 +325,35 @@ mod tests {
                 (x - 40.0 - shift.0).abs() < 0.05 && (y - 30.0 - shift.1).abs() < 0.05,
                 "shift {shift:?}: found ({x}, {y})"
             );
+        }
+    }
+
+    /// Found to the same precision when the second image's exposure differs (gain 1.15
+    /// or 0.7, offset −20 or +15 grey levels, no clipping): both alignments project the
+    /// exposure out of their steps.
+    #[test]
+    fn an_exposure_change_does_not_move_the_patch() {
+        let (w, h) = (80usize, 60usize);
+        let first = image(w, h, (0.0, 0.0));
+        let t = PatchTemplate::sample(view(&first, w, h), (40.0, 30.0)).expect("textured");
+        let shift = (1.37f32, -0.62f32);
+        for (gain, offset) in [(1.15f32, -20.0f32), (0.7, 15.0)] {
+            let img: Vec<u8> = image(w, h, shift)
+                .iter()
+                .map(|&v| (gain * f32::from(v) + offset).round().clamp(0.0, 255.0) as u8)
+                .collect();
+            for affine in [false, true] {
+                let found = if affine {
+                    t.align_affine(view(&img, w, h), (41.0, 30.0), 30, 3.0, Some(0.9))
+                } else {
+                    t.align(view(&img, w, h), (41.0, 30.0), 30, 3.0, Some(0.9))
+                };
+                let (x, y) = found.expect("found");
+                assert!(
+                    (x - 40.0 - shift.0).abs() < 0.03 && (y - 30.0 - shift.1).abs() < 0.03,
+                    "gain {gain}, offset {offset}, affine {affine}: found ({x}, {y})"
+                );
+            }
         }
     }
 
