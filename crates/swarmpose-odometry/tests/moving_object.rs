@@ -118,3 +118,43 @@ fn other_trucks_do_not_take_the_pose() {
         }
     }
 }
+
+/// The truck is there from the first frame: nothing predicts the motion, and the truck's
+/// "standing still" is the strongest one. The engine cannot know which motion is the
+/// camera's, but it must not say so with confidence: every frame with the truck in both
+/// images is flagged (the leftover matches hold a second motion), and the flag ends with
+/// the truck.
+#[test]
+fn a_truck_from_the_first_frame_is_flagged_throughout() {
+    let seq = FeatureSequence::new(FeatureSequenceConfig {
+        seed: 4,
+        vehicle: Some(Vehicle {
+            frames: (0, 20),
+            features: 900,
+            distance_m: 9.0,
+            relative_step_m: 0.0,
+        }),
+        ..FeatureSequenceConfig::default()
+    });
+    for keyframes in [0, 10] {
+        let results = run(&seq, OdometryConfig::default().with_window(keyframes), 30);
+        for r in &results {
+            eprintln!(
+                "from the start, window {keyframes}, frame {:2}: {:8} matches {:4} inliers {:4} \
+                 ambiguous {} error {:.3} m",
+                r.index,
+                r.status.text(),
+                r.counts.matches,
+                r.counts.inliers,
+                r.ambiguous,
+                position_error_m(&seq, r)
+            );
+            let both_seen = (1..=20).contains(&r.index);
+            assert_eq!(
+                r.ambiguous, both_seen,
+                "window {keyframes}, frame {}: flagged {}",
+                r.index, r.ambiguous
+            );
+        }
+    }
+}

@@ -12,11 +12,19 @@
 //! of its inliers with the first is a second motion: the frame is ambiguous, and the
 //! motion whose inliers the prediction explains better (lower median χ²) is taken.
 //!
+//! Without a prediction (the first pair, the pair after a lost frame), or when the
+//! previous frame was ambiguous already (its motion, and so the prediction, may be the
+//! object's), the matches left over by the first motion are searched for a second one by
+//! the estimator itself ([`leftover_motion`]); a second motion with a quarter of the
+//! first's inliers flags the frame, with nothing to choose between them by.
+//!
 //! Everything is measured in whitened pixels, so the check does not depend on the unit of
 //! the calibration or on the scene's size. A wrong prediction (a sudden change of speed)
 //! finds no support and changes nothing.
 
 use nalgebra::{Isometry3, UnitQuaternion};
+
+use swarmpose_core::{Correspondences, Estimator};
 
 use crate::refine::model::{StereoModel, StereoObservation};
 use crate::refine::{RefineConfig, Refined, refine};
@@ -75,18 +83,11 @@ pub(crate) fn second_motion(
     min_inliers: usize,
 ) -> Option<Refined> {
     let chi2 = chi2_under(model, prediction, reference, current);
-    let mut in_first = vec![false; reference.len()];
-    for &i in &first.inliers {
-        if let Some(f) = in_first.get_mut(i) {
-            *f = true;
-        }
-    }
+    let in_first = inlier_mask(first, reference.len());
     let outside = (0..reference.len())
         .filter(|&i| !in_first[i] && chi2[i] <= config.initial_gate_chi2)
         .count();
-    let needed = (SECOND_MOTION_RATIO * first.inliers.len() as f64)
-        .ceil()
-        .max(min_inliers as f64) as usize;
+    let needed = needed(first, min_inliers);
     if outside < needed {
         return None;
     }
@@ -95,29 +96,120 @@ pub(crate) fn second_motion(
     let near: Vec<usize> = (0..reference.len())
         .filter(|&i| chi2[i] <= config.initial_gate_chi2)
         .collect();
+    let second = refine_subset(
+        model,
+        config,
+        (reference, current, folds),
+        &near,
+        prediction,
+        min_inliers,
+    )?;
+    distinct(second, &in_first, needed)
+}
+
+/// A second motion among the matches that are not `first`'s inliers, found by
+/// `estimator` on their 3D points (`correspondences`, indexed by `source`, the match of
+/// each measurement) and refined on their measurements: for a frame without a prediction
+/// to tell the motions apart (the first pair, the pair after a lost frame) or whose
+/// previous frame was ambiguous already. Only its existence is used: there is nothing to
+/// choose between the two by.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn leftover_motion(
+    estimator: &dyn Estimator,
+    correspondences: &Correspondences,
+    model: &StereoModel,
+    config: &RefineConfig,
+    (reference, current, folds, source): (
+        &[StereoObservation],
+        &[StereoObservation],
+        &[u8],
+        &[usize],
+    ),
+    first: &Refined,
+    min_inliers: usize,
+    seed: u64,
+) -> Option<Refined> {
+    let in_first = inlier_mask(first, reference.len());
+    let needed = needed(first, min_inliers);
+    let rest: Vec<usize> = (0..reference.len()).filter(|&i| !in_first[i]).collect();
+    if rest.len() < needed {
+        return None;
+    }
+    let matches: Vec<usize> = rest
+        .iter()
+        .filter_map(|&i| source.get(i).copied())
+        .collect();
+    let found = estimator
+        .estimate_seeded(&correspondences.select(&matches), seed)
+        .ok()?;
+    if found.inliers.len() < needed {
+        return None;
+    }
+    let second = refine_subset(
+        model,
+        config,
+        (reference, current, folds),
+        &rest,
+        &found.transform,
+        min_inliers,
+    )?;
+    distinct(second, &in_first, needed)
+}
+
+/// Which of `n` matches are `first`'s inliers.
+fn inlier_mask(first: &Refined, n: usize) -> Vec<bool> {
+    let mut mask = vec![false; n];
+    for &i in &first.inliers {
+        if let Some(f) = mask.get_mut(i) {
+            *f = true;
+        }
+    }
+    mask
+}
+
+/// Inliers a second motion needs: [`SECOND_MOTION_RATIO`] of `first`'s, and `min_inliers`.
+fn needed(first: &Refined, min_inliers: usize) -> usize {
+    (SECOND_MOTION_RATIO * first.inliers.len() as f64)
+        .ceil()
+        .max(min_inliers as f64) as usize
+}
+
+/// The refinement from `start` on the matches `subset` (ascending), its inliers indexing
+/// the full lists.
+fn refine_subset(
+    model: &StereoModel,
+    config: &RefineConfig,
+    (reference, current, folds): (&[StereoObservation], &[StereoObservation], &[u8]),
+    subset: &[usize],
+    start: &Isometry3<f64>,
+    min_inliers: usize,
+) -> Option<Refined> {
     let pick = |v: &[StereoObservation]| -> Vec<StereoObservation> {
-        near.iter().map(|&i| v[i]).collect()
+        subset.iter().map(|&i| v[i]).collect()
     };
-    let sub_folds: Vec<u8> = near.iter().map(|&i| folds[i]).collect();
-    let mut second = refine(
+    let sub_folds: Vec<u8> = subset.iter().map(|&i| folds[i]).collect();
+    let mut refined = refine(
         model,
         config,
         &pick(reference),
         &pick(current),
         Some(&sub_folds),
-        prediction,
+        start,
         min_inliers,
     )
     .ok()?;
-    for k in &mut second.inliers {
-        *k = near[*k];
+    for k in &mut refined.inliers {
+        *k = subset[*k];
     }
+    refined.motion.rotation = UnitQuaternion::new_normalize(refined.motion.rotation.into_inner());
+    Some(refined)
+}
+
+/// `second` if it shares less than half of its inliers with the first motion's
+/// (`in_first`) and has `needed` of them.
+fn distinct(second: Refined, in_first: &[bool], needed: usize) -> Option<Refined> {
     let shared = second.inliers.iter().filter(|&&i| in_first[i]).count();
-    if 2 * shared >= second.inliers.len() || second.inliers.len() < needed {
-        return None;
-    }
-    second.motion.rotation = UnitQuaternion::new_normalize(second.motion.rotation.into_inner());
-    Some(second)
+    (2 * shared < second.inliers.len() && second.inliers.len() >= needed).then_some(second)
 }
 
 /// True when the prediction explains `second`'s inliers better than `first`'s (lower

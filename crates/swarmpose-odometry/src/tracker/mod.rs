@@ -39,6 +39,10 @@ use crate::window::{Images, Window, WindowMotion};
 mod ambiguity;
 mod calibrate;
 
+/// Mixed into the frame's seed for the search of a second motion among the matches the
+/// first left over ([`ambiguity::leftover_motion`]).
+const LEFTOVER_SEED: u64 = 0x5EC0_4D00_7105_0000;
+
 /// The frame that the next one is matched to.
 #[derive(Debug, Clone)]
 struct Reference<D> {
@@ -113,6 +117,8 @@ pub struct Tracker<D: Descriptor> {
     last: Option<Last>,
     velocity: Option<Velocity>,
     last_tracked_s: Option<f64>,
+    /// The last frame's motion was ambiguous ([`FrameResult::ambiguous`]).
+    last_ambiguous: bool,
     next_index: usize,
 }
 
@@ -141,6 +147,7 @@ impl<D: Descriptor> Tracker<D> {
             last: None,
             velocity: None,
             last_tracked_s: None,
+            last_ambiguous: false,
             next_index: 0,
         }
     }
@@ -360,6 +367,22 @@ impl<D: Descriptor> Tracker<D> {
                 refined = second;
             }
         }
+        if !measured.ambiguous
+            && (prediction.is_none() || self.last_ambiguous)
+            && ambiguity::leftover_motion(
+                self.estimator.as_ref(),
+                &m.correspondences,
+                &model_now,
+                &self.config.refinement,
+                (&obs.reference, &obs.current, &obs.folds, &obs.source),
+                &refined,
+                min,
+                seed ^ LEFTOVER_SEED,
+            )
+            .is_some()
+        {
+            measured.ambiguous = true;
+        }
         times.refine_ms = ms(t);
         let t = Instant::now();
         let mut best: (Refined, DisparityCorrection, f64, CorrectionModel) =
@@ -516,6 +539,7 @@ impl<D: Descriptor> Tracker<D> {
                 result.status = Status::Tracked;
                 result.keyframe = m.keyframe;
                 result.ambiguous = m.ambiguous;
+                self.last_ambiguous = m.ambiguous;
                 result.correction = m.correction;
                 result.focal_px = m.focal_px;
                 result.correction_model = m.model;
@@ -524,6 +548,7 @@ impl<D: Descriptor> Tracker<D> {
             }
             Err(why) => {
                 self.window.clear();
+                self.last_ambiguous = false;
                 let horizon = self.config.max_prediction_s;
                 let velocity = self.velocity.filter(|_| {
                     self.last_tracked_s
