@@ -4,13 +4,17 @@ use rand_chacha::ChaCha8Rng;
 
 use super::*;
 
-fn model() -> StereoModel {
+pub(super) fn model() -> StereoModel {
     crate::refine::model::test_model(Default::default())
 }
 
 /// The measurement of the world point `pw` by the camera at `pose` (camera in world), if
 /// it is in view.
-fn measure(m: &StereoModel, pose: &Isometry3<f64>, pw: &Point3<f64>) -> Option<StereoObservation> {
+pub(super) fn measure(
+    m: &StereoModel,
+    pose: &Isometry3<f64>,
+    pw: &Point3<f64>,
+) -> Option<StereoObservation> {
     let p = pose.inverse() * pw;
     if p.z < 1.0 {
         return None;
@@ -26,7 +30,12 @@ fn measure(m: &StereoModel, pose: &Isometry3<f64>, pw: &Point3<f64>) -> Option<S
 
 /// `n` random points (seed `seed`), metres: `x` within `±half_width_m`, `y` in [-3, 2)
 /// (y down), `z` in [4, `max_depth_m`).
-fn random_points(seed: u64, n: usize, half_width_m: f64, max_depth_m: f64) -> Vec<Point3<f64>> {
+pub(super) fn random_points(
+    seed: u64,
+    n: usize,
+    half_width_m: f64,
+    max_depth_m: f64,
+) -> Vec<Point3<f64>> {
     random_points_from(
         &mut ChaCha8Rng::seed_from_u64(seed),
         n,
