@@ -175,3 +175,60 @@ fn the_prior_has_the_gauge_null_space() {
     assert!(along < 1e-6, "{along}");
     assert!(single > 1e3 * along, "{single} vs {along}");
 }
+
+/// With exact measurements the prior is exact too: marginalising keeps the window on the
+/// true path (as discarding does) over a drive four times the window's length.
+#[test]
+fn exact_measurements_stay_exact_with_a_prior() {
+    for mode in [Marginalisation::Finished, Marginalisation::All] {
+        let config = WindowConfig {
+            keyframes: 4,
+            max_iterations: 20,
+            marginalise: mode,
+            ..WindowConfig::default()
+        };
+        let (truth, given) = super::super::tests::drive_with(config, 16, None);
+        let last = truth.len() - 1;
+        let e = (truth[last].translation.vector - given[last].translation.vector).norm();
+        eprintln!("{mode:?}: {e:.2e} m");
+        assert!(e < 1e-6, "{mode:?}: {e} m");
+    }
+}
+
+/// Noisy measurements (±0.5 px) on the same drive (each point seen in 4 frames of 6):
+/// over 40 seeds, marginalising the leaving keyframe ends closer than discarding it
+/// (means, metres: K = 6 off 0.0094, finished 0.0085, all 0.0085; K = 4 off 0.0092,
+/// finished 0.0090, all 0.0114, where breaking every track at the newest frame costs
+/// more than the prior brings, the tracks being as long as the window).
+#[test]
+fn marginalising_ends_a_noisy_drive_closer() {
+    const SEEDS: u64 = 40;
+    for keyframes in [4, 6] {
+        let mut means = [0.0; 3];
+        let modes = [
+            Marginalisation::Off,
+            Marginalisation::Finished,
+            Marginalisation::All,
+        ];
+        for (mode, mean) in modes.into_iter().zip(&mut means) {
+            let config = WindowConfig {
+                keyframes,
+                marginalise: mode,
+                ..WindowConfig::default()
+            };
+            for seed in 0..SEEDS {
+                let (truth, given) = super::super::tests::drive_with(config, 30, Some((seed, 0.5)));
+                let (t, g) = (truth.last().expect("poses"), given.last().expect("poses"));
+                *mean += (t.translation.vector - g.translation.vector).norm() / SEEDS as f64;
+            }
+        }
+        let [off, finished, all] = means;
+        eprintln!(
+            "K = {keyframes}: mean final error off {off:.4} m, finished {finished:.4} m, all {all:.4} m"
+        );
+        if keyframes == 6 {
+            assert!(finished < 0.95 * off, "finished {finished} m, off {off} m");
+            assert!(all < 0.95 * off, "all {all} m, off {off} m");
+        }
+    }
+}
