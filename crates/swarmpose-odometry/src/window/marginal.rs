@@ -18,6 +18,14 @@
 //! alternative, a prior with a fixed gauge carried from the first keyframe, would make the
 //! oldest keyframe's absolute pose an unknown again, which the engine never revises.
 //!
+//! **Calibration.** The self-calibration changes the disparity correction (and may change
+//! the focal length) from frame to frame, and the measurements in the prior were
+//! linearised with the terms of their time. The prior keeps its sensitivity to them,
+//! `∂b/∂c = S_ξc` (the pose-calibration block of the eliminated system, as the
+//! refinement's), and the terms it was linearised at: its gradient is taken as
+//! `b + S_ξc (c − c_lin)` with the current terms `c`, and `S_ξc` joins the refinement's
+//! for the calibration's part of the covariance.
+//!
 //! **Linearisation point.** The prior is a quadratic in the perturbation `δ` of each of
 //! its poses from the pose it was linearised at, `T = E(δ) T_lin` (`E` as in
 //! [`super::solve`]); its Jacobian is taken as the identity (the poses move little inside
@@ -34,7 +42,8 @@ use nalgebra::{DMatrix, DVector, Matrix6, SymmetricEigen, Vector6};
 
 use super::solve::{self, Pose, Scratch};
 use super::{Keyframe, WindowConfig};
-use crate::refine::model::StereoModel;
+use crate::refine::evidence::{Matrix6xK, VectorK};
+use crate::refine::model::{CALIBRATION_TERMS, FOCAL_TERM, StereoModel};
 use crate::refine::unit_quaternion;
 
 /// What happens to the oldest keyframe's information when it leaves the window.
@@ -65,8 +74,29 @@ pub(crate) struct Prior {
     linearised: Vec<Pose>,
     /// `H`, `6 p` square for `p` poses (with the null space of a rigid motion of all).
     information: DMatrix<f64>,
-    /// `b`, the gradient of half the cost at the linearisation point.
+    /// `b`, the gradient of half the cost at the linearisation point and the terms `at`.
     gradient: DVector<f64>,
+    /// `∂b/∂c`, `6 p` rows, one column per calibration term.
+    calibration: DMatrix<f64>,
+    /// The calibration terms it was linearised at ([`terms`]).
+    at: VectorK,
+}
+
+/// The model's calibration terms, in the order of the measurements' `∂e/∂c`: the
+/// disparity correction's coefficients, then the focal length `fx` (pixels).
+pub(crate) fn terms(model: &StereoModel) -> VectorK {
+    let mut c = VectorK::zeros();
+    for (i, v) in model
+        .correction
+        .coefficients()
+        .iter()
+        .enumerate()
+        .take(FOCAL_TERM)
+    {
+        c[i] = *v;
+    }
+    c[FOCAL_TERM] = model.rig.fx;
+    c
 }
 
 /// `δ` with `pose = E(δ) lin`: `ω = Log(R Rₗᵀ)`, `ν = t − R Rₗᵀ tₗ`. The logarithm is
@@ -91,7 +121,8 @@ impl Prior {
     pub(crate) fn heap_bytes(&self) -> usize {
         self.frames.capacity() * size_of::<usize>()
             + self.linearised.capacity() * size_of::<Pose>()
-            + (self.information.len() + self.gradient.len()) * size_of::<f64>()
+            + (self.information.len() + self.gradient.len() + self.calibration.len())
+                * size_of::<f64>()
     }
 
     /// The slot in `frames` of each of the prior's poses, or `None` when one is missing.
@@ -112,30 +143,40 @@ impl Prior {
         d
     }
 
-    /// The robust cost's units (twice half the cost) at `poses`: `2 bᵀδ + δᵀ H δ`.
-    pub(super) fn energy(&self, slots: &[usize], poses: &[Pose]) -> f64 {
-        let d = self.deltas(slots, poses);
-        2.0 * self.gradient.dot(&d) + d.dot(&(&self.information * &d))
+    /// The gradient at the linearisation point with the calibration terms `c`.
+    fn gradient_at(&self, c: &VectorK) -> DVector<f64> {
+        &self.gradient + &self.calibration * (c - self.at)
     }
 
-    /// Adds the prior to a system over the poses after the first `fixed` slots (held
-    /// fixed: conditioned on): `S += H`, `g += b + H δ` on the rows of the free poses.
+    /// The robust cost's units (twice half the cost) at `poses` with the calibration
+    /// terms `c`, but for a constant: `2 bᵀδ + δᵀ H δ`.
+    pub(super) fn energy(&self, slots: &[usize], poses: &[Pose], c: &VectorK) -> f64 {
+        let d = self.deltas(slots, poses);
+        2.0 * self.gradient_at(c).dot(&d) + d.dot(&(&self.information * &d))
+    }
+
+    /// Adds the prior (its poses at `slots` of `poses`) to a system over the poses after
+    /// the first `fixed` slots (held fixed: conditioned on), with the calibration terms
+    /// `c`: `S += H`, `g += b + S_ξc (c − c_lin) + H δ` and the pose-calibration blocks
+    /// `pose_calibration += S_ξc` on the rows of the free poses.
     pub(super) fn add_to(
         &self,
-        slots: &[usize],
-        poses: &[Pose],
-        fixed: usize,
-        s: &mut DMatrix<f64>,
-        g: &mut DVector<f64>,
+        (slots, poses, fixed): (&[usize], &[Pose], usize),
+        c: &VectorK,
+        (s, g): (&mut DMatrix<f64>, &mut DVector<f64>),
+        pose_calibration: &mut [Matrix6xK],
     ) {
         let d = self.deltas(slots, poses);
-        let gp = &self.gradient + &self.information * d;
+        let gp = self.gradient_at(c) + &self.information * d;
         for (i, si) in slots.iter().enumerate() {
             let Some(vi) = si.checked_sub(fixed) else {
                 continue;
             };
             let mut rows = g.fixed_rows_mut::<6>(6 * vi);
             rows += gp.fixed_rows::<6>(6 * i);
+            if let Some(pc) = pose_calibration.get_mut(vi) {
+                *pc += self.calibration.fixed_rows::<6>(6 * i);
+            }
             for (j, sj) in slots.iter().enumerate() {
                 let Some(vj) = sj.checked_sub(fixed) else {
                     continue;
@@ -195,11 +236,21 @@ pub(crate) fn marginalise(
     } else {
         solve::linearised_system(model, k, &poses, &tracks, &mut sc)?
     };
+    sc.pose_calibration.resize(n, Matrix6xK::zeros());
+    let c = terms(model);
     if let Some(p) = &prior
         && let Some(slots) = p.on(frames)
     {
-        p.add_to(&slots, &poses, 0, &mut s, &mut g);
+        p.add_to(
+            (&slots, &poses, 0),
+            &c,
+            (&mut s, &mut g),
+            &mut sc.pose_calibration,
+        );
     }
+    let cal = DMatrix::from_fn(6 * n, CALIBRATION_TERMS, |r, col| {
+        sc.pose_calibration[r / 6][(r % 6, col)]
+    });
     let s00: Matrix6<f64> = s.fixed_view::<6, 6>(0, 0).into_owned();
     let inv = pseudo_inverse(&s00);
     let r = 6 * (n - 1);
@@ -208,7 +259,11 @@ pub(crate) fn marginalise(
     let mut information = s.view((6, 6), (r, r)).into_owned() - &t * sr0.transpose();
     information = (&information + information.transpose()) * 0.5;
     let gradient = g.rows(6, r).into_owned() - &t * g.fixed_rows::<6>(0);
-    if !(information.iter().all(|v| v.is_finite()) && gradient.iter().all(|v| v.is_finite())) {
+    let calibration = cal.rows(6, r).into_owned() - &t * cal.rows(0, 6);
+    if !(information.iter().all(|v| v.is_finite())
+        && gradient.iter().all(|v| v.is_finite())
+        && calibration.iter().all(|v| v.is_finite()))
+    {
         return None;
     }
     for f in frames.iter_mut().skip(1) {
@@ -219,6 +274,8 @@ pub(crate) fn marginalise(
         linearised: poses[1..].to_vec(),
         information,
         gradient,
+        calibration,
+        at: c,
     })
 }
 

@@ -6,7 +6,7 @@ use rand_chacha::ChaCha8Rng;
 
 use super::super::tests::{measure, model, random_points};
 use super::*;
-use crate::refine::model::StereoObservation;
+use crate::refine::model::{CALIBRATION_TERMS as CALIBRATION, StereoObservation};
 use crate::window::solve::{huber, linearize, relative_poses, tracks_of};
 
 /// Five keyframes 1 m apart, turning 1 degree each, given poses off by up to 2 cm and
@@ -63,8 +63,12 @@ fn scene() -> (Vec<Keyframe>, HashSet<u32>) {
 }
 
 /// The prior on poses 1.. by eliminating pose 0 and every point of `leaving` from the
-/// dense Hessian of their measurements (every variable explicit, nothing reduced first).
-fn dense_prior(frames: &[Keyframe], leaving: &HashSet<u32>) -> (DMatrix<f64>, DVector<f64>) {
+/// dense Hessian of their measurements (every variable explicit, nothing reduced first):
+/// information, gradient, and the gradient's derivative in the calibration terms.
+fn dense_prior(
+    frames: &[Keyframe],
+    leaving: &HashSet<u32>,
+) -> (DMatrix<f64>, DVector<f64>, DMatrix<f64>) {
     let m = model();
     let k = WindowConfig::default().huber_k;
     let poses: Vec<Pose> = frames.iter().map(|f| Pose::of(&f.pose_cw)).collect();
@@ -73,6 +77,7 @@ fn dense_prior(frames: &[Keyframe], leaving: &HashSet<u32>) -> (DMatrix<f64>, DV
     let n = poses.len();
     let size = 6 * n + 3 * tracks.len();
     let (mut h, mut g) = (DMatrix::zeros(size, size), DVector::zeros(size));
+    let mut hc = DMatrix::zeros(size, CALIBRATION);
     let mut rel = Vec::new();
     relative_poses(&poses, &mut rel);
     for (i, t) in tracks.iter().enumerate() {
@@ -90,6 +95,7 @@ fn dense_prior(frames: &[Keyframe], leaving: &HashSet<u32>) -> (DMatrix<f64>, DV
                 b += da;
             }
             h += row.transpose() * &row * w;
+            hc += row.transpose() * j.d_correction * w;
             g += row.transpose() * j.residual * w;
         }
     }
@@ -103,7 +109,9 @@ fn dense_prior(frames: &[Keyframe], leaving: &HashSet<u32>) -> (DMatrix<f64>, DV
     let info = pick(&keep, &keep) - &hkm * &hmm_inv * hkm.transpose();
     let gm = DVector::from_fn(gone.len(), |a, _| g[gone[a]]);
     let gk = DVector::from_fn(keep.len(), |a, _| g[keep[a]]);
-    (info, gk - hkm * hmm_inv * gm)
+    let rows = |r: &[usize]| DMatrix::from_fn(r.len(), CALIBRATION, |a, b| hc[(r[a], b)]);
+    let cal = rows(&keep) - &hkm * &hmm_inv * rows(&gone);
+    (info, gk - &hkm * &hmm_inv * gm, cal)
 }
 
 #[test]
@@ -118,14 +126,19 @@ fn the_prior_is_the_dense_schur_complement() {
             .filter(|t| mode == Marginalisation::All || !live.contains(t))
             .collect();
         assert!(leaving.len() > 50, "{}", leaving.len());
-        let (info, gradient) = dense_prior(&frames, &leaving);
+        let (info, gradient, calibration) = dense_prior(&frames, &leaving);
         let prior = marginalise(&m, &WindowConfig::default(), &mut frames, None, &live, mode)
             .expect("a prior");
         assert_eq!(prior.frames, vec![1, 2, 3, 4]);
         let scale = info.norm();
         let e = (&prior.information - &info).norm() / scale;
         let eg = (&prior.gradient - &gradient).norm() / gradient.norm();
-        eprintln!("{mode:?}: information off by {e:.1e}, gradient by {eg:.1e} (relative)");
+        let ec = (&prior.calibration - &calibration).norm() / calibration.norm();
+        eprintln!(
+            "{mode:?}: information off by {e:.1e}, gradient by {eg:.1e}, calibration by {ec:.1e} (relative)"
+        );
+        assert!(ec < 1e-9, "{mode:?}: calibration off by {ec}");
+        assert_eq!(prior.at, terms(&m));
         assert!(e < 1e-9, "{mode:?}: information off by {e}");
         assert!(eg < 1e-9, "{mode:?}: gradient off by {eg}");
         // The marginalised tracks' measurements left the remaining keyframes.

@@ -102,7 +102,7 @@ pub(super) fn relative_poses(poses: &[Pose], out: &mut Vec<Relative>) {
 pub(super) struct Jac {
     pub(super) residual: Vector3<f64>,
     pub(super) d_point: Matrix3<f64>,
-    d_correction: Matrix3xK,
+    pub(super) d_correction: Matrix3xK,
     pub(super) poses: Option<(Matrix3x6, Matrix3x6)>,
 }
 
@@ -193,7 +193,7 @@ pub(super) struct Scratch {
     cost: f64,
     /// The reduced system's pose-by-calibration blocks `S_ξc` (points eliminated), one
     /// per pose variable: how the calibration terms pull on each pose.
-    pose_calibration: Vec<Matrix6xK>,
+    pub(super) pose_calibration: Vec<Matrix6xK>,
 }
 
 /// Adds `block` to the `H_pξ` of variable `v` among `hpx[start..]`.
@@ -382,10 +382,11 @@ pub(crate) fn refine_window(
     }
     // The prior of the keyframes marginalised before, on the slots of its keyframes.
     let prior = prior.and_then(|p| p.on(frames).map(|slots| (p, slots)));
+    let terms = super::marginal::terms(model);
     let prior_energy = |poses: &[Pose]| {
         prior
             .as_ref()
-            .map_or(0.0, |(p, slots)| p.energy(slots, poses))
+            .map_or(0.0, |(p, slots)| p.energy(slots, poses, &terms))
     };
     let mut trial_rel = Vec::with_capacity(n * n);
     let mut trial_points = points.clone();
@@ -397,7 +398,12 @@ pub(crate) fn refine_window(
         // The cost at the current state comes with its linearisation.
         let (mut s, mut g) = build(model, k, (&poses, 1), &tracks, &points, &mut sc)?;
         if let Some((p, slots)) = &prior {
-            p.add_to(slots, &poses, 1, &mut s, &mut g);
+            p.add_to(
+                (slots, &poses, 1),
+                &terms,
+                (&mut s, &mut g),
+                &mut sc.pose_calibration,
+            );
         }
         let current = sc.cost + prior_energy(&poses);
         if !current.is_finite() {
