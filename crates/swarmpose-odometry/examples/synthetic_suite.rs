@@ -1,10 +1,12 @@
 //! The engine on a suite of rendered synthetic stereo sequences (speeds, turns to either
 //! side): final drift, RMS eq. (20) and aligned ATE for each window size given
 //! on the command line (0: frame to frame), so that a change to the window is judged on
-//! more than one sequence. Slow (every frame is rendered): not a test.
+//! more than one sequence. Slow (every frame is rendered): not a test. A window size may
+//! end in `f` or `a` to marginalise the keyframe that leaves the window
+//! (`Marginalisation::Finished` or `All`; without, its information is discarded).
 //!
 //! ```sh
-//! cargo run --release -p swarmpose-odometry --example synthetic_suite -- 0 10 20
+//! cargo run --release -p swarmpose-odometry --example synthetic_suite -- 0 10 20 10f 10a
 //! ```
 
 use swarmpose_datasets::StereoSequence;
@@ -12,15 +14,13 @@ use swarmpose_eval::associate::by_index;
 use swarmpose_eval::{Trajectory, evaluate};
 use swarmpose_odometry::batch::{camera_of, collect};
 use swarmpose_odometry::synthetic::SyntheticSequence;
+use swarmpose_odometry::window::Marginalisation;
 use swarmpose_odometry::{Odometry, OdometryConfig, Status};
 
 fn main() {
-    let windows: Vec<usize> = std::env::args()
-        .skip(1)
-        .map(|a| a.parse().expect("window sizes: integers"))
-        .collect();
+    let windows: Vec<String> = std::env::args().skip(1).collect();
     let windows = if windows.is_empty() {
-        vec![0, 10]
+        vec!["0".to_string(), "10".to_string()]
     } else {
         windows
     };
@@ -43,7 +43,19 @@ fn main() {
         let seq = SyntheticSequence::new(n, step, f64::to_radians(yaw_deg));
         let gt = seq.ground_truth().expect("ground truth").to_vec();
         for (w, sum) in windows.iter().zip(&mut sums) {
-            let config = OdometryConfig::default().with_window(*w);
+            let (size, mode) = match w.strip_suffix('f') {
+                Some(k) => (k, Marginalisation::Finished),
+                None => match w.strip_suffix('a') {
+                    Some(k) => (k, Marginalisation::All),
+                    None => (w.as_str(), Marginalisation::Off),
+                },
+            };
+            let size: usize = size
+                .parse()
+                .expect("window sizes: integers, optionally ending in f or a");
+            let config = OdometryConfig::default()
+                .with_window(size)
+                .with_marginalisation(mode);
             let mut odo = Odometry::new(camera_of(&seq), config).expect("engine");
             let results = collect(&seq, &mut odo, 0.1).expect("odometry");
             let poses: Vec<_> = results.iter().map(|r| r.pose).collect();

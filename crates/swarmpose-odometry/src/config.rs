@@ -103,6 +103,14 @@ impl OdometryConfig {
         self.window.keyframes = keyframes;
         self
     }
+
+    /// The same settings with the window's oldest keyframe marginalised as `mode` says
+    /// when it leaves ([`crate::window::marginal`]).
+    #[must_use]
+    pub fn with_marginalisation(mut self, mode: crate::window::Marginalisation) -> Self {
+        self.window.marginalise = mode;
+        self
+    }
 }
 
 impl Default for OdometryConfig {

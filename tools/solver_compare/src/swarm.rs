@@ -64,6 +64,7 @@ pub fn prepare(p: &Problem, max_iterations: usize) -> Result<Prepared, String> {
         keyframes: KEYFRAMES,
         max_iterations,
         huber_k: HUBER_K,
+        ..WindowConfig::default()
     });
     // X: keyframe 0's camera turned to look backwards.
     let x_pose = p.initial[0]

@@ -23,6 +23,7 @@ use swarmpose_odometry::output::{
 use swarmpose_odometry::plots::{PlotTrack, render_plots};
 use swarmpose_odometry::rgbd::RgbdSequence;
 use swarmpose_odometry::synthetic::SyntheticSequence;
+use swarmpose_odometry::window::Marginalisation;
 use swarmpose_odometry::{
     CorrectionModel, Decision, FrameResult, Odometry, OdometryConfig, OdometryError,
 };
@@ -94,6 +95,14 @@ pub struct OdometryArgs {
     #[arg(long, value_name = "K", default_value_t = swarmpose_odometry::window::WindowConfig::default().keyframes)]
     pub window: usize,
 
+    /// What happens to the oldest keyframe's information when it leaves the window: `off`
+    /// (discarded: the next keyframe is held fixed at its estimate), `finished` (its pose
+    /// and the tracks it sees that have ended are marginalised into a Gaussian prior on
+    /// the other keyframes) or `all` (with every track it sees; those that go on begin a
+    /// new point). See docs/window.md.
+    #[arg(long, value_name = "MODE", default_value = "off", value_parser = parse_marginalise)]
+    pub marginalise: Marginalisation,
+
     /// Fewest inliers for a motion to be accepted.
     #[arg(long, value_name = "N", default_value_t = OdometryConfig::default().min_inliers)]
     pub min_inliers: usize,
@@ -117,6 +126,15 @@ pub struct OdometryArgs {
 
     #[command(flatten)]
     pub options: EstimatorOptions,
+}
+
+fn parse_marginalise(s: &str) -> Result<Marginalisation, String> {
+    match s {
+        "off" => Ok(Marginalisation::Off),
+        "finished" => Ok(Marginalisation::Finished),
+        "all" => Ok(Marginalisation::All),
+        _ => Err(format!("{s:?}: expected off, finished or all")),
+    }
 }
 
 fn odometry_error(e: OdometryError) -> CliError {
@@ -173,7 +191,8 @@ fn config(args: &OdometryArgs) -> Result<OdometryConfig, CliError> {
         selfcal,
         ..OdometryConfig::default()
     }
-    .with_window(args.window))
+    .with_window(args.window)
+    .with_marginalisation(args.marginalise))
 }
 
 /// Runs `odometry`.

@@ -32,9 +32,15 @@
 //! Poses already given out are not revised (the engine is online), but the window keeps
 //! their refined values for the next frames.
 //!
+//! **Marginalisation** ([`marginal`], off by default: [`WindowConfig::marginalise`]). When
+//! the oldest keyframe leaves, its information is discarded by default; optionally its
+//! pose and the tracks that go with it are marginalised into a Gaussian prior on the
+//! remaining keyframes' relative poses, added to every later refinement.
+//!
 //! Memory is bounded: at most `keyframes` frames, each with its own observations, and the
 //! track identities and patches of the newest frame's features.
 
+pub mod marginal;
 pub mod solve;
 
 use std::collections::{HashMap, VecDeque};
@@ -46,6 +52,8 @@ use swarmpose_vision::temporal::template::PatchTemplate;
 
 use crate::refine::evidence::MatrixK;
 use crate::refine::model::{StereoModel, StereoObservation};
+
+pub use marginal::Marginalisation;
 
 /// Settings of the sliding window.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -62,6 +70,9 @@ pub struct WindowConfig {
     /// Huber threshold on a measurement's whitened residual norm (default 2.5, as in the
     /// frame-to-frame refinement).
     pub huber_k: f64,
+    /// What happens to the oldest keyframe's information when it leaves the window
+    /// (default [`Marginalisation::Off`]: discarded; docs/window.md has the measurements).
+    pub marginalise: Marginalisation,
 }
 
 impl Default for WindowConfig {
@@ -70,6 +81,7 @@ impl Default for WindowConfig {
             keyframes: 10,
             max_iterations: 1,
             huber_k: 2.5,
+            marginalise: Marginalisation::Off,
         }
     }
 }
@@ -173,6 +185,8 @@ pub struct Window {
     /// The patch of each live track in the frame where it began (with images).
     templates: HashMap<u32, PatchTemplate>,
     next_track: u32,
+    /// The prior left by the keyframes marginalised so far ([`WindowConfig::marginalise`]).
+    prior: Option<marginal::Prior>,
 }
 
 impl Window {
@@ -196,6 +210,7 @@ impl Window {
         self.frames.clear();
         self.newest_tracks.clear();
         self.templates.clear();
+        self.prior = None;
     }
 
     /// A new track identity.
@@ -235,6 +250,7 @@ impl Window {
                 .sum::<usize>()
             + self.newest_tracks.capacity() * (size_of::<usize>() + size_of::<u32>())
             + self.templates.capacity() * (size_of::<u32>() + size_of::<PatchTemplate>())
+            + self.prior.as_ref().map_or(0, marginal::Prior::heap_bytes)
     }
 
     /// Measurements held now, over all keyframes (bounded by the window's size).
@@ -360,10 +376,22 @@ impl Window {
             .frames
             .back()
             .is_none_or(|last| is_keyframe(last, &current, &model.noise));
-        self.frames.push_back(current);
-        while self.frames.len() > self.config.keyframes {
+        // The oldest keyframes leave to make room: their information is marginalised into
+        // the prior on the others, or discarded.
+        while self.frames.len() >= self.config.keyframes {
+            if self.config.marginalise != Marginalisation::Off {
+                self.prior = marginal::marginalise(
+                    model,
+                    &self.config,
+                    self.frames.make_contiguous(),
+                    self.prior.take(),
+                    &used,
+                    self.config.marginalise,
+                );
+            }
             self.frames.pop_front();
         }
+        self.frames.push_back(current);
         // Two frames that are a pair add nothing to the pair's refinement; two that are
         // not (the newest measured from a frame that left) do.
         if self.frames.len() < 3 && !dropped {
@@ -374,6 +402,7 @@ impl Window {
             calibration_covariance,
             &self.config,
             self.frames.make_contiguous(),
+            self.prior.as_ref(),
         )?;
         let newest = self.frames.back()?;
         let oldest = self.frames.front()?;

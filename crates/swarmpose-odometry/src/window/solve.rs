@@ -23,6 +23,7 @@ use nalgebra::{
     Vector6,
 };
 
+use super::marginal::Prior;
 use super::{Keyframe, WindowConfig, WindowReport};
 use crate::refine::evidence::{Matrix6xK, MatrixK};
 use crate::refine::model::{
@@ -32,20 +33,20 @@ use crate::refine::unit_quaternion;
 
 /// A pose `T_kw` as a rotation matrix and translation.
 #[derive(Debug, Clone, Copy)]
-struct Pose {
-    rot: Matrix3<f64>,
-    trans: Vector3<f64>,
+pub(super) struct Pose {
+    pub(super) rot: Matrix3<f64>,
+    pub(super) trans: Vector3<f64>,
 }
 
 impl Pose {
-    fn of(t: &Isometry3<f64>) -> Self {
+    pub(super) fn of(t: &Isometry3<f64>) -> Self {
         Self {
             rot: *t.rotation.to_rotation_matrix().matrix(),
             trans: t.translation.vector,
         }
     }
 
-    fn moved(&self, nu: &Vector3<f64>, omega: &Vector3<f64>) -> Self {
+    pub(super) fn moved(&self, nu: &Vector3<f64>, omega: &Vector3<f64>) -> Self {
         let e = *UnitQuaternion::from_scaled_axis(*omega)
             .to_rotation_matrix()
             .matrix();
@@ -68,13 +69,13 @@ impl Pose {
 
 /// A track seen at least twice in the window: its measurements (keyframe slot, the
 /// measurement), the first in its anchor keyframe.
-struct Track {
-    obs: Vec<(usize, StereoObservation)>,
-    point: Vector3<f64>,
+pub(super) struct Track {
+    pub(super) obs: Vec<(usize, StereoObservation)>,
+    pub(super) point: Vector3<f64>,
 }
 
 /// Huber weight and cost of a squared whitened norm.
-fn huber(s2: f64, k: f64) -> (f64, f64) {
+pub(super) fn huber(s2: f64, k: f64) -> (f64, f64) {
     if s2 <= k * k {
         (1.0, s2)
     } else {
@@ -84,10 +85,10 @@ fn huber(s2: f64, k: f64) -> (f64, f64) {
 }
 
 /// A relative pose `T_ja`: rotation and translation (`P_j = R P_a + t`, metres).
-type Relative = (Matrix3<f64>, Vector3<f64>);
+pub(super) type Relative = (Matrix3<f64>, Vector3<f64>);
 
 /// The relative poses `T_ja` of every pair of keyframes, row-major by `(j, a)`.
-fn relative_poses(poses: &[Pose], out: &mut Vec<Relative>) {
+pub(super) fn relative_poses(poses: &[Pose], out: &mut Vec<Relative>) {
     out.clear();
     for j in poses {
         for a in poses {
@@ -98,16 +99,16 @@ fn relative_poses(poses: &[Pose], out: &mut Vec<Relative>) {
 
 /// One measurement linearised: whitened residual, `∂e/∂p`, and `∂e/∂ξ` for the observing
 /// keyframe (`j`) and the anchor (`a`), `None` for the anchor's own measurement.
-struct Jac {
-    residual: Vector3<f64>,
-    d_point: Matrix3<f64>,
-    d_correction: Matrix3xK,
-    poses: Option<(Matrix3x6, Matrix3x6)>,
+pub(super) struct Jac {
+    pub(super) residual: Vector3<f64>,
+    pub(super) d_point: Matrix3<f64>,
+    pub(super) d_correction: Matrix3xK,
+    pub(super) poses: Option<(Matrix3x6, Matrix3x6)>,
 }
 
 /// The measurement `z` in keyframe `slot` of the point `p` anchored in keyframe `anchor`,
 /// `rel` from [`relative_poses`] over `n` keyframes.
-fn linearize(
+pub(super) fn linearize(
     model: &StereoModel,
     (rel, n): (&[Relative], usize),
     anchor: usize,
@@ -178,7 +179,7 @@ struct Eliminated {
 
 /// Buffers of one refinement, reused over its iterations.
 #[derive(Default)]
-struct Scratch {
+pub(super) struct Scratch {
     rel: Vec<Relative>,
     elim: Vec<Eliminated>,
     /// `H_pξ` per track and pose variable (index of the variable, 3x6 block).
@@ -192,7 +193,7 @@ struct Scratch {
     cost: f64,
     /// The reduced system's pose-by-calibration blocks `S_ξc` (points eliminated), one
     /// per pose variable: how the calibration terms pull on each pose.
-    pose_calibration: Vec<Matrix6xK>,
+    pub(super) pose_calibration: Vec<Matrix6xK>,
 }
 
 /// Adds `block` to the `H_pξ` of variable `v` among `hpx[start..]`.
@@ -203,18 +204,19 @@ fn add_hpx(hpx: &mut Vec<(usize, Matrix3x6)>, start: usize, v: usize, block: &Ma
     }
 }
 
-/// The reduced system at `poses` and `points`; `None` if a point left a view or its
-/// block is singular.
+/// The reduced system at `poses` and `points`, over the poses after the first `fixed`
+/// (held fixed: 1 in the refinement, 0 to marginalise the first); `None` if a point left
+/// a view or its block is singular.
 fn build(
     model: &StereoModel,
     k: f64,
-    poses: &[Pose],
+    (poses, fixed): (&[Pose], usize),
     tracks: &[Track],
     points: &[Vector3<f64>],
     sc: &mut Scratch,
 ) -> Option<(DMatrix<f64>, DVector<f64>)> {
     let n = poses.len();
-    let m = n - 1;
+    let m = n.checked_sub(fixed)?;
     relative_poses(poses, &mut sc.rel);
     sc.elim.clear();
     sc.hpx.clear();
@@ -226,8 +228,8 @@ fn build(
     sc.cost = 0.0;
     sc.pose_calibration.clear();
     sc.pose_calibration.resize(m, Matrix6xK::zeros());
-    // Variable of keyframe slot `i`: slot 0 is fixed.
-    let var = |slot: usize| slot.checked_sub(1);
+    // Variable of keyframe slot `i`: the first `fixed` slots have none.
+    let var = |slot: usize| slot.checked_sub(fixed);
     for (t, p) in tracks.iter().zip(points) {
         let anchor = t.obs[0].0;
         let mut hpp = Matrix3::zeros();
@@ -286,25 +288,25 @@ fn build(
     Some((s, g))
 }
 
-/// Refines the window's poses (all but the oldest) and its tracks' points in place.
-/// `None` when there is nothing to refine or the system is singular (poses unchanged).
-pub(crate) fn refine_window(
+/// The tracks seen at least twice in `frames` (posed at `poses`) whose identity passes
+/// `keep`, each with its point anchored in its first keyframe and fitted to the poses by
+/// one Gauss-Newton step on its own measurements (more changed no result in the
+/// ablations of RESULTS.md, and cost as much as a Levenberg-Marquardt iteration each), in
+/// a deterministic order. Leaves `sc.rel` at `poses`.
+pub(super) fn tracks_of(
     model: &StereoModel,
-    calibration_covariance: &MatrixK,
-    config: &WindowConfig,
-    frames: &mut [Keyframe],
-) -> Option<WindowReport> {
-    if frames.len() < 2 {
-        return None;
-    }
-    let k = config.huber_k;
+    k: f64,
+    frames: &[Keyframe],
+    poses: &[Pose],
+    keep: impl Fn(u32) -> bool,
+    sc: &mut Scratch,
+) -> Vec<Track> {
     let mut by_track: HashMap<u32, Vec<(usize, StereoObservation)>> = HashMap::new();
     for (slot, f) in frames.iter().enumerate() {
-        for (t, z) in &f.observations {
+        for (t, z) in f.observations.iter().filter(|(t, _)| keep(*t)) {
             by_track.entry(*t).or_default().push((slot, *z));
         }
     }
-    let mut poses: Vec<Pose> = frames.iter().map(|f| Pose::of(&f.pose_cw)).collect();
     let mut tracks: Vec<Track> = by_track
         .into_values()
         .filter(|obs| obs.len() >= 2)
@@ -319,11 +321,7 @@ pub(crate) fn refine_window(
         (s, (z.u * 64.0) as i64, (z.v * 64.0) as i64)
     });
     let n = poses.len();
-    let mut sc = Scratch::default();
-    relative_poses(&poses, &mut sc.rel);
-    // Each point fitted to the poses first: one Gauss-Newton step on its own measurements
-    // (more changed no result in the ablations of RESULTS.md, and cost as much as a
-    // Levenberg-Marquardt iteration each).
+    relative_poses(poses, &mut sc.rel);
     for t in &mut tracks {
         let anchor = t.obs[0].0;
         let mut h = Matrix3::zeros();
@@ -340,11 +338,56 @@ pub(crate) fn refine_window(
         }
     }
     tracks.retain(|t| t.point.z >= 0.0 && t.point.iter().all(|v| v.is_finite()));
+    tracks
+}
+
+/// The linearised system of `tracks` (from [`tracks_of`]) over every pose of `poses`,
+/// none held fixed, the points eliminated: the information `S` (`6 n` square) and the
+/// gradient `g` of half the robust cost. `None` if a point left a view or its block is
+/// singular.
+pub(super) fn linearised_system(
+    model: &StereoModel,
+    k: f64,
+    poses: &[Pose],
+    tracks: &[Track],
+    sc: &mut Scratch,
+) -> Option<(DMatrix<f64>, DVector<f64>)> {
+    let points: Vec<Vector3<f64>> = tracks.iter().map(|t| t.point).collect();
+    build(model, k, (poses, 0), tracks, &points, sc)
+}
+
+/// Refines the window's poses (all but the oldest) and its tracks' points in place, with
+/// the `prior` of the keyframes marginalised before when there is one (ignored when one
+/// of its keyframes is not in `frames`). `None` when there is nothing to refine or the
+/// system is singular (poses unchanged).
+pub(crate) fn refine_window(
+    model: &StereoModel,
+    calibration_covariance: &MatrixK,
+    config: &WindowConfig,
+    frames: &mut [Keyframe],
+    prior: Option<&Prior>,
+) -> Option<WindowReport> {
+    if frames.len() < 2 {
+        return None;
+    }
+    let k = config.huber_k;
+    let mut poses: Vec<Pose> = frames.iter().map(|f| Pose::of(&f.pose_cw)).collect();
+    let n = poses.len();
+    let mut sc = Scratch::default();
+    let tracks = tracks_of(model, k, frames, &poses, |_| true, &mut sc);
     let observations = tracks.iter().map(|t| t.obs.len()).sum();
     let mut points: Vec<Vector3<f64>> = tracks.iter().map(|t| t.point).collect();
     if tracks.is_empty() {
         return None;
     }
+    // The prior of the keyframes marginalised before, on the slots of its keyframes.
+    let prior = prior.and_then(|p| p.on(frames).map(|slots| (p, slots)));
+    let terms = super::marginal::terms(model);
+    let prior_energy = |poses: &[Pose]| {
+        prior
+            .as_ref()
+            .map_or(0.0, |(p, slots)| p.energy(slots, poses, &terms))
+    };
     let mut trial_rel = Vec::with_capacity(n * n);
     let mut trial_points = points.clone();
     let mut lambda = 1e-4;
@@ -353,8 +396,16 @@ pub(crate) fn refine_window(
     'outer: for _ in 0..config.max_iterations {
         iterations += 1;
         // The cost at the current state comes with its linearisation.
-        let (s, g) = build(model, k, &poses, &tracks, &points, &mut sc)?;
-        let current = sc.cost;
+        let (mut s, mut g) = build(model, k, (&poses, 1), &tracks, &points, &mut sc)?;
+        if let Some((p, slots)) = &prior {
+            p.add_to(
+                (slots, &poses, 1),
+                &terms,
+                (&mut s, &mut g),
+                &mut sc.pose_calibration,
+            );
+        }
+        let current = sc.cost + prior_energy(&poses);
         if !current.is_finite() {
             return None;
         }
@@ -395,7 +446,7 @@ pub(crate) fn refine_window(
                 *tp = p - e.hpp_inv * rhs;
             }
             relative_poses(&trial, &mut trial_rel);
-            let c = cost(model, k, (&trial_rel, n), &tracks, &trial_points);
+            let c = cost(model, k, (&trial_rel, n), &tracks, &trial_points) + prior_energy(&trial);
             if c < current {
                 let done = current - c < 1e-6 * current;
                 poses = trial;

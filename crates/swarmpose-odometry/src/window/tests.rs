@@ -4,13 +4,17 @@ use rand_chacha::ChaCha8Rng;
 
 use super::*;
 
-fn model() -> StereoModel {
+pub(super) fn model() -> StereoModel {
     crate::refine::model::test_model(Default::default())
 }
 
 /// The measurement of the world point `pw` by the camera at `pose` (camera in world), if
 /// it is in view.
-fn measure(m: &StereoModel, pose: &Isometry3<f64>, pw: &Point3<f64>) -> Option<StereoObservation> {
+pub(super) fn measure(
+    m: &StereoModel,
+    pose: &Isometry3<f64>,
+    pw: &Point3<f64>,
+) -> Option<StereoObservation> {
     let p = pose.inverse() * pw;
     if p.z < 1.0 {
         return None;
@@ -26,7 +30,12 @@ fn measure(m: &StereoModel, pose: &Isometry3<f64>, pw: &Point3<f64>) -> Option<S
 
 /// `n` random points (seed `seed`), metres: `x` within `±half_width_m`, `y` in [-3, 2)
 /// (y down), `z` in [4, `max_depth_m`).
-fn random_points(seed: u64, n: usize, half_width_m: f64, max_depth_m: f64) -> Vec<Point3<f64>> {
+pub(super) fn random_points(
+    seed: u64,
+    n: usize,
+    half_width_m: f64,
+    max_depth_m: f64,
+) -> Vec<Point3<f64>> {
     random_points_from(
         &mut ChaCha8Rng::seed_from_u64(seed),
         n,
@@ -64,6 +73,34 @@ fn drift_error() -> Isometry3<f64> {
 /// A camera driving forward 1 m a frame and turning 1 degree, among 300 random points;
 /// the window is given poses that drift by 1 cm and 0.05 degree a frame.
 fn drive(keyframes: usize, frames: usize) -> (Vec<Isometry3<f64>>, Vec<Isometry3<f64>>) {
+    let config = WindowConfig {
+        keyframes,
+        max_iterations: 20,
+        ..WindowConfig::default()
+    };
+    drive_with(config, frames, None)
+}
+
+/// [`drive`] with the window's `config`, and with `noise` (seed, pixels: uniform within
+/// ± that on the positions, half on the disparities) on the measurements.
+pub(super) fn drive_with(
+    config: WindowConfig,
+    frames: usize,
+    noise: Option<(u64, f64)>,
+) -> (Vec<Isometry3<f64>>, Vec<Isometry3<f64>>) {
+    let keyframes = config.keyframes;
+    let mut rng = ChaCha8Rng::seed_from_u64(noise.map_or(0, |n| n.0));
+    let px = noise.map_or(0.0, |n| n.1);
+    let mut noisy = |z: StereoObservation| {
+        if px == 0.0 {
+            return z;
+        }
+        StereoObservation {
+            u: z.u + rng.random_range(-px..px),
+            v: z.v + rng.random_range(-px..px),
+            d: z.d + rng.random_range(-px / 2.0..px / 2.0),
+        }
+    };
     let m = model();
     let points = random_points(7, 300, 15.0, 40.0);
     let step = Isometry3::from_parts(
@@ -71,11 +108,7 @@ fn drive(keyframes: usize, frames: usize) -> (Vec<Isometry3<f64>>, Vec<Isometry3
         UnitQuaternion::from_axis_angle(&Vector3::y_axis(), 1f64.to_radians()),
     );
     let error = drift_error();
-    let mut window = Window::new(WindowConfig {
-        keyframes,
-        max_iterations: 20,
-        ..WindowConfig::default()
-    });
+    let mut window = Window::new(config);
     let (mut truth, mut given) = (vec![Isometry3::identity()], vec![Isometry3::identity()]);
     for i in 1..frames {
         let t_prev = truth[i - 1];
@@ -86,11 +119,11 @@ fn drive(keyframes: usize, frames: usize) -> (Vec<Isometry3<f64>>, Vec<Isometry3
             // Each point is seen in 4 consecutive frames out of every 6.
             .filter(|(k, _)| (i + k) % 6 < 4)
             .filter_map(|(k, pw)| {
-                let current = measure(&m, &t, pw)?;
+                let current = noisy(measure(&m, &t, pw)?);
                 Some(Link {
                     reference_feature: k,
                     current_feature: k,
-                    reference: measure(&m, &t_prev, pw)?,
+                    reference: noisy(measure(&m, &t_prev, pw)?),
                     current,
                     current_keypoint: current,
                 })
