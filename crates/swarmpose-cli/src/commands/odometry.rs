@@ -100,7 +100,7 @@ pub struct OdometryArgs {
     /// and the tracks it sees that have ended are marginalised into a Gaussian prior on
     /// the other keyframes) or `all` (with every track it sees; those that go on begin a
     /// new point). See docs/window.md.
-    #[arg(long, value_name = "MODE", default_value = "off", value_parser = parse_marginalise)]
+    #[arg(long, value_name = "MODE", default_value = "off", value_parser = |s: &str| s.parse::<Marginalisation>())]
     pub marginalise: Marginalisation,
 
     /// Fewest inliers for a motion to be accepted.
@@ -126,15 +126,6 @@ pub struct OdometryArgs {
 
     #[command(flatten)]
     pub options: EstimatorOptions,
-}
-
-fn parse_marginalise(s: &str) -> Result<Marginalisation, String> {
-    match s {
-        "off" => Ok(Marginalisation::Off),
-        "finished" => Ok(Marginalisation::Finished),
-        "all" => Ok(Marginalisation::All),
-        _ => Err(format!("{s:?}: expected off, finished or all")),
-    }
 }
 
 fn odometry_error(e: OdometryError) -> CliError {

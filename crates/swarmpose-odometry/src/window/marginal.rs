@@ -63,6 +63,35 @@ pub enum Marginalisation {
     All,
 }
 
+impl Marginalisation {
+    /// Every mode, in the order of [`Marginalisation::NAMES`].
+    pub const ALL: [Marginalisation; 3] = [Self::Off, Self::Finished, Self::All];
+    /// The modes' names (`off`, `finished`, `all`), as the command line takes them.
+    pub const NAMES: [&'static str; 3] = ["off", "finished", "all"];
+
+    /// The mode's name.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Off => Self::NAMES[0],
+            Self::Finished => Self::NAMES[1],
+            Self::All => Self::NAMES[2],
+        }
+    }
+}
+
+impl std::str::FromStr for Marginalisation {
+    type Err = String;
+
+    /// One of [`Marginalisation::NAMES`].
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Self::ALL
+            .into_iter()
+            .find(|m| m.name() == s)
+            .ok_or_else(|| format!("{s:?}: expected one of {}", Self::NAMES.join(", ")))
+    }
+}
+
 /// A Gaussian prior on keyframe poses: half the robust cost it stands for is
 /// `bᵀδ + ½ δᵀ H δ` (plus a constant), `δ` the poses' perturbations from their
 /// linearisation point.

@@ -245,3 +245,14 @@ fn marginalising_ends_a_noisy_drive_closer() {
         }
     }
 }
+
+/// Every mode reads back from its name; other names are refused with the list.
+#[test]
+fn modes_read_back_from_their_names() {
+    use crate::window::Marginalisation;
+    for m in Marginalisation::ALL {
+        assert_eq!(m.name().parse::<Marginalisation>(), Ok(m));
+    }
+    let e = "some".parse::<Marginalisation>().expect_err("not a mode");
+    assert!(e.contains("off, finished, all"), "{e}");
+}
