@@ -15,7 +15,7 @@
 
 use std::time::Instant;
 
-use nalgebra::{Isometry3, Matrix6, Translation3, UnitQuaternion};
+use nalgebra::{Isometry3, Matrix6, UnitQuaternion};
 use swarmpose_core::Estimator;
 use swarmpose_vision::features::{Descriptor, GrayView};
 use swarmpose_vision::frontend::{DisparityCorrection, StereoFrame, match_frames};
@@ -38,6 +38,9 @@ use crate::window::{Images, Window, WindowMotion};
 
 mod ambiguity;
 mod calibrate;
+mod predict;
+
+use predict::{Velocity, scale_motion};
 
 /// Mixed into the frame's seed for the search of a second motion among the matches the
 /// first left over ([`ambiguity::leftover_motion`]).
@@ -59,13 +62,6 @@ struct Reference<D> {
 struct Last {
     pose: Isometry3<f64>,
     timestamp_s: f64,
-}
-
-/// The last tracked motion and the time it spans.
-#[derive(Debug, Clone, Copy)]
-struct Velocity {
-    motion: Isometry3<f64>,
-    dt_s: f64,
 }
 
 /// A measured motion from the reference.
@@ -92,16 +88,6 @@ fn focal_changed(rig: &RectifiedStereo, focal_px: f64) -> RectifiedStereo {
     r.fy *= 1.0 + focal_px / r.fx;
     r.fx += focal_px;
     r
-}
-
-/// `m` scaled to `f` times its rotation angle and translation (constant velocity over
-/// a different time step).
-fn scale_motion(m: &Isometry3<f64>, f: f64) -> Isometry3<f64> {
-    if (f - 1.0).abs() < 1e-12 {
-        return *m;
-    }
-    let r = UnitQuaternion::from_scaled_axis(m.rotation.scaled_axis() * f);
-    Isometry3::from_parts(Translation3::from(m.translation.vector * f), r)
 }
 
 /// The back end: poses from triangulated frames.
@@ -228,18 +214,6 @@ impl<D: Descriptor> Tracker<D> {
             noise: self.noise,
             correction,
         }
-    }
-
-    /// The constant-velocity motion from the reference, taken at `ref_timestamp_s`, to a
-    /// frame taken at `timestamp_s`: the last tracked motion scaled to that time span, if
-    /// it is recent ([`OdometryConfig::max_prediction_s`]).
-    fn prediction(&self, ref_timestamp_s: f64, timestamp_s: f64) -> Option<Isometry3<f64>> {
-        let v = self.velocity?;
-        let recent = self
-            .last_tracked_s
-            .is_some_and(|t| timestamp_s - t <= self.config.max_prediction_s);
-        (recent && v.dt_s > 0.0)
-            .then(|| scale_motion(&v.motion, (timestamp_s - ref_timestamp_s) / v.dt_s))
     }
 
     /// The motion of `frame` from the reference, or why there is none.
