@@ -255,6 +255,14 @@ fn kitti_run_writes_its_outputs() {
     }
     let csv = std::fs::read_to_string(out_dir.join("frames.csv")).expect("frames.csv");
     assert_eq!(csv.lines().count(), 52);
+    // The window's last estimate of every frame, and its evaluation.
+    let smoothed =
+        std::fs::read_to_string(out_dir.join("trajectory.smoothed.kitti.txt")).expect("smoothed");
+    assert_eq!(smoothed.lines().count(), 51);
+    assert!(
+        summary.contains("smoothed (each frame's last window estimate)"),
+        "{summary}"
+    );
     let v = json_of(&swarmpose(
         &[
             "evaluate",

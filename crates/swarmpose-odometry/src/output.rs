@@ -224,3 +224,30 @@ pub fn calibration_json(d: &Decision) -> serde_json::Value {
         "frames": d.frames,
     })
 }
+
+/// The fixed-lag smoothed trajectory of a run: each frame's last estimate by the sliding
+/// window (the value its pose had when it left the window, or has now for the frames the
+/// window still holds), from [`FrameResult::window_poses`]; a frame's online pose without
+/// the window. Grows by one pose a frame: it is for runs that keep their trajectory.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Smoothed {
+    poses: Vec<Isometry3<f64>>,
+}
+
+impl Smoothed {
+    /// Takes the next frame's result (frames in order, from frame 0).
+    pub fn add(&mut self, r: &FrameResult) {
+        self.poses.push(r.pose);
+        for (i, p) in &r.window_poses {
+            if let Some(s) = self.poses.get_mut(*i) {
+                *s = *p;
+            }
+        }
+    }
+
+    /// The poses so far, one per frame.
+    #[must_use]
+    pub fn poses(&self) -> &[Isometry3<f64>] {
+        &self.poses
+    }
+}

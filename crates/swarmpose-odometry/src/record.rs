@@ -159,4 +159,11 @@ pub struct FrameResult {
     /// pose may still be that of the other motion, so treat it with care. Only the robust
     /// PSO (`pso`) looks for a second motion.
     pub ambiguous: bool,
+    /// With the sliding window, the window's current estimate of the pose of each frame it
+    /// holds (frame index, pose as [`FrameResult::pose`]), oldest first, this frame last:
+    /// earlier frames' poses as revised by this frame's refinement. A frame's last
+    /// revision (the value it had when it left the window) is the output of a fixed-lag
+    /// smoother, at most the window's span late; [`FrameResult::pose`] stays the online
+    /// estimate. Empty without the window or for a frame that was not tracked.
+    pub window_poses: Vec<(usize, Isometry3<f64>)>,
 }

@@ -137,6 +137,20 @@ impl Frame {
         self.result.keyframe
     }
 
+    /// With the sliding window, its current estimate of each frame it holds, oldest
+    /// first, this frame last: a list of ``(index, pose)`` with 4x4 poses as ``pose``
+    /// (earlier frames as revised by this frame; a frame's last revision is the
+    /// fixed-lag smoothed pose, see ``OdometryRun.smoothed_poses``). Empty without the
+    /// window or for a frame that was not tracked.
+    #[getter]
+    fn window_poses<'py>(&self, py: Python<'py>) -> Vec<(usize, Bound<'py, PyArray2<f64>>)> {
+        self.result
+            .window_poses
+            .iter()
+            .map(|(i, p)| (*i, transform(py, p)))
+            .collect()
+    }
+
     /// True when the estimator found two distinct motions with comparable support (a
     /// large moving object, a repeating scene): the one nearer the constant-velocity
     /// prediction was taken, but the pose may be the other's; treat it with care.

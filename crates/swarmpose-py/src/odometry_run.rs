@@ -103,6 +103,17 @@ impl OdometryRun {
         transforms(py, &p)
     }
 
+    /// Each frame's last estimate by the sliding window (a fixed-lag smoother: the pose it
+    /// had when it left the window), (N, 4, 4) (metres); ``poses`` without the window.
+    #[getter]
+    fn smoothed_poses<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray3<f64>> {
+        let mut s = swarmpose_odometry::output::Smoothed::default();
+        for f in &self.frames {
+            s.add(f);
+        }
+        transforms(py, s.poses())
+    }
+
     /// Timestamps, seconds, (N,).
     #[getter]
     fn timestamps<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {

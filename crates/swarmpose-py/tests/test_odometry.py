@@ -57,6 +57,15 @@ def test_streaming_matches_the_cli(kitti_seq2, swarmpose_bin, tmp_path):
 
     run = swarmpose.odometry(kitti_seq2)
     assert np.array_equal(run.poses, poses)
+    # The fixed-lag smoothed trajectory: the CLI's file, and each frame's last window
+    # pose as the frames carry them.
+    smoothed = run.smoothed_poses
+    assert np.max(np.abs(smoothed - read_kitti(out / "trajectory.smoothed.kitti.txt"))) < 1e-12
+    last = {}
+    for f in frames:
+        assert f.index == 0 or f.window_poses[-1][0] == f.index
+        last.update({i: p for i, p in f.window_poses})
+    assert all(np.array_equal(smoothed[i], p) for i, p in last.items())
     assert run.statuses == [f.status for f in frames]
 
     metrics = swarmpose.evaluate(run.poses, run.ground_truth)

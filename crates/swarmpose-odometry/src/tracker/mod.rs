@@ -465,6 +465,7 @@ impl<D: Descriptor> Tracker<D> {
             correction_model,
             keyframe: false,
             ambiguous: false,
+            window_poses: Vec::new(),
         };
         let Some(last) = self.last else {
             // The first frame: the origin.
@@ -514,6 +515,9 @@ impl<D: Descriptor> Tracker<D> {
                 result.keyframe = m.keyframe;
                 result.ambiguous = m.ambiguous;
                 self.last_ambiguous = m.ambiguous;
+                if self.window.enabled() {
+                    result.window_poses = self.window.poses().collect();
+                }
                 result.correction = m.correction;
                 result.focal_px = m.focal_px;
                 result.correction_model = m.model;

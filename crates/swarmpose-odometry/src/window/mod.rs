@@ -233,6 +233,15 @@ impl Window {
         self.frames.back().is_some_and(|f| f.keyframe)
     }
 
+    /// The frames held (frame index, pose of the camera in the world), oldest first.
+    pub fn poses(&self) -> impl Iterator<Item = (usize, Isometry3<f64>)> + '_ {
+        self.frames.iter().map(|f| {
+            let mut p = f.pose_cw.inverse();
+            p.rotation = UnitQuaternion::new_normalize(p.rotation.into_inner());
+            (f.index, p)
+        })
+    }
+
     /// True when no keyframe is held.
     #[must_use]
     pub fn is_empty(&self) -> bool {

@@ -143,6 +143,9 @@ class Frame:
     @property
     def keyframe(self) -> bool: ...
     @property
+    def window_poses(self) -> List[Tuple[int, npt.NDArray[np.float64]]]:
+        """The window's current (index, 4x4 pose) of each frame it holds, this frame last."""
+    @property
     def ambiguous(self) -> bool:
         """Two distinct motions had comparable support; the one nearer the constant-velocity prediction was taken."""
 
@@ -223,6 +226,9 @@ class OdometryRun:
     """Every frame of a ``swarmpose.odometry`` run."""
     @property
     def poses(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def smoothed_poses(self) -> npt.NDArray[np.float64]:
+        """Each frame's last estimate by the sliding window (fixed-lag smoothed), (N, 4, 4)."""
     @property
     def timestamps(self) -> npt.NDArray[np.float64]: ...
     @property
