@@ -4,7 +4,6 @@
 use nalgebra::{Isometry3, Point3};
 use swarmpose_core::{Correspondences, Estimator};
 use swarmpose_vision::frontend::{DisparityCorrection, FrameMatches};
-use swarmpose_vision::stereo::RectifiedStereo;
 
 use crate::refine::model::StereoObservation;
 use crate::window::Link;
@@ -97,44 +96,8 @@ pub(crate) struct Initial {
     /// Its inliers.
     pub inliers: usize,
     /// The estimator found a second, distinct motion with comparable support (a moving
-    /// object, or a scene that repeats): `motion` is the one of the two nearer the
-    /// prediction (the larger one without a prediction).
+    /// object, or a scene that repeats); `motion` is the one with more support.
     pub ambiguous: bool,
-}
-
-/// Median distance, pixels in `(u, v, d)` of `rig`, between where `a` and `b` put the
-/// points `src` (in B) in A; `f64::INFINITY` when no point lies in front of the camera
-/// under both. Unit-free: it compares two motions by what they do to the measurements.
-fn median_separation_px(
-    rig: &RectifiedStereo,
-    src: &[Point3<f64>],
-    a: &Isometry3<f64>,
-    b: &Isometry3<f64>,
-) -> f64 {
-    let measure = |p: Point3<f64>| -> Option<[f64; 3]> {
-        (p.z > 0.0).then(|| {
-            let (u, v) = rig.project_left(&p);
-            [u, v, rig.fx * rig.baseline_m / p.z]
-        })
-    };
-    let mut d: Vec<f64> = src
-        .iter()
-        .filter_map(|p| {
-            let (za, zb) = (measure(a * p)?, measure(b * p)?);
-            Some(
-                za.iter()
-                    .zip(&zb)
-                    .map(|(x, y)| (x - y) * (x - y))
-                    .sum::<f64>()
-                    .sqrt(),
-            )
-        })
-        .collect();
-    if d.is_empty() {
-        return f64::INFINITY;
-    }
-    let mid = d.len() / 2;
-    *d.select_nth_unstable_by(mid, f64::total_cmp).1
 }
 
 /// The estimator's motion (pose of B in A) on the matches' 3D points with `correction`
@@ -142,23 +105,19 @@ fn median_separation_px(
 /// ratio of the focal length applied to the calibration's: depth is `f b / d`, the other
 /// coordinates `(u − c) b / d` do not depend on `f`); the reason when there is none.
 ///
-/// When the estimator reports a runner-up (a second distinct motion with at least its
-/// ambiguity ratio of the winner's support, [`swarmpose_core::RunnerUp`]), the motion
-/// taken is the one that moves the points of both consensus sets nearer to where
-/// `prediction` (the constant-velocity motion from A to B) puts them, measured on `rig`'s
-/// pixels; without a prediction, the winner. Either way the result is flagged ambiguous.
-#[allow(clippy::too_many_arguments)]
+/// A runner-up reported by the estimator (a second distinct motion with at least its
+/// ambiguity ratio of the winner's support, [`swarmpose_core::RunnerUp`]) flags the result
+/// ambiguous; which of the two motions is the camera's is decided after the refinement
+/// ([`crate::tracker`]'s check for a second motion near the prediction).
 pub(crate) fn initial_motion(
     m: &FrameMatches,
     correction: &DisparityCorrection,
     focal_scale: f64,
-    rig: &RectifiedStereo,
+    baseline_m: f64,
     estimator: &dyn Estimator,
     seed: u64,
     min_inliers: usize,
-    prediction: Option<&Isometry3<f64>>,
 ) -> Result<Initial, String> {
-    let baseline_m = rig.baseline_m;
     let corrected;
     let data = if *correction == DisparityCorrection::default() {
         &m.correspondences
@@ -184,26 +143,11 @@ pub(crate) fn initial_motion(
     let e = estimator
         .estimate_seeded(data, seed)
         .map_err(|e| format!("estimator: {e}"))?;
-    let mut initial = Initial {
+    let initial = Initial {
         motion: e.transform,
         inliers: e.inliers.len(),
         ambiguous: e.diagnostics.runner_up.is_some(),
     };
-    if let (Some(second), Some(prediction)) = (e.diagnostics.runner_up.as_ref(), prediction) {
-        let src = data.src();
-        let both: Vec<Point3<f64>> = e
-            .inliers
-            .iter()
-            .chain(&second.inliers)
-            .filter_map(|&i| src.get(i).copied())
-            .collect();
-        let winner = median_separation_px(rig, &both, &e.transform, prediction);
-        let runner_up = median_separation_px(rig, &both, &second.transform, prediction);
-        if runner_up < winner {
-            initial.motion = second.transform;
-            initial.inliers = second.inliers.len();
-        }
-    }
     if initial.inliers < min_inliers {
         return Err(format!(
             "estimator: {} inliers, fewer than {min_inliers}",

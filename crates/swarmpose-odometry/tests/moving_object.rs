@@ -3,25 +3,35 @@
 //! not say so with confidence: it flags the frames as ambiguous and takes the motion
 //! that agrees with the constant-velocity prediction.
 
+mod common;
+
 use swarmpose_odometry::synthetic::features::{FeatureSequence, FeatureSequenceConfig};
 use swarmpose_odometry::synthetic::vehicle::Vehicle;
-use swarmpose_odometry::{FrameResult, OdometryConfig, StageTimes};
+use swarmpose_odometry::{FrameResult, OdometryConfig};
 
-/// Runs `frames` frames of `seq` through a tracker with `config`.
-fn run(seq: &FeatureSequence, config: OdometryConfig, frames: usize) -> Vec<FrameResult> {
+/// Runs `frames` frames of `seq` through a tracker with `config`, printing each result
+/// under `label`.
+fn run(
+    seq: &FeatureSequence,
+    config: OdometryConfig,
+    frames: usize,
+    label: &str,
+) -> Vec<FrameResult> {
     let mut tracker = seq.tracker(config);
-    (0..frames)
-        .map(|k| {
-            tracker
-                .track(
-                    seq.frame(k),
-                    None,
-                    seq.timestamp_s(k),
-                    StageTimes::default(),
-                )
-                .expect("frame")
-        })
-        .collect()
+    let mut results = Vec::with_capacity(frames);
+    common::stream(seq, &mut tracker, frames, |_, r| {
+        eprintln!(
+            "{label}, frame {:2}: {:8} matches {:4} inliers {:4} ambiguous {} error {:.3} m",
+            r.index,
+            r.status.text(),
+            r.counts.matches,
+            r.counts.inliers,
+            r.ambiguous,
+            position_error_m(seq, r)
+        );
+        results.push(r.clone());
+    });
+    results
 }
 
 /// Distance between the estimated and the true position of frame `k`, metres.
@@ -48,23 +58,15 @@ fn with_truck(features: usize, relative_step_m: f64) -> FeatureSequence {
 fn flagged_frames(seq: &FeatureSequence, label: &str) -> Vec<Vec<FrameResult>> {
     [0, 10]
         .map(|keyframes| {
-            let results = run(seq, OdometryConfig::default().with_window(keyframes), 40);
+            let label = format!("{label}, window {keyframes}");
+            let config = OdometryConfig::default().with_window(keyframes);
+            let results = run(seq, config, 40, &label);
             for r in &results {
-                eprintln!(
-                    "{label}, window {keyframes}, frame {:2}: {:8} matches {:4} inliers {:4} \
-                     ambiguous {} error {:.3} m",
-                    r.index,
-                    r.status.text(),
-                    r.counts.matches,
-                    r.counts.inliers,
-                    r.ambiguous,
-                    position_error_m(seq, r)
-                );
                 assert!(r.status.is_tracked() || r.index == 0, "frame {}", r.index);
                 // Frame 10 is matched to frame 9, where there is no truck yet.
                 assert!(
                     !r.ambiguous || (11..=30).contains(&r.index),
-                    "{label}, window {keyframes}, frame {}: no truck in both frames",
+                    "{label}, frame {}: no truck in both frames",
                     r.index
                 );
             }
@@ -72,7 +74,7 @@ fn flagged_frames(seq: &FeatureSequence, label: &str) -> Vec<Vec<FrameResult>> {
             let drift = position_error_m(seq, end) / (39.0 * seq.config().step_m);
             assert!(
                 drift < 0.005,
-                "{label}, window {keyframes}: ends {:.1} % of the path off",
+                "{label}: ends {:.1} % of the path off",
                 100.0 * drift
             );
             results.into_iter().filter(|r| r.ambiguous).collect()
@@ -137,18 +139,14 @@ fn a_truck_from_the_first_frame_is_flagged_throughout() {
         ..FeatureSequenceConfig::default()
     });
     for keyframes in [0, 10] {
-        let results = run(&seq, OdometryConfig::default().with_window(keyframes), 30);
+        let label = format!("from the start, window {keyframes}");
+        let results = run(
+            &seq,
+            OdometryConfig::default().with_window(keyframes),
+            30,
+            &label,
+        );
         for r in &results {
-            eprintln!(
-                "from the start, window {keyframes}, frame {:2}: {:8} matches {:4} inliers {:4} \
-                 ambiguous {} error {:.3} m",
-                r.index,
-                r.status.text(),
-                r.counts.matches,
-                r.counts.inliers,
-                r.ambiguous,
-                position_error_m(&seq, r)
-            );
             let both_seen = (1..=20).contains(&r.index);
             assert_eq!(
                 r.ambiguous, both_seen,

@@ -70,10 +70,18 @@ fn median_at(chi2: &[f64], indices: &[usize]) -> f64 {
     *v.select_nth_unstable_by(mid, f64::total_cmp).1
 }
 
+/// A second motion found near the prediction.
+pub(crate) struct Second {
+    /// The motion, refined; its inliers index the full match lists.
+    pub refined: Refined,
+    /// The prediction explains its inliers better than the first motion's (lower median
+    /// whitened χ² under the prediction): it is the one to take.
+    pub preferred: bool,
+}
+
 /// A second motion of the matches `(reference, current)` near `prediction` (the pose of
 /// B in A at constant velocity), distinct from `first` (refined from the estimator's
-/// motion), given each match's fold; `None` when there is none. The second motion's
-/// inliers index the full match lists, like `first`'s.
+/// motion), given each match's fold; `None` when there is none.
 pub(crate) fn second_motion(
     model: &StereoModel,
     config: &RefineConfig,
@@ -81,7 +89,7 @@ pub(crate) fn second_motion(
     first: &Refined,
     prediction: &Isometry3<f64>,
     min_inliers: usize,
-) -> Option<Refined> {
+) -> Option<Second> {
     let chi2 = chi2_under(model, prediction, reference, current);
     let in_first = inlier_mask(first, reference.len());
     let outside = (0..reference.len())
@@ -104,7 +112,9 @@ pub(crate) fn second_motion(
         prediction,
         min_inliers,
     )?;
-    distinct(second, &in_first, needed)
+    let refined = distinct(second, &in_first, needed)?;
+    let preferred = median_at(&chi2, &refined.inliers) < median_at(&chi2, &first.inliers);
+    Some(Second { refined, preferred })
 }
 
 /// A second motion among the matches that are not `first`'s inliers, found by
@@ -210,17 +220,4 @@ fn refine_subset(
 fn distinct(second: Refined, in_first: &[bool], needed: usize) -> Option<Refined> {
     let shared = second.inliers.iter().filter(|&&i| in_first[i]).count();
     (2 * shared < second.inliers.len() && second.inliers.len() >= needed).then_some(second)
-}
-
-/// True when the prediction explains `second`'s inliers better than `first`'s (lower
-/// median whitened χ² under `prediction`).
-pub(crate) fn prediction_prefers(
-    model: &StereoModel,
-    (reference, current): (&[StereoObservation], &[StereoObservation]),
-    first: &Refined,
-    second: &Refined,
-    prediction: &Isometry3<f64>,
-) -> bool {
-    let chi2 = chi2_under(model, prediction, reference, current);
-    median_at(&chi2, &second.inliers) < median_at(&chi2, &first.inliers)
 }

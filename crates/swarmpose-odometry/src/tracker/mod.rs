@@ -249,11 +249,10 @@ impl<D: Descriptor> Tracker<D> {
             &m,
             &correction,
             1.0 + focal_px / self.camera.rig.fx,
-            &focal_changed(&self.camera.rig, focal_px),
+            self.camera.rig.baseline_m,
             self.estimator.as_ref(),
             seed,
             min,
-            prediction.as_ref(),
         );
         times.estimate_ms = ms(t);
         let initial = est?;
@@ -331,14 +330,8 @@ impl<D: Descriptor> Tracker<D> {
             )
         {
             measured.ambiguous = true;
-            if ambiguity::prediction_prefers(
-                &model_now,
-                (&obs.reference, &obs.current),
-                &refined,
-                &second,
-                p,
-            ) {
-                refined = second;
+            if second.preferred {
+                refined = second.refined;
             }
         }
         if !measured.ambiguous

@@ -232,6 +232,21 @@ fn pseudo_inverse(m: &Matrix6<f64>) -> Matrix6<f64> {
     e.eigenvectors * Matrix6::from_diagonal(&inv) * e.eigenvectors.transpose()
 }
 
+/// The tracks that go with `leaving` (the keyframe that leaves) under `mode`: those whose
+/// track has ended (not in `live`, the newest frame's), or all it sees.
+pub(super) fn leaving_tracks(
+    leaving: &Keyframe,
+    live: &HashSet<u32>,
+    mode: Marginalisation,
+) -> HashSet<u32> {
+    leaving
+        .observations
+        .iter()
+        .map(|(t, _)| *t)
+        .filter(|t| mode == Marginalisation::All || !live.contains(t))
+        .collect()
+}
+
 /// Marginalises the oldest keyframe `frames[0]` (about to leave the window) with the
 /// tracks `mode` sends with it (`live`: the tracks the newest frame measures), on top of
 /// the `prior` of earlier ones: returns the prior on `frames[1..]`, and removes the
@@ -250,12 +265,7 @@ pub(crate) fn marginalise(
     if n < 2 || mode == Marginalisation::Off {
         return None;
     }
-    let leaving: HashSet<u32> = frames[0]
-        .observations
-        .iter()
-        .map(|(t, _)| *t)
-        .filter(|t| mode == Marginalisation::All || !live.contains(t))
-        .collect();
+    let leaving = leaving_tracks(&frames[0], live, mode);
     let poses: Vec<Pose> = frames.iter().map(|f| Pose::of(&f.pose_cw)).collect();
     let mut sc = Scratch::default();
     let k = config.huber_k;

@@ -119,12 +119,7 @@ fn the_prior_is_the_dense_schur_complement() {
     let m = model();
     for mode in [Marginalisation::All, Marginalisation::Finished] {
         let (mut frames, live) = scene();
-        let leaving: HashSet<u32> = frames[0]
-            .observations
-            .iter()
-            .map(|(t, _)| *t)
-            .filter(|t| mode == Marginalisation::All || !live.contains(t))
-            .collect();
+        let leaving = leaving_tracks(&frames[0], &live, mode);
         assert!(leaving.len() > 50, "{}", leaving.len());
         let (info, gradient, calibration) = dense_prior(&frames, &leaving);
         let prior = marginalise(&m, &WindowConfig::default(), &mut frames, None, &live, mode)
