@@ -38,11 +38,12 @@ impl Odometry {
     /// command line), ``disparity_correction`` (a fixed ``(offset, quadratic)`` in
     /// pixels instead), ``min_inliers``, ``seed`` (frame k uses seed + k), ``window``
     /// (keyframes of the sliding-window bundle adjustment; 0: frame to frame; default as the
-    /// command line, 10).
+    /// command line, 10), ``marginalise`` (what happens to the window's oldest keyframe when
+    /// it leaves: ``"off"``, the default, ``"finished"`` or ``"all"``; see docs/window.md).
     #[new]
     #[pyo3(signature = (fx, fy, cx, cy, baseline, width, height, *, method = "pso", threshold = None,
         detector = "orb", refine = true, calibrate = None, disparity_correction = None,
-        min_inliers = None, seed = 0, window = None))]
+        min_inliers = None, seed = 0, window = None, marginalise = None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         fx: f64,
@@ -61,6 +62,7 @@ impl Odometry {
         min_inliers: Option<usize>,
         seed: u64,
         window: Option<usize>,
+        marginalise: Option<&str>,
     ) -> PyResult<Self> {
         let camera = StereoCamera {
             rig: RectifiedStereo {
@@ -83,6 +85,7 @@ impl Odometry {
             min_inliers,
             seed,
             window,
+            marginalise,
             rgbd: None,
         };
         Ok(Self {
@@ -95,7 +98,7 @@ impl Odometry {
     #[staticmethod]
     #[pyo3(signature = (sequence_dir, *, method = "pso", threshold = None, detector = "orb",
         refine = true, calibrate = None, disparity_correction = None, min_inliers = None, seed = 0,
-        window = None))]
+        window = None, marginalise = None))]
     #[allow(clippy::too_many_arguments)]
     fn from_sequence(
         sequence_dir: PathBuf,
@@ -108,6 +111,7 @@ impl Odometry {
         min_inliers: Option<usize>,
         seed: u64,
         window: Option<usize>,
+        marginalise: Option<&str>,
     ) -> PyResult<Self> {
         let seq = Sequence::open(&sequence_dir)?;
         let options = Options {
@@ -120,6 +124,7 @@ impl Odometry {
             min_inliers,
             seed,
             window,
+            marginalise,
             rgbd: None,
         };
         Ok(Self {
@@ -170,7 +175,7 @@ impl Odometry {
     #[staticmethod]
     #[pyo3(signature = (fx, fy, cx, cy, width, height, *, depth_coefficient = None,
         method = "pso", threshold = None, refine = true, min_inliers = None, seed = 0,
-        window = None))]
+        window = None, marginalise = None))]
     #[allow(clippy::too_many_arguments)]
     fn rgbd(
         fx: f64,
@@ -186,6 +191,7 @@ impl Odometry {
         min_inliers: Option<usize>,
         seed: u64,
         window: Option<usize>,
+        marginalise: Option<&str>,
     ) -> PyResult<Self> {
         let mut noise = RgbdNoise::default();
         noise.depth_coefficient = depth_coefficient.unwrap_or(noise.depth_coefficient);
@@ -210,6 +216,7 @@ impl Odometry {
             min_inliers,
             seed,
             window,
+            marginalise,
             rgbd: Some(noise),
         };
         Ok(Self {

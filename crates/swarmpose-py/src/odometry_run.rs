@@ -25,7 +25,7 @@ use crate::sequence::Sequence;
 #[pyfunction]
 #[pyo3(signature = (sequence_dir, *, frame_period = 0.1, method = "pso", threshold = None,
     detector = "orb", refine = true, calibrate = None, disparity_correction = None,
-    min_inliers = None, seed = 0, window = None))]
+    min_inliers = None, seed = 0, window = None, marginalise = None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn odometry(
     py: Python<'_>,
@@ -40,6 +40,7 @@ pub(crate) fn odometry(
     min_inliers: Option<usize>,
     seed: u64,
     window: Option<usize>,
+    marginalise: Option<&str>,
 ) -> PyResult<OdometryRun> {
     if !(frame_period.is_finite() && frame_period > 0.0) {
         return Err(PyValueError::new_err(
@@ -57,6 +58,7 @@ pub(crate) fn odometry(
         min_inliers,
         seed,
         window,
+        marginalise,
         rgbd: None,
     };
     let mut engine = options.build(camera_of(seq.inner.as_ref()))?;

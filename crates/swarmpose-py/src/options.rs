@@ -6,6 +6,7 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use swarmpose_odometry::config::Calibration;
 use swarmpose_odometry::frontend::RgbdNoise;
+use swarmpose_odometry::window::Marginalisation;
 use swarmpose_odometry::{CorrectionModel, OdometryConfig, StereoCamera};
 use swarmpose_vision::frontend::Detector;
 
@@ -25,6 +26,9 @@ pub(crate) struct Options<'a> {
     pub(crate) seed: u64,
     /// Keyframes of the sliding window (0: frame to frame; `None`: the engine's default).
     pub(crate) window: Option<usize>,
+    /// What happens to the window's oldest keyframe when it leaves (`None`: the engine's
+    /// default, `"off"`).
+    pub(crate) marginalise: Option<&'a str>,
     /// An RGB-D camera with this depth noise (frames go to `track_rgbd`).
     pub(crate) rgbd: Option<RgbdNoise>,
 }
@@ -45,6 +49,12 @@ impl Options<'_> {
         };
         if let Some(k) = self.window {
             c = c.with_window(k);
+        }
+        if let Some(mode) = self.marginalise {
+            let mode: Marginalisation = mode
+                .parse()
+                .map_err(|e: String| PyValueError::new_err(format!("marginalise {e}")))?;
+            c = c.with_marginalisation(mode);
         }
         if let Some(n) = self.min_inliers {
             if n < 3 {

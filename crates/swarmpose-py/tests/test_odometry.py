@@ -204,6 +204,24 @@ def test_window_matches_the_cli(kitti_seq2, swarmpose_bin, tmp_path):
         swarmpose.odometry(kitti_seq2, window=-1)
 
 
+def test_marginalise_matches_the_cli(kitti_seq2, swarmpose_bin, tmp_path):
+    """``marginalise=MODE`` is the command line's ``--marginalise MODE``: the same
+    trajectory (another one than the default's, which is ``"off"``), and an unknown mode
+    is refused with the modes named."""
+    out = tmp_path / "cli"
+    subprocess.run([str(swarmpose_bin), "odometry", str(kitti_seq2), "--out", str(out),
+                    "--quiet", "--marginalise", "finished"], check=True, capture_output=True)
+    cli = read_kitti(out / "trajectory.kitti.txt")
+    run = swarmpose.odometry(kitti_seq2, marginalise="finished")
+    assert np.max(np.abs(run.poses - cli)) < 1e-12
+    off = swarmpose.odometry(kitti_seq2, marginalise="off")
+    default = swarmpose.odometry(kitti_seq2)
+    assert np.max(np.abs(off.poses - default.poses)) < 1e-12
+    assert np.max(np.abs(run.poses - default.poses)) > 1e-6
+    with pytest.raises(ValueError, match='marginalise "sometimes": expected one of off, finished, all'):
+        swarmpose.Odometry(**KITTI_CAMERA, marginalise="sometimes")
+
+
 def test_fixed_correction_out_of_range():
     """A fixed correction of 1e9 px (every point at the camera) is refused as on the
     command line, with the same message."""

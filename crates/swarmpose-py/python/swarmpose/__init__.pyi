@@ -170,6 +170,7 @@ class Odometry:
         min_inliers: Optional[int] = None,
         seed: int = 0,
         window: Optional[int] = None,
+        marginalise: Optional[str] = None,
     ) -> None: ...
     @staticmethod
     def from_sequence(
@@ -184,6 +185,7 @@ class Odometry:
         min_inliers: Optional[int] = None,
         seed: int = 0,
         window: Optional[int] = None,
+        marginalise: Optional[str] = None,
     ) -> "Odometry": ...
     def track(
         self, left: npt.NDArray[np.uint8], right: npt.NDArray[np.uint8], timestamp: float
@@ -205,6 +207,7 @@ class Odometry:
         min_inliers: Optional[int] = None,
         seed: int = 0,
         window: Optional[int] = None,
+        marginalise: Optional[str] = None,
     ) -> "Odometry":
         """An engine for an RGB-D camera; frames go to ``track_rgbd``."""
     def track_rgbd(
@@ -254,6 +257,7 @@ def odometry(
     min_inliers: Optional[int] = None,
     seed: int = 0,
     window: Optional[int] = None,
+    marginalise: Optional[str] = None,
 ) -> OdometryRun:
     """Runs a whole KITTI, Karlsruhe or EuRoC sequence directory, as ``swarmpose odometry``."""
 
