@@ -220,6 +220,7 @@ pub fn calibration_json(d: &Decision) -> serde_json::Value {
             "pairs": d.pairs,
             "held_out_score_chi2": d.rigidity_score,
             "next_term_held_out_score_chi2": d.rigidity_next_score,
+            "applied_fraction": d.rigidity_weight,
         },
         "frames": d.frames,
     })

@@ -479,7 +479,7 @@ fn finish(
         };
         out(&format!(
             "disparity correction: {}{focal} ({}; rows: yaw f*psi {:.3} px{}, roll f*theta {:.3} px, from {} \
-             row offsets; rigidity: {} pairs, held-out score {:.1})",
+             row offsets; rigidity: {} pairs, held-out score {:.1}{})",
             decision.correction,
             decision.model,
             decision.rows.rotation_px[0],
@@ -491,7 +491,12 @@ fn finish(
             decision.rows.rotation_px[1],
             decision.rows.measurements,
             decision.pairs,
-            decision.rigidity_score
+            decision.rigidity_score,
+            if decision.rigidity_weight > 0.0 && decision.rigidity_weight < 1.0 {
+                format!(", applied {:.0} %", 100.0 * decision.rigidity_weight)
+            } else {
+                String::new()
+            }
         ))?;
     }
     out(&format!(
