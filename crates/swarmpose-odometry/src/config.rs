@@ -93,6 +93,13 @@ pub struct OdometryConfig {
     /// The sliding window of keyframes refined together (default: 10 keyframes,
     /// [`WindowConfig::default`]).
     pub window: WindowConfig,
+    /// Most pixels of a stereo image the engine works on: larger images are halved
+    /// (2x2 means) until they have at most this many, before any other work (default
+    /// 1 500 000: 1280x1024 stays as it is, 1920x1080 is halved once; `usize::MAX`: never).
+    /// The front end's windows, descriptors and noise are in pixels of a camera of about a
+    /// megapixel; pixel figures the engine reports are in pixels of the working image
+    /// ([`crate::Odometry::working_camera`]). RGB-D frames are never halved.
+    pub max_working_pixels: usize,
 }
 
 impl OdometryConfig {
@@ -126,6 +133,7 @@ impl Default for OdometryConfig {
             refinement: RefineConfig::default(),
             selfcal: SelfCalConfig::default(),
             window: WindowConfig::default(),
+            max_working_pixels: 1_500_000,
         }
     }
 }

@@ -36,6 +36,7 @@ use crate::record::{FrameResult, StageTimes};
 use crate::refine::model::PixelNoise;
 use crate::selfcal::Decision;
 use crate::tracker::Tracker;
+use crate::working::{Halver, WorkingScale};
 
 /// The front end and back end for one detector.
 enum Inner {
@@ -65,9 +66,16 @@ enum Sensor {
 /// with the number of frames. Frames from any source: a directory
 /// ([`crate::batch`]), a camera driver, a Python array.
 pub struct Odometry {
+    /// The camera the frames come from.
     camera: StereoCamera,
     sensor: Sensor,
     inner: Inner,
+    /// Halvings of the stereo images before any work ([`crate::working`]).
+    scale: WorkingScale,
+    /// The camera of the working images.
+    working_camera: StereoCamera,
+    /// Buffers of the halved left and right images.
+    halved: [Halver; 2],
 }
 
 /// Builds an [`Odometry`] with a chosen estimator or for an RGB-D camera.
@@ -107,12 +115,19 @@ impl OdometryBuilder {
     /// a detector other than ORB.
     pub fn build(self) -> Result<Odometry, OdometryError> {
         let mut camera = self.camera;
-        let mut config = self.config;
+        let config = self.config;
         if let Some(noise) = &self.rgbd {
             noise.validate()?;
             camera.rig.baseline_m = noise.virtual_baseline_m;
         }
         camera.validate()?;
+        // Stereo images larger than the working size are halved; RGB-D frames never.
+        let scale = match self.rgbd {
+            Some(_) => WorkingScale::default(),
+            None => WorkingScale::for_camera(&camera, config.max_working_pixels),
+        };
+        let working_camera = scale.camera(&camera);
+        let mut config = scale.config(&config);
         let estimator = self
             .estimator
             .unwrap_or_else(|| Box::new(PsoEstimator::new(PsoEstimatorConfig::default())));
@@ -131,21 +146,22 @@ impl OdometryBuilder {
             }
             None => Sensor::Stereo,
         };
+        let work = working_camera;
         let inner = match config.detector {
             Detector::Orb => {
-                let f = Frontend::orb(camera.rig);
+                let f = Frontend::orb(work.rig);
                 let noise = config
                     .pixel_noise
-                    .unwrap_or_else(|| noise_of(&f.stereo, sensor, &camera));
-                let t = Tracker::new(camera, noise, f.temporal, config, estimator);
+                    .unwrap_or_else(|| noise_of(&f.stereo, sensor, &work));
+                let t = Tracker::new(work, noise, f.temporal, config, estimator);
                 Inner::Orb(Box::new(f), t)
             }
             Detector::Surf => {
-                let f = Frontend::surf(camera.rig);
+                let f = Frontend::surf(work.rig);
                 let noise = config
                     .pixel_noise
-                    .unwrap_or_else(|| noise_of(&f.stereo, sensor, &camera));
-                let t = Tracker::new(camera, noise, f.temporal, config, estimator);
+                    .unwrap_or_else(|| noise_of(&f.stereo, sensor, &work));
+                let t = Tracker::new(work, noise, f.temporal, config, estimator);
                 Inner::Surf(Box::new(f), t)
             }
         };
@@ -153,6 +169,9 @@ impl OdometryBuilder {
             camera,
             sensor,
             inner,
+            scale,
+            working_camera,
+            halved: [Halver::default(), Halver::default()],
         })
     }
 }
@@ -196,6 +215,21 @@ impl Odometry {
         &self.camera
     }
 
+    /// The camera of the images the engine works on: [`Odometry::camera`], halved
+    /// [`Odometry::working_halvings`] times when its images have more than
+    /// [`OdometryConfig::max_working_pixels`] pixels. The pixel figures of the
+    /// self-calibration are in its pixels.
+    #[must_use]
+    pub fn working_camera(&self) -> &StereoCamera {
+        &self.working_camera
+    }
+
+    /// How many times each stereo image is halved before any work (0: full size).
+    #[must_use]
+    pub fn working_halvings(&self) -> u32 {
+        self.scale.levels
+    }
+
     /// The detector's name.
     #[must_use]
     pub fn detector(&self) -> &'static str {
@@ -235,6 +269,7 @@ impl Odometry {
     #[must_use]
     pub fn state_bytes(&self) -> usize {
         with_inner!(&self.inner, _f, t => t.state_bytes())
+            + self.halved.iter().map(Halver::heap_bytes).sum::<usize>()
     }
 
     /// Takes the next stereo frame and returns its pose. `load_ms` is the caller's time
@@ -271,9 +306,19 @@ impl Odometry {
             load_ms,
             ..StageTimes::default()
         };
+        let t0 = std::time::Instant::now();
+        let (left, right) = match self.scale.levels {
+            0 => (input.left, input.right),
+            levels => {
+                let [l, r] = &mut self.halved;
+                (l.apply(input.left, levels), r.apply(input.right, levels))
+            }
+        };
+        // Halving is part of getting the images (stage time `load`).
+        times.load_ms += crate::frontend::ms(t0);
         with_inner!(&mut self.inner, f, t => {
-            let frame = stereo_frame(f.as_ref(), input.left, input.right, &mut times)?;
-            t.track(frame, Some(input.left), input.timestamp_s, times)
+            let frame = stereo_frame(f.as_ref(), left, right, &mut times)?;
+            t.track(frame, Some(left), input.timestamp_s, times)
         })
     }
 
@@ -353,14 +398,16 @@ impl Odometry {
             });
         }
         let camera = self.camera;
+        let levels = self.scale.levels;
         with_inner!(&mut self.inner, f, t => {
             let frontend = f.as_ref();
             std::thread::scope(|scope| {
                 // One frame in flight between the threads: memory stays bounded.
                 let (tx, rx) = std::sync::mpsc::sync_channel(1);
                 scope.spawn(move || {
+                    let [mut hl, mut hr] = [Halver::default(), Halver::default()];
                     for (index, item) in frames.enumerate() {
-                        let front = item.and_then(|frame| {
+                        let front = item.and_then(|mut frame| {
                             let input = StereoInput {
                                 left: frame.left.view(),
                                 right: frame.right.view(),
@@ -372,6 +419,22 @@ impl Odometry {
                                 load_ms: frame.load_ms,
                                 ..StageTimes::default()
                             };
+                            if levels > 0 {
+                                let t0 = std::time::Instant::now();
+                                // The back end takes the working left image (the
+                                // tracks' patches); the right one is not needed there.
+                                let l = hl.apply(frame.left.view(), levels);
+                                frame.left = GrayImage {
+                                    width: l.width,
+                                    height: l.height,
+                                    data: l.data.to_vec(),
+                                };
+                                let r = hr.apply(frame.right.view(), levels);
+                                times.load_ms += crate::frontend::ms(t0);
+                                let features =
+                                    stereo_frame(frontend, frame.left.view(), r, &mut times)?;
+                                return Ok((features, frame, times));
+                            }
                             let features = stereo_frame(
                                 frontend,
                                 frame.left.view(),

@@ -141,3 +141,89 @@ fn a_changing_exposure_is_followed() {
     assert!(b <= 0.1, "drift {b:.3} % with a changing exposure");
     assert!(changing.eq20_rms < 0.001);
 }
+
+/// The same camera with twice as many pixels each way (each pixel repeated 2x2, the
+/// calibration scaled to match) and a working size of the original's pixels: the engine
+/// halves the images back and gives the same trajectory and the same self-calibration
+/// decision; a fixed correction given in the large images' pixels (twice the values) is
+/// the same correction. Without the working size the large images are used as they are.
+#[test]
+fn a_larger_camera_is_halved_to_the_same_result() {
+    use swarmpose_odometry::batch::camera_of;
+    use swarmpose_odometry::config::Calibration;
+    use swarmpose_odometry::{Odometry, StereoInput};
+    use swarmpose_vision::frontend::DisparityCorrection;
+    use swarmpose_vision::image::GrayImage;
+
+    let seq = SyntheticSequence::new(8, 0.8, 1f64.to_radians());
+    let small = camera_of(&seq);
+    let mut large = small;
+    large.rig.fx *= 2.0;
+    large.rig.fy *= 2.0;
+    large.rig.cx = 2.0 * small.rig.cx + 0.5;
+    large.rig.cy = 2.0 * small.rig.cy + 0.5;
+    large.width *= 2;
+    large.height *= 2;
+    let doubled = |img: &GrayImage| {
+        let w = img.width * 2;
+        let data = (0..w * img.height * 2)
+            .map(|i| img.get(i % w / 2, i / w / 2))
+            .collect();
+        GrayImage::from_raw(w, img.height * 2, data).expect("size")
+    };
+    let run = |camera, calibration: Calibration, max_working_pixels: usize, double: bool| {
+        let config = OdometryConfig {
+            calibration,
+            max_working_pixels,
+            ..OdometryConfig::default()
+        };
+        let mut odo = Odometry::new(camera, config).expect("engine");
+        let mut results = Vec::new();
+        for k in 0..seq.len() {
+            let mut pair = seq.frame(k).expect("rendered");
+            if double {
+                pair.left = doubled(&pair.left);
+                pair.right = doubled(&pair.right);
+            }
+            let input = StereoInput {
+                left: pair.left.view(),
+                right: pair.right.view(),
+                timestamp_s: 0.1 * k as f64,
+            };
+            results.push(odo.track(input).expect("frame"));
+        }
+        (results, *odo.calibration(), odo.working_halvings())
+    };
+    let fixed = |offset_px: f64, quadratic_px: f64| {
+        Calibration::Fixed(DisparityCorrection {
+            offset_px,
+            quadratic_px,
+            ..DisparityCorrection::default()
+        })
+    };
+    let max = small.width * small.height;
+    for (small_calibration, large_calibration) in [
+        (Calibration::Auto, Calibration::Auto),
+        (fixed(0.4, 0.3), fixed(0.8, 0.6)),
+    ] {
+        let (a, da, la) = run(small, small_calibration, max, false);
+        let (b, db, lb) = run(large, large_calibration, max, true);
+        assert_eq!((la, lb), (0, 1));
+        assert_eq!(da.model, db.model);
+        assert_eq!(da.correction, db.correction);
+        for (x, y) in a.iter().zip(&b) {
+            assert_eq!(x.status, y.status, "frame {}", x.index);
+            assert_eq!(x.counts.inliers, y.counts.inliers, "frame {}", x.index);
+            assert_eq!(x.correction, y.correction, "frame {}", x.index);
+            let moved = (x.pose.translation.vector - y.pose.translation.vector).norm();
+            let turned = x.pose.rotation.angle_to(&y.pose.rotation);
+            assert!(
+                moved < 1e-9 && turned < 1e-9,
+                "frame {}: {moved:e} m, {turned:e} rad",
+                x.index
+            );
+        }
+    }
+    let (_, _, levels) = run(large, Calibration::Auto, usize::MAX, true);
+    assert_eq!(levels, 0);
+}

@@ -24,7 +24,16 @@ fn results(
     runner: Runner,
     stop_after: usize,
 ) -> (Vec<FrameResult>, RunEnd) {
-    let mut odo = Odometry::new(camera_of(seq), OdometryConfig::default()).expect("engine");
+    results_with(seq, runner, stop_after, OdometryConfig::default())
+}
+
+fn results_with(
+    seq: &dyn StereoSequence,
+    runner: Runner,
+    stop_after: usize,
+    config: OdometryConfig,
+) -> (Vec<FrameResult>, RunEnd) {
+    let mut odo = Odometry::new(camera_of(seq), config).expect("engine");
     let mut out = Vec::new();
     let end = runner(seq, &mut odo, 0.1, &mut |r| {
         out.push(r.clone());
@@ -76,6 +85,23 @@ fn two_threads_give_the_one_thread_trajectory() {
         assert!(matches!(end1, RunEnd::Stopped(5)) && matches!(end2, RunEnd::Stopped(5)));
         assert_same(&one, &two);
     }
+}
+
+/// Images halved to the working size ([`OdometryConfig::max_working_pixels`]): the front
+/// thread halves them, with the same results as one thread.
+#[test]
+fn two_threads_halve_as_one_thread_does() {
+    let seq = SyntheticSequence::new(6, 0.8, 0.0);
+    let (w, h) = seq.image_size();
+    let config = OdometryConfig {
+        max_working_pixels: w * h / 4,
+        ..OdometryConfig::default()
+    };
+    let (one, _) = results_with(&seq, run_sequence, usize::MAX, config.clone());
+    let (two, _) = results_with(&seq, run_sequence_two_threads, usize::MAX, config);
+    assert_eq!(one.len(), seq.len());
+    assert!(one.iter().skip(1).all(|r| r.status.is_tracked()));
+    assert_same(&one, &two);
 }
 
 #[test]

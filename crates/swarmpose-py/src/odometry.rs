@@ -39,11 +39,13 @@ impl Odometry {
     /// pixels instead), ``min_inliers``, ``seed`` (frame k uses seed + k), ``window``
     /// (keyframes of the sliding-window bundle adjustment; 0: frame to frame; default as the
     /// command line, 10), ``marginalise`` (what happens to the window's oldest keyframe when
-    /// it leaves: ``"off"``, the default, ``"finished"`` or ``"all"``; see docs/window.md).
+    /// it leaves: ``"off"``, the default, ``"finished"`` or ``"all"``; see docs/window.md),
+    /// ``max_working_pixels`` (stereo images with more pixels are halved until they have at
+    /// most this many; default 1 500 000; see ``working_camera``).
     #[new]
     #[pyo3(signature = (fx, fy, cx, cy, baseline, width, height, *, method = "pso", threshold = None,
         detector = "orb", refine = true, calibrate = None, disparity_correction = None,
-        min_inliers = None, seed = 0, window = None, marginalise = None))]
+        min_inliers = None, seed = 0, window = None, marginalise = None, max_working_pixels = None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         fx: f64,
@@ -63,6 +65,7 @@ impl Odometry {
         seed: u64,
         window: Option<usize>,
         marginalise: Option<&str>,
+        max_working_pixels: Option<usize>,
     ) -> PyResult<Self> {
         let camera = StereoCamera {
             rig: RectifiedStereo {
@@ -86,6 +89,7 @@ impl Odometry {
             seed,
             window,
             marginalise,
+            max_working_pixels,
             rgbd: None,
         };
         Ok(Self {
@@ -98,7 +102,7 @@ impl Odometry {
     #[staticmethod]
     #[pyo3(signature = (sequence_dir, *, method = "pso", threshold = None, detector = "orb",
         refine = true, calibrate = None, disparity_correction = None, min_inliers = None, seed = 0,
-        window = None, marginalise = None))]
+        window = None, marginalise = None, max_working_pixels = None))]
     #[allow(clippy::too_many_arguments)]
     fn from_sequence(
         sequence_dir: PathBuf,
@@ -112,6 +116,7 @@ impl Odometry {
         seed: u64,
         window: Option<usize>,
         marginalise: Option<&str>,
+        max_working_pixels: Option<usize>,
     ) -> PyResult<Self> {
         let seq = Sequence::open(&sequence_dir)?;
         let options = Options {
@@ -125,6 +130,7 @@ impl Odometry {
             seed,
             window,
             marginalise,
+            max_working_pixels,
             rgbd: None,
         };
         Ok(Self {
@@ -217,6 +223,7 @@ impl Odometry {
             seed,
             window,
             marginalise,
+            max_working_pixels: None,
             rgbd: Some(noise),
         };
         Ok(Self {
@@ -263,6 +270,14 @@ impl Odometry {
     #[getter]
     fn camera<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         camera_dict(py, self.inner.camera())
+    }
+
+    /// The camera of the images the engine works on: ``camera`` halved (2x2 means) while
+    /// its images have more than ``max_working_pixels`` pixels. The pixel figures of
+    /// ``calibration`` are in its pixels.
+    #[getter]
+    fn working_camera<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        camera_dict(py, self.inner.working_camera())
     }
 
     /// The detector's name.

@@ -25,7 +25,7 @@ use crate::sequence::Sequence;
 #[pyfunction]
 #[pyo3(signature = (sequence_dir, *, frame_period = 0.1, method = "pso", threshold = None,
     detector = "orb", refine = true, calibrate = None, disparity_correction = None,
-    min_inliers = None, seed = 0, window = None, marginalise = None))]
+    min_inliers = None, seed = 0, window = None, marginalise = None, max_working_pixels = None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn odometry(
     py: Python<'_>,
@@ -41,6 +41,7 @@ pub(crate) fn odometry(
     seed: u64,
     window: Option<usize>,
     marginalise: Option<&str>,
+    max_working_pixels: Option<usize>,
 ) -> PyResult<OdometryRun> {
     if !(frame_period.is_finite() && frame_period > 0.0) {
         return Err(PyValueError::new_err(
@@ -59,6 +60,7 @@ pub(crate) fn odometry(
         seed,
         window,
         marginalise,
+        max_working_pixels,
         rgbd: None,
     };
     let mut engine = options.build(camera_of(seq.inner.as_ref()))?;

@@ -29,6 +29,8 @@ pub(crate) struct Options<'a> {
     /// What happens to the window's oldest keyframe when it leaves (`None`: the engine's
     /// default, `"off"`).
     pub(crate) marginalise: Option<&'a str>,
+    /// Most pixels of a stereo image the engine works on (`None`: the engine's default).
+    pub(crate) max_working_pixels: Option<usize>,
     /// An RGB-D camera with this depth noise (frames go to `track_rgbd`).
     pub(crate) rgbd: Option<RgbdNoise>,
 }
@@ -55,6 +57,9 @@ impl Options<'_> {
                 .parse()
                 .map_err(|e: String| PyValueError::new_err(format!("marginalise {e}")))?;
             c = c.with_marginalisation(mode);
+        }
+        if let Some(n) = self.max_working_pixels {
+            c.max_working_pixels = n;
         }
         if let Some(n) = self.min_inliers {
             if n < 3 {

@@ -222,6 +222,29 @@ def test_marginalise_matches_the_cli(kitti_seq2, swarmpose_bin, tmp_path):
         swarmpose.Odometry(**KITTI_CAMERA, marginalise="sometimes")
 
 
+def test_large_images_are_halved(kitti_seq2):
+    """A camera whose images have more than ``max_working_pixels`` pixels works on its
+    images halved: each KITTI pixel repeated 2x2 (calibration to match) gives the
+    recorded images' poses again."""
+    seq = swarmpose.Sequence(kitti_seq2)
+    big = dict(KITTI_CAMERA, fx=2 * 718.856, fy=2 * 718.856, cx=2 * 607.1928 + 0.5,
+               cy=2 * 185.2157 + 0.5, width=2 * 1241, height=2 * 376)
+    large = swarmpose.Odometry(**big, max_working_pixels=1241 * 376)
+    small = swarmpose.Odometry(**KITTI_CAMERA, max_working_pixels=1241 * 376)
+    assert large.working_camera["width"] == 1241 and large.working_camera["height"] == 376
+    assert abs(large.working_camera["cx"] - 607.1928) < 1e-9
+    assert small.working_camera == small.camera
+    for i in range(3):
+        left, right = seq[i]
+        a = small.track(left, right, 0.1 * i)
+        twice = [np.repeat(np.repeat(im, 2, axis=0), 2, axis=1) for im in (left, right)]
+        b = large.track(*twice, 0.1 * i)
+        assert a.status == b.status
+        assert np.max(np.abs(a.pose - b.pose)) < 1e-9
+    with pytest.raises(OverflowError):
+        swarmpose.Odometry(**KITTI_CAMERA, max_working_pixels=-1)
+
+
 def test_fixed_correction_out_of_range():
     """A fixed correction of 1e9 px (every point at the camera) is refused as on the
     command line, with the same message."""

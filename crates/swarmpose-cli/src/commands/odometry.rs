@@ -108,6 +108,14 @@ pub struct OdometryArgs {
     #[arg(long, value_name = "N", default_value_t = OdometryConfig::default().min_inliers)]
     pub min_inliers: usize,
 
+    /// Most pixels of a stereo image the engine works on: larger images are halved (2x2
+    /// means) until they have at most this many (1920x1080 is halved once; the front end
+    /// is made for cameras of about a megapixel). The pixel figures of the
+    /// self-calibration are then in pixels of the halved images.
+    #[arg(long, value_name = "N", default_value_t = OdometryConfig::default().max_working_pixels,
+          value_parser = clap::value_parser!(usize))]
+    pub max_working_pixels: usize,
+
     /// Seconds between frames of a sequence without timestamps.
     #[arg(long, value_name = "S", default_value_t = 0.1)]
     pub frame_period: f64,
@@ -183,6 +191,7 @@ fn config(args: &OdometryArgs) -> Result<OdometryConfig, CliError> {
         min_inliers: args.min_inliers.max(3),
         seed: args.seed,
         selfcal,
+        max_working_pixels: args.max_working_pixels,
         ..OdometryConfig::default()
     }
     .with_window(args.window)
@@ -469,6 +478,18 @@ fn finish(
         odometry.estimator(),
         odometry.detector()
     ))?;
+    if odometry.working_halvings() > 0 {
+        let (c, w) = (odometry.camera(), odometry.working_camera());
+        out(&format!(
+            "working images: {}x{}, the {}x{} images halved {} time(s) (--max-working-pixels); \
+             disparity corrections below in their pixels",
+            w.width,
+            w.height,
+            c.width,
+            c.height,
+            odometry.working_halvings()
+        ))?;
+    }
     if source == CorrectionModel::GIVEN {
         out(&format!("disparity correction: {applied} (given)"))?;
     } else {

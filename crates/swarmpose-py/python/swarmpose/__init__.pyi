@@ -171,6 +171,7 @@ class Odometry:
         seed: int = 0,
         window: Optional[int] = None,
         marginalise: Optional[str] = None,
+        max_working_pixels: Optional[int] = None,
     ) -> None: ...
     @staticmethod
     def from_sequence(
@@ -186,6 +187,7 @@ class Odometry:
         seed: int = 0,
         window: Optional[int] = None,
         marginalise: Optional[str] = None,
+        max_working_pixels: Optional[int] = None,
     ) -> "Odometry": ...
     def track(
         self, left: npt.NDArray[np.uint8], right: npt.NDArray[np.uint8], timestamp: float
@@ -216,6 +218,9 @@ class Odometry:
         """Takes the next gray image and its depth (float32 metres; 0 or NaN: none)."""
     @property
     def camera(self) -> Dict[str, float]: ...
+    @property
+    def working_camera(self) -> Dict[str, float]:
+        """``camera`` halved while its images have more than ``max_working_pixels`` pixels."""
     @property
     def detector(self) -> str: ...
     @property
@@ -258,6 +263,7 @@ def odometry(
     seed: int = 0,
     window: Optional[int] = None,
     marginalise: Optional[str] = None,
+    max_working_pixels: Optional[int] = None,
 ) -> OdometryRun:
     """Runs a whole KITTI, Karlsruhe or EuRoC sequence directory, as ``swarmpose odometry``."""
 

@@ -1,5 +1,5 @@
 //! Owned 8-bit grayscale images: PNG loading with errors naming the file, bilinear
-//! sampling and a small separable blur.
+//! sampling, a small separable blur and halving.
 
 use std::path::{Path, PathBuf};
 
@@ -228,6 +228,34 @@ pub fn sample_patch(img: GrayView<'_>, x0: f32, y0: f32, n: usize, out: &mut [f3
     Some(())
 }
 
+/// Halves `img`: each pixel of the result is the mean (rounded) of a 2x2 block, so the
+/// result has `(width / 2, height / 2)` pixels (a last odd column or row is dropped).
+/// With pixel centres at integer coordinates, a point at `x` in `img` is at
+/// `(x − 0.5) / 2` in the result. `out` is resized to the result (reused between calls);
+/// returns its width and height.
+pub fn halve(img: GrayView<'_>, out: &mut Vec<u8>) -> (usize, usize) {
+    let (w, h) = (img.width / 2, img.height / 2);
+    out.clear();
+    out.resize(w * h, 0);
+    if w == 0 || h == 0 {
+        return (w, h);
+    }
+    let stride = img.width;
+    for (y, orow) in out.chunks_exact_mut(w).enumerate() {
+        let top = &img.data[2 * y * stride..][..2 * w];
+        let bottom = &img.data[(2 * y + 1) * stride..][..2 * w];
+        for ((o, t), b) in orow
+            .iter_mut()
+            .zip(top.chunks_exact(2))
+            .zip(bottom.chunks_exact(2))
+        {
+            let sum = u16::from(t[0]) + u16::from(t[1]) + u16::from(b[0]) + u16::from(b[1]);
+            *o = ((sum + 2) / 4) as u8;
+        }
+    }
+    (w, h)
+}
+
 /// Separable binomial blur `[1 4 6 4 1] / 16` (σ ≈ 1 pixel), borders clamped. `out` is
 /// resized to the image; `tmp` is scratch space (reused between calls).
 pub fn blur5(img: GrayView<'_>, tmp: &mut Vec<u16>, out: &mut Vec<u8>) {
@@ -305,6 +333,29 @@ mod tests {
         let (mut t, mut o) = (Vec::new(), Vec::new());
         blur5(flat.view(), &mut t, &mut o);
         assert!(o.iter().all(|&v| v == 77));
+    }
+
+    #[test]
+    fn halving_averages_each_block() {
+        // 5x3: the last column and row are dropped; blocks rounded to nearest.
+        let img = GrayImage::from_raw(
+            5,
+            3,
+            vec![0, 2, 10, 11, 99, 1, 2, 12, 13, 99, 99, 99, 99, 99, 99],
+        )
+        .expect("size");
+        let mut out = vec![7; 3];
+        assert_eq!(halve(img.view(), &mut out), (2, 1));
+        assert_eq!(out, vec![1, 12]);
+        // A ramp in x keeps its slope halved per pixel and moves as (x - 0.5) / 2.
+        let ramp: Vec<u8> = (0..8 * 4).map(|i| (i % 8 * 20) as u8).collect();
+        let img = GrayImage::from_raw(8, 4, ramp).expect("size");
+        halve(img.view(), &mut out);
+        assert_eq!(out[..4], [10, 50, 90, 130]);
+        // Too small to halve: empty.
+        let one = GrayImage::from_raw(1, 1, vec![5]).expect("size");
+        assert_eq!(halve(one.view(), &mut out), (0, 0));
+        assert!(out.is_empty());
     }
 
     #[test]
