@@ -75,6 +75,19 @@ fn bad_sequences_give_one_clear_line() {
         None,
     );
     check_error(&out, &["--particles does not apply to --method svd"]);
+
+    let out = swarmpose(
+        &[
+            "odometry",
+            s(&two),
+            "--out",
+            s(&out_dir),
+            "--max-working-pixels",
+            "5",
+        ],
+        None,
+    );
+    check_error(&out, &["max_working_pixels 5: at least 10000 are needed"]);
     assert!(!out_dir.exists(), "nothing written on bad input");
 }
 

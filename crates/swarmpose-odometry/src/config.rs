@@ -95,7 +95,8 @@ pub struct OdometryConfig {
     pub window: WindowConfig,
     /// Most pixels of a stereo image the engine works on: larger images are halved
     /// (2x2 means) until they have at most this many, before any other work (default
-    /// 1 500 000: 1280x1024 stays as it is, 1920x1080 is halved once; `usize::MAX`: never).
+    /// 1 500 000: 1280x1024 stays as it is, 1920x1080 is halved once; `usize::MAX`: never;
+    /// at least 10 000).
     /// The front end's windows, descriptors and noise are in pixels of a camera of about a
     /// megapixel; pixel figures the engine reports are in pixels of the working image
     /// ([`crate::Odometry::working_camera`]). RGB-D frames are never halved.

@@ -124,7 +124,7 @@ impl OdometryBuilder {
         // Stereo images larger than the working size are halved; RGB-D frames never.
         let scale = match self.rgbd {
             Some(_) => WorkingScale::default(),
-            None => WorkingScale::for_camera(&camera, config.max_working_pixels),
+            None => WorkingScale::for_camera(&camera, config.max_working_pixels)?,
         };
         let working_camera = scale.camera(&camera);
         let mut config = scale.config(&config);

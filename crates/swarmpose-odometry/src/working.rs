@@ -22,7 +22,12 @@ use swarmpose_vision::frontend::DisparityCorrection;
 use swarmpose_vision::image::halve;
 
 use crate::config::{Calibration, OdometryConfig};
+use crate::error::OdometryError;
 use crate::intake::StereoCamera;
+
+/// Fewest pixels [`OdometryConfig::max_working_pixels`] may ask for (100x100; a halved
+/// image then has at least a quarter of them): fewer leave too few pixels for features.
+pub const MIN_WORKING_PIXELS: usize = 10_000;
 
 /// How many times the images are halved.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -32,16 +37,26 @@ pub(crate) struct WorkingScale {
 }
 
 impl WorkingScale {
-    /// Halvings until the camera's images have at most `max_pixels` pixels (and are not
-    /// smaller than 2x2).
-    pub fn for_camera(camera: &StereoCamera, max_pixels: usize) -> Self {
+    /// Halvings until the camera's images have at most `max_pixels` pixels.
+    ///
+    /// # Errors
+    /// [`OdometryError::Camera`] when `max_pixels` is below [`MIN_WORKING_PIXELS`].
+    pub fn for_camera(camera: &StereoCamera, max_pixels: usize) -> Result<Self, OdometryError> {
+        if max_pixels < MIN_WORKING_PIXELS {
+            return Err(OdometryError::Camera {
+                message: format!(
+                    "max_working_pixels {max_pixels}: at least {MIN_WORKING_PIXELS} are needed \
+                     (smaller images have too few pixels for features)"
+                ),
+            });
+        }
         let (mut w, mut h) = (camera.width, camera.height);
         let mut levels = 0;
-        while w.saturating_mul(h) > max_pixels && w >= 4 && h >= 4 {
+        while w.saturating_mul(h) > max_pixels {
             (w, h) = (w / 2, h / 2);
             levels += 1;
         }
-        Self { levels }
+        Ok(Self { levels })
     }
 
     /// Pixels of the camera's images per pixel of the working image.
@@ -138,15 +153,20 @@ mod tests {
     #[test]
     fn large_images_are_halved_until_they_fit() {
         let max = OdometryConfig::default().max_working_pixels;
-        assert_eq!(WorkingScale::for_camera(&camera(1241, 376), max).levels, 0);
-        assert_eq!(WorkingScale::for_camera(&camera(1280, 1024), max).levels, 0);
-        assert_eq!(WorkingScale::for_camera(&camera(2482, 752), max).levels, 1);
-        assert_eq!(WorkingScale::for_camera(&camera(3840, 2160), max).levels, 2);
-        assert_eq!(
-            WorkingScale::for_camera(&camera(3840, 2160), usize::MAX).levels,
-            0
-        );
-        assert_eq!(WorkingScale::for_camera(&camera(5, 5), 1).levels, 1);
+        let levels = |w, h, max| {
+            WorkingScale::for_camera(&camera(w, h), max)
+                .expect("a working size")
+                .levels
+        };
+        assert_eq!(levels(1241, 376, max), 0);
+        assert_eq!(levels(1280, 1024, max), 0);
+        assert_eq!(levels(2482, 752, max), 1);
+        assert_eq!(levels(3840, 2160, max), 2);
+        assert_eq!(levels(3840, 2160, usize::MAX), 0);
+        assert_eq!(levels(64, 64, MIN_WORKING_PIXELS), 0);
+        assert_eq!(levels(1000, 1000, MIN_WORKING_PIXELS), 4);
+        let e = WorkingScale::for_camera(&camera(640, 480), 100).expect_err("too small");
+        assert!(e.to_string().contains("max_working_pixels 100"), "{e}");
         // The halved camera sees a point where the halved image has it.
         let s = WorkingScale { levels: 1 };
         let full = camera(2482, 752);

@@ -243,6 +243,8 @@ def test_large_images_are_halved(kitti_seq2):
         assert np.max(np.abs(a.pose - b.pose)) < 1e-9
     with pytest.raises(OverflowError):
         swarmpose.Odometry(**KITTI_CAMERA, max_working_pixels=-1)
+    with pytest.raises(ValueError, match="max_working_pixels 5: at least 10000 are needed"):
+        swarmpose.Odometry(**KITTI_CAMERA, max_working_pixels=5)
 
 
 def test_fixed_correction_out_of_range():
