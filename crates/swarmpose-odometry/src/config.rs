@@ -96,11 +96,21 @@ pub struct OdometryConfig {
     /// Most pixels of a stereo image the engine works on: larger images are halved
     /// (2x2 means) until they have at most this many, before any other work (default
     /// 1 500 000: 1280x1024 stays as it is, 1920x1080 is halved once; `usize::MAX`: never;
-    /// at least 10 000).
-    /// The front end's windows, descriptors and noise are in pixels of a camera of about a
-    /// megapixel; pixel figures the engine reports are in pixels of the working image
-    /// ([`crate::Odometry::working_camera`]). RGB-D frames are never halved.
+    /// at least 10 000). The front end's windows, descriptors and noise are in pixels of a
+    /// camera of about half a megapixel to a megapixel ([`crate::working`]); what the
+    /// engine reports stays in pixels of the camera's images
+    /// ([`crate::Odometry::working_camera`] is the working one). RGB-D frames are never
+    /// resampled.
     pub max_working_pixels: usize,
+    /// Fewest pixels of a stereo image the engine works on: smaller images are doubled
+    /// (bicubic, as SIFT doubles its input) until they have at least this many (default
+    /// 0: never; at most a quarter of the maximum). Not the default, because it helps some
+    /// measurements and hurts others (RESULTS.md, "Other image sizes"): with 250 000,
+    /// kitti_vo_seq2 at half size (620x188) ends 1.148 % instead of 1.986 % and the
+    /// built-in street (480x288) 0.010 % instead of 0.039 %, but the street's
+    /// self-calibration finds a right camera's yaw 16 % short (4 % at its own size)
+    /// and the still EuRoC clip (752x480, with 375 000) wanders 0.61 mm instead of 0.26 mm.
+    pub min_working_pixels: usize,
 }
 
 impl OdometryConfig {
@@ -135,6 +145,7 @@ impl Default for OdometryConfig {
             selfcal: SelfCalConfig::default(),
             window: WindowConfig::default(),
             max_working_pixels: 1_500_000,
+            min_working_pixels: 0,
         }
     }
 }

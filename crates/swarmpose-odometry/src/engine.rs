@@ -36,7 +36,7 @@ use crate::record::{FrameResult, StageTimes};
 use crate::refine::model::PixelNoise;
 use crate::selfcal::Decision;
 use crate::tracker::Tracker;
-use crate::working::{Halver, WorkingScale};
+use crate::working::{Resampler, WorkingScale};
 
 /// The front end and back end for one detector.
 enum Inner {
@@ -70,12 +70,12 @@ pub struct Odometry {
     camera: StereoCamera,
     sensor: Sensor,
     inner: Inner,
-    /// Halvings of the stereo images before any work ([`crate::working`]).
+    /// Halvings or doublings of the stereo images before any work ([`crate::working`]).
     scale: WorkingScale,
     /// The camera of the working images.
     working_camera: StereoCamera,
-    /// Buffers of the halved left and right images.
-    halved: [Halver; 2],
+    /// Buffers of the resampled left and right images.
+    resampled: [Resampler; 2],
 }
 
 /// Builds an [`Odometry`] with a chosen estimator or for an RGB-D camera.
@@ -121,10 +121,13 @@ impl OdometryBuilder {
             camera.rig.baseline_m = noise.virtual_baseline_m;
         }
         camera.validate()?;
-        // Stereo images larger than the working size are halved; RGB-D frames never.
+        // Stereo images are brought to the working size; RGB-D frames never.
         let scale = match self.rgbd {
             Some(_) => WorkingScale::default(),
-            None => WorkingScale::for_camera(&camera, config.max_working_pixels)?,
+            None => WorkingScale::for_camera(
+                &camera,
+                (config.min_working_pixels, config.max_working_pixels),
+            )?,
         };
         let working_camera = scale.camera(&camera);
         let mut config = scale.config(&config);
@@ -171,7 +174,7 @@ impl OdometryBuilder {
             inner,
             scale,
             working_camera,
-            halved: [Halver::default(), Halver::default()],
+            resampled: [Resampler::default(), Resampler::default()],
         })
     }
 }
@@ -215,18 +218,19 @@ impl Odometry {
         &self.camera
     }
 
-    /// The camera of the images the engine works on: [`Odometry::camera`], halved
-    /// [`Odometry::working_halvings`] times when its images have more than
-    /// [`OdometryConfig::max_working_pixels`] pixels. The pixel figures of the
-    /// self-calibration are in its pixels.
+    /// The camera of the images the engine works on: [`Odometry::camera`], halved while
+    /// its images have more than [`OdometryConfig::max_working_pixels`] pixels and doubled
+    /// while they have fewer than [`OdometryConfig::min_working_pixels`]. Everything else
+    /// the engine reports in pixels is in pixels of [`Odometry::camera`].
     #[must_use]
     pub fn working_camera(&self) -> &StereoCamera {
         &self.working_camera
     }
 
-    /// How many times each stereo image is halved before any work (0: full size).
+    /// How the stereo images are resampled before any work: halved this many times when
+    /// positive, doubled `−levels` times when negative, 0 for the images as they are.
     #[must_use]
-    pub fn working_halvings(&self) -> u32 {
+    pub fn working_levels(&self) -> i32 {
         self.scale.levels
     }
 
@@ -247,8 +251,9 @@ impl Odometry {
 
     /// The self-calibration's current decision and its evidence.
     #[must_use]
-    pub fn calibration(&self) -> &Decision {
-        with_inner!(&self.inner, _f, t => t.calibration())
+    pub fn calibration(&self) -> Decision {
+        let d = with_inner!(&self.inner, _f, t => *t.calibration());
+        self.scale.decision_in_camera_pixels(d)
     }
 
     /// The disparity correction applied to the next frame (pixels) and where it comes
@@ -261,7 +266,8 @@ impl Odometry {
         swarmpose_vision::frontend::DisparityCorrection,
         crate::CorrectionModel,
     ) {
-        with_inner!(&self.inner, _f, t => t.correction())
+        let (c, model) = with_inner!(&self.inner, _f, t => t.correction());
+        (self.scale.correction_in_camera_pixels(c), model)
     }
 
     /// Heap bytes of the engine's per-frame state (the reference frame's features): it
@@ -269,7 +275,11 @@ impl Odometry {
     #[must_use]
     pub fn state_bytes(&self) -> usize {
         with_inner!(&self.inner, _f, t => t.state_bytes())
-            + self.halved.iter().map(Halver::heap_bytes).sum::<usize>()
+            + self
+                .resampled
+                .iter()
+                .map(Resampler::heap_bytes)
+                .sum::<usize>()
     }
 
     /// Takes the next stereo frame and returns its pose. `load_ms` is the caller's time
@@ -310,16 +320,18 @@ impl Odometry {
         let (left, right) = match self.scale.levels {
             0 => (input.left, input.right),
             levels => {
-                let [l, r] = &mut self.halved;
+                let [l, r] = &mut self.resampled;
                 (l.apply(input.left, levels), r.apply(input.right, levels))
             }
         };
-        // Halving is part of getting the images (stage time `load`).
+        // Resampling is part of getting the images (stage time `load`).
         times.load_ms += crate::frontend::ms(t0);
+        let scale = self.scale;
         with_inner!(&mut self.inner, f, t => {
             let frame = stereo_frame(f.as_ref(), left, right, &mut times)?;
             t.track(frame, Some(left), input.timestamp_s, times)
         })
+        .map(|r| scale.result_in_camera_pixels(r))
     }
 
     /// Takes the next RGB-D frame and returns its pose.
@@ -398,14 +410,15 @@ impl Odometry {
             });
         }
         let camera = self.camera;
-        let levels = self.scale.levels;
+        let scale = self.scale;
+        let levels = scale.levels;
         with_inner!(&mut self.inner, f, t => {
             let frontend = f.as_ref();
             std::thread::scope(|scope| {
                 // One frame in flight between the threads: memory stays bounded.
                 let (tx, rx) = std::sync::mpsc::sync_channel(1);
                 scope.spawn(move || {
-                    let [mut hl, mut hr] = [Halver::default(), Halver::default()];
+                    let [mut hl, mut hr] = [Resampler::default(), Resampler::default()];
                     for (index, item) in frames.enumerate() {
                         let front = item.and_then(|mut frame| {
                             let input = StereoInput {
@@ -419,7 +432,7 @@ impl Odometry {
                                 load_ms: frame.load_ms,
                                 ..StageTimes::default()
                             };
-                            if levels > 0 {
+                            if levels != 0 {
                                 let t0 = std::time::Instant::now();
                                 // The back end takes the working left image (the
                                 // tracks' patches); the right one is not needed there.
@@ -456,6 +469,7 @@ impl Odometry {
                     let (features, frame, times) = message?;
                     let r = t
                         .track(features, Some(frame.left.view()), frame.timestamp_s, times)
+                        .map(|r| scale.result_in_camera_pixels(r))
                         .map_err(|e| at_frame(taken, e))?;
                     taken += 1;
                     if on_frame(&r).is_break() {

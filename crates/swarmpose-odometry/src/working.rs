@@ -1,52 +1,74 @@
-//! The working resolution: stereo images larger than
-//! [`OdometryConfig::max_working_pixels`] are halved (the mean of each 2x2 block) until
-//! they are not, before any other work, and the engine runs on the halved camera.
+//! The working resolution: stereo images are brought into a band of sizes before any
+//! other work, halved (the mean of each 2x2 block) while they have more than
+//! [`OdometryConfig::max_working_pixels`] pixels and doubled (bicubic) while they have
+//! fewer than [`OdometryConfig::min_working_pixels`] (0 by default: not doubled); the
+//! engine runs on the camera of the working images.
 //!
-//! The front end's windows, descriptors, detector radius and noise model are in pixels,
-//! set for cameras of about half a megapixel to a megapixel. On images several times that
-//! size they see other corners, less distinctive patches and the wrong noise: kitti_vo_seq2
-//! resampled to twice its size (2482x752, no new information) drifted 1.203 % at full
-//! size against 0.960 % as recorded; halved back inside the engine it gives the recorded
-//! size's result again (RESULTS.md, "Other image sizes"), at the recorded size's speed.
-//! A real camera of many megapixels loses some sub-pixel precision this way, and gains a
-//! frame rate a robot can use; `usize::MAX` keeps every image at its full size.
+//! The front end's windows, descriptors, detector radius, image borders and noise model
+//! are in pixels, made for cameras of about half a megapixel to a megapixel. On other
+//! sizes they see other corners and patches of another extent. kitti_vo_seq2 (1241x376)
+//! resampled to twice its size drifted 1.203 % at full size against 0.960 % as recorded,
+//! and 0.914 % halved back by the engine; resampled to half its size (620x188) it drifted
+//! 1.986 % (aligned ATE 0.368 m), and 1.148 % (0.059 m) doubled back (RESULTS.md, "Other
+//! image sizes"). A camera of many megapixels loses some sub-pixel precision by the
+//! halving and gains a frame rate a robot can use. Doubling costs four times the pixels'
+//! time and is not the default: it also made the self-calibration of a small synthetic rig
+//! less accurate and a still real camera wander more ([`OdometryConfig::min_working_pixels`]).
 //!
-//! Everything the engine reports in pixels (the disparity correction and its evidence,
-//! [`crate::Odometry::working_camera`]) is in pixels of the working image; a fixed
-//! correction and a pixel noise given in the configuration are in pixels of the camera's
-//! images and are converted. Poses and covariances are metric and do not change. RGB-D
-//! frames are never halved.
+//! What the engine reports in pixels (the disparity correction and its evidence, in
+//! [`crate::FrameResult`] and [`crate::Odometry::calibration`]) is in pixels of the
+//! camera's images, as are a fixed correction and a pixel noise given in the
+//! configuration: they are converted at the engine's boundary, and only
+//! [`crate::Odometry::working_camera`] shows the working images. Poses and covariances are
+//! metric and do not change. RGB-D frames are never resampled.
 
 use swarmpose_vision::features::GrayView;
 use swarmpose_vision::frontend::DisparityCorrection;
-use swarmpose_vision::image::halve;
+use swarmpose_vision::image::{double, halve};
 
 use crate::config::{Calibration, OdometryConfig};
 use crate::error::OdometryError;
 use crate::intake::StereoCamera;
+use crate::record::FrameResult;
+use crate::selfcal::Decision;
 
 /// Fewest pixels [`OdometryConfig::max_working_pixels`] may ask for (100x100; a halved
 /// image then has at least a quarter of them): fewer leave too few pixels for features.
 pub const MIN_WORKING_PIXELS: usize = 10_000;
 
-/// How many times the images are halved.
+/// How the images are resampled: halved `levels` times when positive, doubled `−levels`
+/// times when negative.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub(crate) struct WorkingScale {
-    /// Halvings, 0 for the full size.
-    pub levels: u32,
+    /// Halvings (positive) or doublings (negative); 0 for the images as they are.
+    pub levels: i32,
 }
 
 impl WorkingScale {
-    /// Halvings until the camera's images have at most `max_pixels` pixels.
+    /// Halvings while the camera's images have more than `max_pixels` pixels, doublings
+    /// while they have fewer than `min_pixels` (`min_pixels` at most a quarter of
+    /// `max_pixels`, so that a doubled image never needs halving).
     ///
     /// # Errors
-    /// [`OdometryError::Camera`] when `max_pixels` is below [`MIN_WORKING_PIXELS`].
-    pub fn for_camera(camera: &StereoCamera, max_pixels: usize) -> Result<Self, OdometryError> {
+    /// [`OdometryError::Camera`] when `max_pixels` is below [`MIN_WORKING_PIXELS`] or
+    /// `min_pixels` above a quarter of `max_pixels`.
+    pub fn for_camera(
+        camera: &StereoCamera,
+        (min_pixels, max_pixels): (usize, usize),
+    ) -> Result<Self, OdometryError> {
         if max_pixels < MIN_WORKING_PIXELS {
             return Err(OdometryError::Camera {
                 message: format!(
                     "max_working_pixels {max_pixels}: at least {MIN_WORKING_PIXELS} are needed \
                      (smaller images have too few pixels for features)"
+                ),
+            });
+        }
+        if min_pixels > max_pixels / 4 {
+            return Err(OdometryError::Camera {
+                message: format!(
+                    "min_working_pixels {min_pixels}: at most a quarter of max_working_pixels \
+                     {max_pixels} (a doubled image has four times the pixels)"
                 ),
             });
         }
@@ -56,20 +78,24 @@ impl WorkingScale {
             (w, h) = (w / 2, h / 2);
             levels += 1;
         }
+        while w.saturating_mul(h) < min_pixels {
+            (w, h) = (w * 2, h * 2);
+            levels -= 1;
+        }
         Ok(Self { levels })
     }
 
     /// Pixels of the camera's images per pixel of the working image.
     pub fn factor(self) -> f64 {
-        f64::from(1u32 << self.levels.min(31))
+        2f64.powi(self.levels)
     }
 
-    /// The camera of the working images: each halving takes `f / 2` and `(c − 0.5) / 2`
-    /// (pixel centres at integers) and drops an odd last column or row; the baseline
-    /// does not change.
+    /// The camera of the working images. Each halving takes `f / 2` and `(c − 0.5) / 2`
+    /// (pixel centres at integers) and drops an odd last column or row; each doubling
+    /// takes `2 f` and `2 c + 0.5`. The baseline does not change.
     pub fn camera(self, camera: &StereoCamera) -> StereoCamera {
         let mut c = *camera;
-        for _ in 0..self.levels {
+        for _ in 0..self.levels.max(0) {
             c.rig.fx /= 2.0;
             c.rig.fy /= 2.0;
             c.rig.cx = (c.rig.cx - 0.5) / 2.0;
@@ -77,7 +103,54 @@ impl WorkingScale {
             c.width /= 2;
             c.height /= 2;
         }
+        for _ in 0..(-self.levels).max(0) {
+            c.rig.fx *= 2.0;
+            c.rig.fy *= 2.0;
+            c.rig.cx = 2.0 * c.rig.cx + 0.5;
+            c.rig.cy = 2.0 * c.rig.cy + 0.5;
+            c.width *= 2;
+            c.height *= 2;
+        }
         c
+    }
+
+    /// `c` (pixels of the working images) in pixels of the camera's images.
+    pub fn correction_in_camera_pixels(self, c: DisparityCorrection) -> DisparityCorrection {
+        if self.levels == 0 {
+            return c;
+        }
+        let s = self.factor();
+        DisparityCorrection::from_coefficients(c.coefficients().map(|a| a * s))
+    }
+
+    /// `d`'s pixel figures (corrections, rotations, their covariances) in pixels of the
+    /// camera's images; its scores are unit-free.
+    pub fn decision_in_camera_pixels(self, mut d: Decision) -> Decision {
+        if self.levels == 0 {
+            return d;
+        }
+        let s = self.factor();
+        d.correction = self.correction_in_camera_pixels(d.correction);
+        d.focal_px *= s;
+        d.covariance *= s * s;
+        d.rows.rotation_px = d.rows.rotation_px.map(|v| v * s);
+        for row in &mut d.rows.rotation_covariance {
+            for v in row {
+                *v *= s * s;
+            }
+        }
+        d
+    }
+
+    /// `r`'s pixel figures (its correction and focal length change) in pixels of the
+    /// camera's images.
+    pub fn result_in_camera_pixels(self, mut r: FrameResult) -> FrameResult {
+        if self.levels == 0 {
+            return r;
+        }
+        r.correction = self.correction_in_camera_pixels(r.correction);
+        r.focal_px *= self.factor();
+        r
     }
 
     /// The configuration with its pixel quantities (a fixed disparity correction, a given
@@ -98,24 +171,34 @@ impl WorkingScale {
     }
 }
 
-/// The buffers of one image's halvings, reused from frame to frame.
+/// The buffers of one image's resampling, reused from frame to frame.
 #[derive(Debug, Clone, Default)]
-pub(crate) struct Halver {
+pub(crate) struct Resampler {
     a: Vec<u8>,
     b: Vec<u8>,
+    tmp: Vec<i32>,
 }
 
-impl Halver {
-    /// `image` halved `levels` times (at least once).
-    pub fn apply(&mut self, image: GrayView<'_>, levels: u32) -> GrayView<'_> {
-        let (mut w, mut h) = halve(image, &mut self.a);
-        for _ in 1..levels {
+impl Resampler {
+    /// `image` halved `levels` times (positive) or doubled `−levels` times (negative);
+    /// `levels` is not 0.
+    pub fn apply(&mut self, image: GrayView<'_>, levels: i32) -> GrayView<'_> {
+        let (mut w, mut h) = if levels > 0 {
+            halve(image, &mut self.a)
+        } else {
+            double(image, &mut self.tmp, &mut self.a)
+        };
+        for _ in 1..levels.unsigned_abs() {
             let src = GrayView {
                 width: w,
                 height: h,
                 data: &self.a,
             };
-            (w, h) = halve(src, &mut self.b);
+            (w, h) = if levels > 0 {
+                halve(src, &mut self.b)
+            } else {
+                double(src, &mut self.tmp, &mut self.b)
+            };
             std::mem::swap(&mut self.a, &mut self.b);
         }
         GrayView {
@@ -127,7 +210,7 @@ impl Halver {
 
     /// Heap bytes held.
     pub fn heap_bytes(&self) -> usize {
-        self.a.capacity() + self.b.capacity()
+        self.a.capacity() + self.b.capacity() + self.tmp.capacity() * size_of::<i32>()
     }
 }
 
@@ -151,37 +234,54 @@ mod tests {
     }
 
     #[test]
-    fn large_images_are_halved_until_they_fit() {
-        let max = OdometryConfig::default().max_working_pixels;
-        let levels = |w, h, max| {
-            WorkingScale::for_camera(&camera(w, h), max)
+    fn images_are_brought_into_the_working_band() {
+        let d = OdometryConfig::default();
+        let band = (d.min_working_pixels, d.max_working_pixels);
+        let levels = |w, h, band| {
+            WorkingScale::for_camera(&camera(w, h), band)
                 .expect("a working size")
                 .levels
         };
-        assert_eq!(levels(1241, 376, max), 0);
-        assert_eq!(levels(1280, 1024, max), 0);
-        assert_eq!(levels(2482, 752, max), 1);
-        assert_eq!(levels(3840, 2160, max), 2);
-        assert_eq!(levels(3840, 2160, usize::MAX), 0);
-        assert_eq!(levels(64, 64, MIN_WORKING_PIXELS), 0);
-        assert_eq!(levels(1000, 1000, MIN_WORKING_PIXELS), 4);
-        let e = WorkingScale::for_camera(&camera(640, 480), 100).expect_err("too small");
+        assert_eq!(levels(1241, 376, band), 0);
+        assert_eq!(levels(1344, 372, band), 0);
+        assert_eq!(levels(1280, 1024, band), 0);
+        assert_eq!(levels(2482, 752, band), 1);
+        assert_eq!(levels(3840, 2160, band), 2);
+        // By default small images stay as they are; with a lower bound they are doubled.
+        assert_eq!(levels(620, 188, band), 0);
+        let band = (250_000, d.max_working_pixels);
+        assert_eq!(levels(620, 188, band), -1);
+        assert_eq!(levels(480, 288, band), -1);
+        assert_eq!(levels(640, 480, band), 0);
+        assert_eq!(levels(752, 480, band), 0);
+        assert_eq!(levels(320, 240, band), -1);
+        assert_eq!(levels(160, 120, band), -2);
+        // No resampling at all.
+        assert_eq!(levels(3840, 2160, (0, usize::MAX)), 0);
+        assert_eq!(levels(320, 240, (0, usize::MAX)), 0);
+        assert_eq!(levels(64, 64, (0, MIN_WORKING_PIXELS)), 0);
+        assert_eq!(levels(1000, 1000, (0, MIN_WORKING_PIXELS)), 4);
+        let e = WorkingScale::for_camera(&camera(640, 480), (0, 100)).expect_err("too small");
         assert!(e.to_string().contains("max_working_pixels 100"), "{e}");
-        // The halved camera sees a point where the halved image has it.
-        let s = WorkingScale { levels: 1 };
+        let e =
+            WorkingScale::for_camera(&camera(640, 480), (300_000, 1_000_000)).expect_err("no band");
+        assert!(e.to_string().contains("min_working_pixels 300000"), "{e}");
+        // The resampled camera sees a point where the resampled image has it.
         let full = camera(2482, 752);
-        let half = s.camera(&full);
-        assert_eq!((half.width, half.height), (1241, 376));
         let (x, z) = (0.8, 12.0);
-        let u_full = full.rig.fx * x / z + full.rig.cx;
-        let u_half = half.rig.fx * x / z + half.rig.cx;
-        assert!((u_half - (u_full - 0.5) / 2.0).abs() < 1e-12);
+        let u = |c: &StereoCamera| c.rig.fx * x / z + c.rig.cx;
+        let half = WorkingScale { levels: 1 }.camera(&full);
+        assert_eq!((half.width, half.height), (1241, 376));
+        assert!((u(&half) - (u(&full) - 0.5) / 2.0).abs() < 1e-12);
+        let twice = WorkingScale { levels: -1 }.camera(&full);
+        assert_eq!((twice.width, twice.height), (4964, 1504));
+        assert!((u(&twice) - (2.0 * u(&full) + 0.5)).abs() < 1e-9);
         assert_eq!(half.rig.baseline_m, full.rig.baseline_m);
+        assert_eq!(twice.rig.baseline_m, full.rig.baseline_m);
     }
 
     #[test]
     fn given_pixel_quantities_are_converted() {
-        let s = WorkingScale { levels: 2 };
         let config = OdometryConfig {
             calibration: Calibration::Fixed(DisparityCorrection {
                 offset_px: 4.0,
@@ -194,27 +294,31 @@ mod tests {
             }),
             ..OdometryConfig::default()
         };
-        let c = s.config(&config);
-        let Calibration::Fixed(d) = c.calibration else {
-            panic!("still fixed");
-        };
-        assert_eq!((d.offset_px, d.quadratic_px), (1.0, -2.0));
-        let n = c.pixel_noise.expect("given");
-        assert_eq!((n.position_px, n.disparity_px), (0.5, 0.25));
+        for (levels, scale) in [(2, 0.25), (-1, 2.0)] {
+            let c = WorkingScale { levels }.config(&config);
+            let Calibration::Fixed(d) = c.calibration else {
+                panic!("still fixed");
+            };
+            assert_eq!((d.offset_px, d.quadratic_px), (4.0 * scale, -8.0 * scale));
+            let n = c.pixel_noise.expect("given");
+            assert_eq!((n.position_px, n.disparity_px), (2.0 * scale, scale));
+        }
     }
 
     #[test]
-    fn halving_twice_is_a_quarter() {
+    fn resampling_twice() {
         let data: Vec<u8> = (0..16 * 8).map(|i| (i % 16 * 10) as u8).collect();
         let image = GrayView {
             width: 16,
             height: 8,
             data: &data,
         };
-        let mut h = Halver::default();
-        let q = h.apply(image, 2);
+        let mut r = Resampler::default();
+        let q = r.apply(image, 2);
         assert_eq!((q.width, q.height), (4, 2));
         // Columns 4i..4i+3 of the ramp: means 15, 55, 95, 135.
         assert_eq!(q.data[..4], [15, 55, 95, 135]);
+        let q = r.apply(image, -2);
+        assert_eq!((q.width, q.height), (64, 32));
     }
 }

@@ -46,7 +46,7 @@ fn results_do_not_depend_on_the_unit_of_the_baseline() {
         camera.rig.baseline_m *= scale;
         let mut odo = Odometry::new(camera, OdometryConfig::default()).expect("engine");
         let results = collect(&seq, &mut odo, 0.1).expect("odometry");
-        (results, *odo.calibration())
+        (results, odo.calibration())
     };
     let (metres, decision_m) = run(1.0);
     let (millimetres, decision_mm) = run(1000.0);
@@ -145,8 +145,9 @@ fn a_changing_exposure_is_followed() {
 /// The same camera with twice as many pixels each way (each pixel repeated 2x2, the
 /// calibration scaled to match) and a working size of the original's pixels: the engine
 /// halves the images back and gives the same trajectory and the same self-calibration
-/// decision; a fixed correction given in the large images' pixels (twice the values) is
-/// the same correction. Without the working size the large images are used as they are.
+/// decision, reported in the large images' pixels (twice the values); a fixed correction
+/// given in those pixels is the same correction. Without the working size the large
+/// images are used as they are.
 #[test]
 fn a_larger_camera_is_halved_to_the_same_result() {
     use swarmpose_odometry::batch::camera_of;
@@ -175,6 +176,7 @@ fn a_larger_camera_is_halved_to_the_same_result() {
         let config = OdometryConfig {
             calibration,
             max_working_pixels,
+            min_working_pixels: 0,
             ..OdometryConfig::default()
         };
         let mut odo = Odometry::new(camera, config).expect("engine");
@@ -192,7 +194,7 @@ fn a_larger_camera_is_halved_to_the_same_result() {
             };
             results.push(odo.track(input).expect("frame"));
         }
-        (results, *odo.calibration(), odo.working_halvings())
+        (results, odo.calibration(), odo.working_levels())
     };
     let fixed = |offset_px: f64, quadratic_px: f64| {
         Calibration::Fixed(DisparityCorrection {
@@ -209,12 +211,16 @@ fn a_larger_camera_is_halved_to_the_same_result() {
         let (a, da, la) = run(small, small_calibration, max, false);
         let (b, db, lb) = run(large, large_calibration, max, true);
         assert_eq!((la, lb), (0, 1));
+        // Pixel figures are reported in each camera's own pixels.
+        let twice = |c: DisparityCorrection| {
+            DisparityCorrection::from_coefficients(c.coefficients().map(|a| 2.0 * a))
+        };
         assert_eq!(da.model, db.model);
-        assert_eq!(da.correction, db.correction);
+        assert_eq!(twice(da.correction), db.correction);
         for (x, y) in a.iter().zip(&b) {
             assert_eq!(x.status, y.status, "frame {}", x.index);
             assert_eq!(x.counts.inliers, y.counts.inliers, "frame {}", x.index);
-            assert_eq!(x.correction, y.correction, "frame {}", x.index);
+            assert_eq!(twice(x.correction), y.correction, "frame {}", x.index);
             let moved = (x.pose.translation.vector - y.pose.translation.vector).norm();
             let turned = x.pose.rotation.angle_to(&y.pose.rotation);
             assert!(

@@ -87,49 +87,27 @@ fn two_threads_give_the_one_thread_trajectory() {
     }
 }
 
-/// Images halved to the working size ([`OdometryConfig::max_working_pixels`]): the front
-/// thread halves them, with the same results as one thread.
+/// Images resampled to the working size ([`OdometryConfig::max_working_pixels`],
+/// [`OdometryConfig::min_working_pixels`]): the front thread halves or doubles them, with
+/// the same results as one thread.
 #[test]
-fn two_threads_halve_as_one_thread_does() {
+fn two_threads_resample_as_one_thread_does() {
     let seq = SyntheticSequence::new(6, 0.8, 0.0);
     let (w, h) = seq.image_size();
-    let config = OdometryConfig {
+    let halved = OdometryConfig {
         max_working_pixels: w * h / 4,
+        min_working_pixels: 0,
         ..OdometryConfig::default()
     };
-    let (one, _) = results_with(&seq, run_sequence, usize::MAX, config.clone());
-    let (two, _) = results_with(&seq, run_sequence_two_threads, usize::MAX, config);
-    assert_eq!(one.len(), seq.len());
-    assert!(one.iter().skip(1).all(|r| r.status.is_tracked()));
-    assert_same(&one, &two);
-}
-
-#[test]
-fn a_bad_frame_stops_the_stream_and_is_named() {
-    let seq = SyntheticSequence::default();
-    let mut odo = Odometry::new(camera_of(&seq), OdometryConfig::default()).expect("engine");
-    let frames = (0..8).map(|i| {
-        let pair = seq.frame(i).map_err(OdometryError::from)?;
-        let right = if i == 6 {
-            GrayImage::new(3, 3) // not the camera's size
-        } else {
-            pair.right
-        };
-        Ok(OwnedStereoFrame {
-            left: pair.left,
-            right,
-            timestamp_s: i as f64 * 0.1,
-            load_ms: 0.0,
-        })
-    });
-    let mut seen = 0;
-    let e = odo
-        .run_two_threads(frames, &mut |_| {
-            seen += 1;
-            ControlFlow::Continue(())
-        })
-        .expect_err("frame 6 is bad");
-    assert_eq!(seen, 6, "frames 0-5 are given out");
-    assert!(e.to_string().starts_with("frame 6: "), "{e}");
-    assert!(matches!(e, OdometryError::AtFrame { index: 6, .. }), "{e}");
+    let doubled = OdometryConfig {
+        min_working_pixels: w * h + 1,
+        ..OdometryConfig::default()
+    };
+    for config in [halved, doubled] {
+        let (one, _) = results_with(&seq, run_sequence, usize::MAX, config.clone());
+        let (two, _) = results_with(&seq, run_sequence_two_threads, usize::MAX, config);
+        assert_eq!(one.len(), seq.len());
+        assert!(one.iter().skip(1).all(|r| r.status.is_tracked()));
+        assert_same(&one, &two);
+    }
 }

@@ -40,12 +40,13 @@ impl Odometry {
     /// (keyframes of the sliding-window bundle adjustment; 0: frame to frame; default as the
     /// command line, 10), ``marginalise`` (what happens to the window's oldest keyframe when
     /// it leaves: ``"off"``, the default, ``"finished"`` or ``"all"``; see docs/window.md),
-    /// ``max_working_pixels`` (stereo images with more pixels are halved until they have at
-    /// most this many; default 1 500 000; see ``working_camera``).
+    /// ``max_working_pixels`` and ``min_working_pixels`` (stereo images are halved while
+    /// they have more pixels than the first, 1 500 000 by default, and doubled while they
+    /// have fewer than the second, 0 by default: never; see ``working_camera``).
     #[new]
     #[pyo3(signature = (fx, fy, cx, cy, baseline, width, height, *, method = "pso", threshold = None,
         detector = "orb", refine = true, calibrate = None, disparity_correction = None,
-        min_inliers = None, seed = 0, window = None, marginalise = None, max_working_pixels = None))]
+        min_inliers = None, seed = 0, window = None, marginalise = None, max_working_pixels = None, min_working_pixels = None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         fx: f64,
@@ -66,6 +67,7 @@ impl Odometry {
         window: Option<usize>,
         marginalise: Option<&str>,
         max_working_pixels: Option<usize>,
+        min_working_pixels: Option<usize>,
     ) -> PyResult<Self> {
         let camera = StereoCamera {
             rig: RectifiedStereo {
@@ -90,6 +92,7 @@ impl Odometry {
             window,
             marginalise,
             max_working_pixels,
+            min_working_pixels,
             rgbd: None,
         };
         Ok(Self {
@@ -102,7 +105,7 @@ impl Odometry {
     #[staticmethod]
     #[pyo3(signature = (sequence_dir, *, method = "pso", threshold = None, detector = "orb",
         refine = true, calibrate = None, disparity_correction = None, min_inliers = None, seed = 0,
-        window = None, marginalise = None, max_working_pixels = None))]
+        window = None, marginalise = None, max_working_pixels = None, min_working_pixels = None))]
     #[allow(clippy::too_many_arguments)]
     fn from_sequence(
         sequence_dir: PathBuf,
@@ -117,6 +120,7 @@ impl Odometry {
         window: Option<usize>,
         marginalise: Option<&str>,
         max_working_pixels: Option<usize>,
+        min_working_pixels: Option<usize>,
     ) -> PyResult<Self> {
         let seq = Sequence::open(&sequence_dir)?;
         let options = Options {
@@ -131,6 +135,7 @@ impl Odometry {
             window,
             marginalise,
             max_working_pixels,
+            min_working_pixels,
             rgbd: None,
         };
         Ok(Self {
@@ -224,6 +229,7 @@ impl Odometry {
             window,
             marginalise,
             max_working_pixels: None,
+            min_working_pixels: None,
             rgbd: Some(noise),
         };
         Ok(Self {
@@ -273,8 +279,9 @@ impl Odometry {
     }
 
     /// The camera of the images the engine works on: ``camera`` halved (2x2 means) while
-    /// its images have more than ``max_working_pixels`` pixels. The pixel figures of
-    /// ``calibration`` are in its pixels.
+    /// its images have more than ``max_working_pixels`` pixels, doubled (bicubic) while
+    /// they have fewer than ``min_working_pixels``. Everything else is in pixels of
+    /// ``camera``.
     #[getter]
     fn working_camera<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         camera_dict(py, self.inner.working_camera())
@@ -296,7 +303,7 @@ impl Odometry {
     /// ``calibration.json``).
     #[getter]
     fn calibration<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        json_value(py, &calibration_json(self.inner.calibration()))
+        json_value(py, &calibration_json(&self.inner.calibration()))
     }
 
     /// Heap bytes of the engine's per-frame state (it does not grow with the frames).

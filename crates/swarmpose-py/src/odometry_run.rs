@@ -25,7 +25,7 @@ use crate::sequence::Sequence;
 #[pyfunction]
 #[pyo3(signature = (sequence_dir, *, frame_period = 0.1, method = "pso", threshold = None,
     detector = "orb", refine = true, calibrate = None, disparity_correction = None,
-    min_inliers = None, seed = 0, window = None, marginalise = None, max_working_pixels = None))]
+    min_inliers = None, seed = 0, window = None, marginalise = None, max_working_pixels = None, min_working_pixels = None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn odometry(
     py: Python<'_>,
@@ -42,6 +42,7 @@ pub(crate) fn odometry(
     window: Option<usize>,
     marginalise: Option<&str>,
     max_working_pixels: Option<usize>,
+    min_working_pixels: Option<usize>,
 ) -> PyResult<OdometryRun> {
     if !(frame_period.is_finite() && frame_period > 0.0) {
         return Err(PyValueError::new_err(
@@ -61,6 +62,7 @@ pub(crate) fn odometry(
         window,
         marginalise,
         max_working_pixels,
+        min_working_pixels,
         rgbd: None,
     };
     let mut engine = options.build(camera_of(seq.inner.as_ref()))?;
@@ -82,7 +84,7 @@ pub(crate) fn odometry(
         return Err(e);
     }
     ended.map_err(|e| odometry_error(&e))?;
-    let calibration = json_value(py, &calibration_json(engine.calibration()))?.unbind();
+    let calibration = json_value(py, &calibration_json(&engine.calibration()))?.unbind();
     Ok(OdometryRun {
         frames,
         ground_truth: seq.inner.ground_truth().map(<[_]>::to_vec),

@@ -31,6 +31,8 @@ pub(crate) struct Options<'a> {
     pub(crate) marginalise: Option<&'a str>,
     /// Most pixels of a stereo image the engine works on (`None`: the engine's default).
     pub(crate) max_working_pixels: Option<usize>,
+    /// Fewest pixels of a stereo image the engine works on (`None`: the engine's default).
+    pub(crate) min_working_pixels: Option<usize>,
     /// An RGB-D camera with this depth noise (frames go to `track_rgbd`).
     pub(crate) rgbd: Option<RgbdNoise>,
 }
@@ -60,6 +62,9 @@ impl Options<'_> {
         }
         if let Some(n) = self.max_working_pixels {
             c.max_working_pixels = n;
+        }
+        if let Some(n) = self.min_working_pixels {
+            c.min_working_pixels = n;
         }
         if let Some(n) = self.min_inliers {
             if n < 3 {

@@ -229,8 +229,9 @@ def test_large_images_are_halved(kitti_seq2):
     seq = swarmpose.Sequence(kitti_seq2)
     big = dict(KITTI_CAMERA, fx=2 * 718.856, fy=2 * 718.856, cx=2 * 607.1928 + 0.5,
                cy=2 * 185.2157 + 0.5, width=2 * 1241, height=2 * 376)
-    large = swarmpose.Odometry(**big, max_working_pixels=1241 * 376)
-    small = swarmpose.Odometry(**KITTI_CAMERA, max_working_pixels=1241 * 376)
+    large = swarmpose.Odometry(**big, max_working_pixels=1241 * 376, min_working_pixels=0)
+    small = swarmpose.Odometry(**KITTI_CAMERA, max_working_pixels=1241 * 376,
+                               min_working_pixels=0)
     assert large.working_camera["width"] == 1241 and large.working_camera["height"] == 376
     assert abs(large.working_camera["cx"] - 607.1928) < 1e-9
     assert small.working_camera == small.camera

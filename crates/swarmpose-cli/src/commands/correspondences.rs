@@ -119,10 +119,8 @@ fn self_calibrate(
         }
     })
     .map_err(|e| CliError::usage(e.to_string()))?;
-    let d = *odometry.calibration();
-    // In pixels of the images (the engine's are those of its working images).
-    let s = f64::from(1u32 << odometry.working_halvings().min(31));
-    let c = DisparityCorrection::from_coefficients(d.correction.coefficients().map(|a| a * s));
+    let d = odometry.calibration();
+    let c = d.correction;
     let reuse = if c.linear_x_px == 0.0 && c.linear_y_px == 0.0 && c.cross_xy_px == 0.0 {
         format!(
             "--disparity-offset {} --disparity-quadratic {}",

@@ -110,11 +110,18 @@ pub struct OdometryArgs {
 
     /// Most pixels of a stereo image the engine works on: larger images are halved (2x2
     /// means) until they have at most this many (1920x1080 is halved once; the front end
-    /// is made for cameras of about a megapixel). The pixel figures of the
-    /// self-calibration are then in pixels of the halved images.
+    /// is made for cameras of about half a megapixel to a megapixel).
     #[arg(long, value_name = "N", default_value_t = OdometryConfig::default().max_working_pixels,
           value_parser = clap::value_parser!(usize))]
     pub max_working_pixels: usize,
+
+    /// Fewest pixels of a stereo image the engine works on: smaller images are doubled
+    /// (bicubic) until they have at least this many (default 0: never; at most a quarter
+    /// of --max-working-pixels). 250000 doubles 620x188 and 480x288: it helps some
+    /// sequences and hurts others (RESULTS.md, "Other image sizes").
+    #[arg(long, value_name = "N", default_value_t = OdometryConfig::default().min_working_pixels,
+          value_parser = clap::value_parser!(usize))]
+    pub min_working_pixels: usize,
 
     /// Seconds between frames of a sequence without timestamps.
     #[arg(long, value_name = "S", default_value_t = 0.1)]
@@ -192,6 +199,7 @@ fn config(args: &OdometryArgs) -> Result<OdometryConfig, CliError> {
         seed: args.seed,
         selfcal,
         max_working_pixels: args.max_working_pixels,
+        min_working_pixels: args.min_working_pixels,
         ..OdometryConfig::default()
     }
     .with_window(args.window)
@@ -434,11 +442,11 @@ fn finish(
         ..Decision::default()
     };
     let decision = if source == CorrectionModel::GIVEN {
-        &given
+        given
     } else {
         odometry.calibration()
     };
-    let calibration = serde_json::to_string_pretty(&calibration_json(decision))
+    let calibration = serde_json::to_string_pretty(&calibration_json(&decision))
         .map_err(|e| CliError::failure(format!("calibration.json: {e}")))?;
     dir.write("calibration.json", calibration.as_bytes())?;
     write_smoothed(dir, track)?;
@@ -478,16 +486,18 @@ fn finish(
         odometry.estimator(),
         odometry.detector()
     ))?;
-    if odometry.working_halvings() > 0 {
+    let levels = odometry.working_levels();
+    if levels != 0 {
         let (c, w) = (odometry.camera(), odometry.working_camera());
         out(&format!(
-            "working images: {}x{}, the {}x{} images halved {} time(s) (--max-working-pixels); \
-             disparity corrections below in their pixels",
+            "working images: {}x{}, the {}x{} images {} {} time(s) (--min-working-pixels, \
+             --max-working-pixels)",
             w.width,
             w.height,
             c.width,
             c.height,
-            odometry.working_halvings()
+            if levels > 0 { "halved" } else { "doubled" },
+            levels.unsigned_abs()
         ))?;
     }
     if source == CorrectionModel::GIVEN {

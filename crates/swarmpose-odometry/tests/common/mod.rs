@@ -41,7 +41,7 @@ pub fn run_sequence(seq: &dyn swarmpose_datasets::StereoSequence, config: Odomet
     let results = collect(seq, &mut odo, 0.1).expect("odometry");
     Run {
         results,
-        calibration: *odo.calibration(),
+        calibration: odo.calibration(),
     }
 }
 

@@ -172,6 +172,7 @@ class Odometry:
         window: Optional[int] = None,
         marginalise: Optional[str] = None,
         max_working_pixels: Optional[int] = None,
+        min_working_pixels: Optional[int] = None,
     ) -> None: ...
     @staticmethod
     def from_sequence(
@@ -188,6 +189,7 @@ class Odometry:
         window: Optional[int] = None,
         marginalise: Optional[str] = None,
         max_working_pixels: Optional[int] = None,
+        min_working_pixels: Optional[int] = None,
     ) -> "Odometry": ...
     def track(
         self, left: npt.NDArray[np.uint8], right: npt.NDArray[np.uint8], timestamp: float
@@ -220,7 +222,7 @@ class Odometry:
     def camera(self) -> Dict[str, float]: ...
     @property
     def working_camera(self) -> Dict[str, float]:
-        """``camera`` halved while its images have more than ``max_working_pixels`` pixels."""
+        """``camera`` halved above ``max_working_pixels`` pixels, doubled below ``min_working_pixels``."""
     @property
     def detector(self) -> str: ...
     @property
@@ -264,6 +266,7 @@ def odometry(
     window: Optional[int] = None,
     marginalise: Optional[str] = None,
     max_working_pixels: Optional[int] = None,
+    min_working_pixels: Optional[int] = None,
 ) -> OdometryRun:
     """Runs a whole KITTI, Karlsruhe or EuRoC sequence directory, as ``swarmpose odometry``."""
 

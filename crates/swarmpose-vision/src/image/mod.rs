@@ -1,5 +1,5 @@
 //! Owned 8-bit grayscale images: PNG loading with errors naming the file, bilinear
-//! sampling, a small separable blur and halving.
+//! sampling, a small separable blur, halving and doubling.
 
 use std::path::{Path, PathBuf};
 
@@ -256,6 +256,61 @@ pub fn halve(img: GrayView<'_>, out: &mut Vec<u8>) -> (usize, usize) {
     (w, h)
 }
 
+/// Weights of the neighbours `k − 2 ..= k + 1` of the even output pixel `2k` in
+/// [`double`] (in 256ths): the cubic convolution kernel with `a = −0.75` (OpenCV's
+/// bicubic) at the distances 1.75, 0.75, 0.25 and 1.25; the odd pixel `2k + 1` takes
+/// them mirrored on `k − 1 ..= k + 2`.
+const DOUBLE_TAPS: [i32; 4] = [-9, 67, 225, -27];
+
+/// Doubles `img` with a bicubic interpolation (separable, borders clamped; the weights
+/// are [`DOUBLE_TAPS`]), into `out`: `(2 width, 2 height)` pixels. With pixel centres at
+/// integer coordinates, a point at `x` in `img` is at `2 x + 0.5` in the result. `tmp` is
+/// scratch space; both are reused between calls. Returns the result's width and height.
+pub fn double(img: GrayView<'_>, tmp: &mut Vec<i32>, out: &mut Vec<u8>) -> (usize, usize) {
+    let (w, h) = (img.width, img.height);
+    let (w2, h2) = (2 * w, 2 * h);
+    tmp.clear();
+    tmp.resize(w2 * h, 0);
+    out.clear();
+    out.resize(w2 * h2, 0);
+    if w == 0 || h == 0 {
+        return (w2, h2);
+    }
+    let clamp = |i: isize, n: usize| i.clamp(0, n as isize - 1) as usize;
+    // Horizontal pass: 256 times the interpolated values, row by row.
+    for (row, trow) in img.data.chunks_exact(w).zip(tmp.chunks_exact_mut(w2)) {
+        let at = |i: isize| i32::from(row[clamp(i, w)]);
+        for k in 0..w {
+            let k = k as isize;
+            let [t0, t1, t2, t3] = DOUBLE_TAPS;
+            trow[2 * k as usize] = t0 * at(k - 2) + t1 * at(k - 1) + t2 * at(k) + t3 * at(k + 1);
+            trow[2 * k as usize + 1] =
+                t3 * at(k - 1) + t2 * at(k) + t1 * at(k + 1) + t0 * at(k + 2);
+        }
+    }
+    // Vertical pass, then back to 8 bits (65536 times the value), rounded and clamped.
+    let to_u8 = |v: i64| ((v + 32768) >> 16).clamp(0, 255) as u8;
+    for k in 0..h {
+        let r = |i: isize| &tmp[clamp(i, h) * w2..][..w2];
+        let k = k as isize;
+        let (a, b, c, d, e) = (r(k - 2), r(k - 1), r(k), r(k + 1), r(k + 2));
+        let [t0, t1, t2, t3] = DOUBLE_TAPS.map(i64::from);
+        let (even, odd) = out[2 * k as usize * w2..][..2 * w2].split_at_mut(w2);
+        for x in 0..w2 {
+            let (a, b, c, d, e) = (
+                i64::from(a[x]),
+                i64::from(b[x]),
+                i64::from(c[x]),
+                i64::from(d[x]),
+                i64::from(e[x]),
+            );
+            even[x] = to_u8(t0 * a + t1 * b + t2 * c + t3 * d);
+            odd[x] = to_u8(t3 * b + t2 * c + t1 * d + t0 * e);
+        }
+    }
+    (w2, h2)
+}
+
 /// Separable binomial blur `[1 4 6 4 1] / 16` (σ ≈ 1 pixel), borders clamped. `out` is
 /// resized to the image; `tmp` is scratch space (reused between calls).
 pub fn blur5(img: GrayView<'_>, tmp: &mut Vec<u16>, out: &mut Vec<u8>) {
@@ -356,6 +411,48 @@ mod tests {
         let one = GrayImage::from_raw(1, 1, vec![5]).expect("size");
         assert_eq!(halve(one.view(), &mut out), (0, 0));
         assert!(out.is_empty());
+    }
+
+    #[test]
+    fn doubling_interpolates_bicubically() {
+        let (mut tmp, mut out) = (Vec::new(), Vec::new());
+        // A flat image stays flat; the taps sum to 256.
+        assert_eq!(DOUBLE_TAPS.iter().sum::<i32>(), 256);
+        let flat = GrayImage::from_raw(3, 2, vec![77; 6]).expect("size");
+        assert_eq!(double(flat.view(), &mut tmp, &mut out), (6, 4));
+        assert!(out.iter().all(|&v| v == 77));
+        // A linear ramp 10 x + 40 (away from the clamped borders) is sampled at
+        // x = (X − 0.5) / 2: the cubic kernel reproduces linear functions.
+        let w = 12;
+        let ramp: Vec<u8> = (0..w * 6).map(|i| (10 * (i % w) + 40) as u8).collect();
+        let img = GrayImage::from_raw(w, 6, ramp).expect("size");
+        let (w2, _) = double(img.view(), &mut tmp, &mut out);
+        for xx in 4..w2 - 4 {
+            let expected = 10.0 * (xx as f64 - 0.5) / 2.0 + 40.0;
+            let got = f64::from(out[5 * w2 + xx]);
+            assert!(
+                (got - expected).abs() <= 0.5,
+                "column {xx}: {got} vs {expected}"
+            );
+        }
+        // Halving a doubled smooth image gives it back within a grey level.
+        let smooth: Vec<u8> = (0..20 * 10)
+            .map(|i| {
+                let (x, y) = ((i % 20) as f64, (i / 20) as f64);
+                (128.0 + 60.0 * (x / 3.0).sin() * (y / 4.0).cos()).round() as u8
+            })
+            .collect();
+        let img = GrayImage::from_raw(20, 10, smooth.clone()).expect("size");
+        let (w2, h2) = double(img.view(), &mut tmp, &mut out);
+        let doubled = GrayImage::from_raw(w2, h2, out.clone()).expect("size");
+        let mut back = Vec::new();
+        assert_eq!(halve(doubled.view(), &mut back), (20, 10));
+        for (i, (a, b)) in back.iter().zip(&smooth).enumerate() {
+            let (x, y) = (i % 20, i / 20);
+            if (2..18).contains(&x) && (2..8).contains(&y) {
+                assert!(a.abs_diff(*b) <= 1, "({x}, {y}): {a} vs {b}");
+            }
+        }
     }
 
     #[test]
