@@ -111,3 +111,33 @@ fn two_threads_resample_as_one_thread_does() {
         assert_same(&one, &two);
     }
 }
+
+#[test]
+fn a_bad_frame_stops_the_stream_and_is_named() {
+    let seq = SyntheticSequence::default();
+    let mut odo = Odometry::new(camera_of(&seq), OdometryConfig::default()).expect("engine");
+    let frames = (0..8).map(|i| {
+        let pair = seq.frame(i).map_err(OdometryError::from)?;
+        let right = if i == 6 {
+            GrayImage::new(3, 3) // not the camera's size
+        } else {
+            pair.right
+        };
+        Ok(OwnedStereoFrame {
+            left: pair.left,
+            right,
+            timestamp_s: i as f64 * 0.1,
+            load_ms: 0.0,
+        })
+    });
+    let mut seen = 0;
+    let e = odo
+        .run_two_threads(frames, &mut |_| {
+            seen += 1;
+            ControlFlow::Continue(())
+        })
+        .expect_err("frame 6 is bad");
+    assert_eq!(seen, 6, "frames 0-5 are given out");
+    assert!(e.to_string().starts_with("frame 6: "), "{e}");
+    assert!(matches!(e, OdometryError::AtFrame { index: 6, .. }), "{e}");
+}
