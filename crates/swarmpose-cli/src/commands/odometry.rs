@@ -6,7 +6,7 @@
 //! decision, the plots and, with ground truth, the evaluation.
 
 use std::ops::ControlFlow;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -359,10 +359,10 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
     finish(&dir, &track, &odometry, &title, gt.as_deref())?;
     if let (Source::Stereo(seq, ..), Some(seq_dir)) = (&source, &args.sequence)
         && seq.layout() == "karlsruhe"
-        && let Some(line) = ins_summary(seq_dir, &track.poses)
+        && let Some(line) = super::odometry_ins::ins_summary(seq_dir, &track.poses)
     {
         out(&line)?;
-        if let Some(line) = ins_summary(seq_dir, track.smoothed.poses()) {
+        if let Some(line) = super::odometry_ins::ins_summary(seq_dir, track.smoothed.poses()) {
             out(&format!("smoothed: {line}"))?;
         }
     }
@@ -576,35 +576,4 @@ fn finish(
         }
     }
     Ok(())
-}
-
-/// Karlsruhe has no camera ground truth, only rough INS positions of the vehicle in
-/// another frame: the ATE of our positions after their SE(3) Umeyama alignment, as a line
-/// to print (`None` without INS data).
-fn ins_summary(dir: &Path, poses: &[Isometry3<f64>]) -> Option<String> {
-    use nalgebra::Point3;
-    let ins =
-        swarmpose_datasets::karlsruhe::KarlsruheSequence::open(dir).and_then(|k| k.ins_positions());
-    let Ok(Some(ins)) = ins else {
-        return None;
-    };
-    if ins.len() != poses.len() {
-        return None;
-    }
-    let x: Vec<Point3<f64>> = poses
-        .iter()
-        .map(|p| Point3::from(p.translation.vector))
-        .collect();
-    let y: Vec<Point3<f64>> = ins.iter().map(|p| Point3::new(p[0], p[1], p[2])).collect();
-    let t = swarmpose_eval::metrics::umeyama(&x, &y).ok()?;
-    let ate: Vec<f64> = x.iter().zip(&y).map(|(a, b)| (b - t * a).norm()).collect();
-    let stats = swarmpose_eval::Stats::of(&ate);
-    let length: f64 = y.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
-    let last = ate.last().copied().unwrap_or(0.0);
-    Some(format!(
-        "vs INS positions (insdata.txt, after SE(3) alignment): path {length:.2} m, ATE {:.3} m ({:.2} % of the path), final position error {last:.3} m ({:.2} %)",
-        stats.rmse,
-        100.0 * stats.rmse / length.max(1e-9),
-        100.0 * last / length.max(1e-9)
-    ))
 }
