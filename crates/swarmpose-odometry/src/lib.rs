@@ -43,7 +43,7 @@ pub mod selfcal;
 pub mod synthetic;
 pub mod tracker;
 pub mod window;
-mod working;
+pub mod working;
 
 pub use config::{Calibration, OdometryConfig};
 pub use engine::{Odometry, OdometryBuilder, OwnedStereoFrame};

@@ -260,7 +260,7 @@ pub fn halve(img: GrayView<'_>, out: &mut Vec<u8>) -> (usize, usize) {
 /// [`double`] (in 256ths): the cubic convolution kernel with `a = −0.75` (OpenCV's
 /// bicubic) at the distances 1.75, 0.75, 0.25 and 1.25; the odd pixel `2k + 1` takes
 /// them mirrored on `k − 1 ..= k + 2`.
-const DOUBLE_TAPS: [i32; 4] = [-9, 67, 225, -27];
+pub const DOUBLE_TAPS: [i32; 4] = [-9, 67, 225, -27];
 
 /// Doubles `img` with a bicubic interpolation (separable, borders clamped; the weights
 /// are [`DOUBLE_TAPS`]), into `out`: `(2 width, 2 height)` pixels. With pixel centres at

@@ -29,7 +29,7 @@ const N: usize = 2 * TEMPLATE_RADIUS + 1;
 /// The image patch around a keypoint of the frame where a track began, with its
 /// gradients (inverse compositional Lucas-Kanade). The alignments are blind to a change
 /// of exposure between the frames (`I ≈ g T + b`): their steps see only the part of the
-/// error outside the span of the template and the constant patch ([`project_out`]).
+/// error outside the span of the template and the constant patch (`project_out`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct PatchTemplate {
     values: [f32; N * N],
