@@ -15,7 +15,7 @@
 //! | `evaluate` | [`swarmpose_eval::evaluate`] |
 //!
 //! Errors become Python exceptions carrying the Rust error's one-line message
-//! ([`errors`]). Long computations release the GIL.
+//! (`errors.rs`). Long computations release the GIL.
 #![deny(missing_docs)]
 #![warn(clippy::unwrap_used)]
 
