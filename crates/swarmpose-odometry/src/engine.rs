@@ -249,7 +249,8 @@ impl Odometry {
         with_inner!(&self.inner, _f, t => t.estimator_name())
     }
 
-    /// The self-calibration's current decision and its evidence.
+    /// The self-calibration's current decision and its evidence, in pixels of the
+    /// camera's images (whatever the working size).
     #[must_use]
     pub fn calibration(&self) -> Decision {
         let d = with_inner!(&self.inner, _f, t => *t.calibration());
