@@ -8,6 +8,10 @@
 //! and the per-frame latency (p50, p99). Needs `kitti_vo_seq2` under the data root
 //! (`SWARMPOSE_DATA`); skipped with a message otherwise.
 //!
+//! A second group, `working_size`, runs the engine on the same frames doubled in memory
+//! (bicubic, 2482x752, the calibration to match): halved back by the engine (the default
+//! [`OdometryConfig::max_working_pixels`]) and at full size.
+//!
 //! `cargo bench -p swarmpose-odometry --bench pipeline`
 
 use std::hint::black_box;
@@ -19,6 +23,7 @@ use swarmpose_datasets::open;
 
 use swarmpose_odometry::batch::{camera_of, collect, run_sequence_two_threads};
 use swarmpose_odometry::{Odometry, OdometryConfig, StageTimes, StereoInput};
+use swarmpose_vision::image::{GrayImage, double};
 
 fn percentile(sorted: &[f64], p: f64) -> f64 {
     let i = ((sorted.len() as f64 - 1.0) * p).round() as usize;
@@ -114,5 +119,60 @@ fn bench_pipeline(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench_pipeline);
+/// The engine (images in memory) on kitti_vo_seq2 doubled: halved back by the engine
+/// (default) and at full size (`max_working_pixels = usize::MAX`).
+fn bench_working_size(c: &mut Criterion) {
+    let dir = swarmpose_datasets::data_root().join("kitti_vo_seq2");
+    let Ok(seq) = open(&dir) else {
+        eprintln!("SKIPPED: {} not found (set SWARMPOSE_DATA)", dir.display());
+        return;
+    };
+    let mut camera = camera_of(seq.as_ref());
+    camera.rig.fx *= 2.0;
+    camera.rig.fy *= 2.0;
+    camera.rig.cx = 2.0 * camera.rig.cx + 0.5;
+    camera.rig.cy = 2.0 * camera.rig.cy + 0.5;
+    camera.width *= 2;
+    camera.height *= 2;
+    let (mut tmp, mut out) = (Vec::new(), Vec::new());
+    let mut doubled = |img: &GrayImage| {
+        let (w, h) = double(img.view(), &mut tmp, &mut out);
+        GrayImage::from_raw(w, h, out.clone()).expect("size")
+    };
+    let frames: Vec<(GrayImage, GrayImage)> = (0..seq.len())
+        .filter_map(|i| seq.frame(i).ok())
+        .map(|f| (doubled(&f.left), doubled(&f.right)))
+        .collect();
+    let mut g = c.benchmark_group("working_size");
+    g.sample_size(10);
+    g.measurement_time(Duration::from_secs(30));
+    g.throughput(Throughput::Elements(frames.len() as u64));
+    let variants = [
+        ("halved by the engine (default)", OdometryConfig::default()),
+        (
+            "full size",
+            OdometryConfig {
+                max_working_pixels: usize::MAX,
+                ..OdometryConfig::default()
+            },
+        ),
+    ];
+    for (label, config) in &variants {
+        g.bench_function(format!("kitti_vo_seq2 2482x752/engine, {label}"), |b| {
+            b.iter(|| {
+                let mut odo = Odometry::new(camera, config.clone()).expect("engine");
+                for (i, (l, r)) in frames.iter().enumerate() {
+                    let _ = black_box(odo.track(StereoInput {
+                        left: l.view(),
+                        right: r.view(),
+                        timestamp_s: i as f64 * 0.1,
+                    }));
+                }
+            });
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench_pipeline, bench_working_size);
 criterion_main!(benches);
