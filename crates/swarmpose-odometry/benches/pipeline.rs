@@ -127,13 +127,7 @@ fn bench_working_size(c: &mut Criterion) {
         eprintln!("SKIPPED: {} not found (set SWARMPOSE_DATA)", dir.display());
         return;
     };
-    let mut camera = camera_of(seq.as_ref());
-    camera.rig.fx *= 2.0;
-    camera.rig.fy *= 2.0;
-    camera.rig.cx = 2.0 * camera.rig.cx + 0.5;
-    camera.rig.cy = 2.0 * camera.rig.cy + 0.5;
-    camera.width *= 2;
-    camera.height *= 2;
+    let camera = camera_of(seq.as_ref()).doubled();
     let (mut tmp, mut out) = (Vec::new(), Vec::new());
     let mut doubled = |img: &GrayImage| {
         let (w, h) = double(img.view(), &mut tmp, &mut out);

@@ -438,11 +438,10 @@ impl Odometry {
                                 // The back end takes the working left image (the
                                 // tracks' patches); the right one is not needed there.
                                 let l = hl.apply(frame.left.view(), levels);
-                                frame.left = GrayImage {
-                                    width: l.width,
-                                    height: l.height,
-                                    data: l.data.to_vec(),
-                                };
+                                // Into the frame's own buffer: no allocation when halving.
+                                frame.left.data.clear();
+                                frame.left.data.extend_from_slice(l.data);
+                                (frame.left.width, frame.left.height) = (l.width, l.height);
                                 let r = hr.apply(frame.right.view(), levels);
                                 times.load_ms += crate::frontend::ms(t0);
                                 let features =

@@ -54,6 +54,35 @@ impl StereoCamera {
         }
         Ok(())
     }
+
+    /// The camera of its images halved (2x2 means, [`swarmpose_vision::image::halve`]):
+    /// `f / 2`, `(c − 0.5) / 2` (pixel centres at integers), an odd last column or row
+    /// dropped; the baseline (metres) unchanged.
+    #[must_use]
+    pub fn halved(&self) -> Self {
+        let mut c = *self;
+        c.rig.fx /= 2.0;
+        c.rig.fy /= 2.0;
+        c.rig.cx = (c.rig.cx - 0.5) / 2.0;
+        c.rig.cy = (c.rig.cy - 0.5) / 2.0;
+        c.width /= 2;
+        c.height /= 2;
+        c
+    }
+
+    /// The camera of its images doubled ([`swarmpose_vision::image::double`]): `2 f`,
+    /// `2 c + 0.5`; the baseline (metres) unchanged.
+    #[must_use]
+    pub fn doubled(&self) -> Self {
+        let mut c = *self;
+        c.rig.fx *= 2.0;
+        c.rig.fy *= 2.0;
+        c.rig.cx = 2.0 * c.rig.cx + 0.5;
+        c.rig.cy = 2.0 * c.rig.cy + 0.5;
+        c.width *= 2;
+        c.height *= 2;
+        c
+    }
 }
 
 /// A stereo frame from any source: the rectified left and right images (8-bit gray,

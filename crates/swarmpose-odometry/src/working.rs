@@ -90,26 +90,15 @@ impl WorkingScale {
         2f64.powi(self.levels)
     }
 
-    /// The camera of the working images. Each halving takes `f / 2` and `(c − 0.5) / 2`
-    /// (pixel centres at integers) and drops an odd last column or row; each doubling
-    /// takes `2 f` and `2 c + 0.5`. The baseline does not change.
+    /// The camera of the working images ([`StereoCamera::halved`] or
+    /// [`StereoCamera::doubled`], `levels` times).
     pub fn camera(self, camera: &StereoCamera) -> StereoCamera {
         let mut c = *camera;
         for _ in 0..self.levels.max(0) {
-            c.rig.fx /= 2.0;
-            c.rig.fy /= 2.0;
-            c.rig.cx = (c.rig.cx - 0.5) / 2.0;
-            c.rig.cy = (c.rig.cy - 0.5) / 2.0;
-            c.width /= 2;
-            c.height /= 2;
+            c = c.halved();
         }
         for _ in 0..(-self.levels).max(0) {
-            c.rig.fx *= 2.0;
-            c.rig.fy *= 2.0;
-            c.rig.cx = 2.0 * c.rig.cx + 0.5;
-            c.rig.cy = 2.0 * c.rig.cy + 0.5;
-            c.width *= 2;
-            c.height *= 2;
+            c = c.doubled();
         }
         c
     }
