@@ -478,7 +478,7 @@ impl SelfCalibration {
 /// `relative` (χ² units, negative when they help) over `terms` terms, each chosen for
 /// lowering it by more than `margin`: `w = clamp((−relative − terms · margin) / margin, 0, 1)`,
 /// 0 when the score has just passed the margins and 1 from one margin beyond them; 0 when no
-/// term is chosen (nothing is applied).
+/// term is chosen or the score is not a number (nothing is applied).
 ///
 /// A term chosen by a hair is a near tie with not choosing it. Applied in full, the
 /// correction jumps between 0 and its fitted value as the evidence crosses the margin
@@ -497,6 +497,9 @@ pub fn applied_fraction(relative: f64, terms: usize, margin: f64) -> f64 {
         return 1.0;
     }
     let excess = -relative - margin * terms as f64;
+    if excess.is_nan() {
+        return 0.0;
+    }
     (excess / margin).clamp(0.0, 1.0)
 }
 
@@ -558,6 +561,8 @@ mod tests {
         // Nothing chosen: nothing applied; no margin: the fit in full.
         assert_eq!(applied_fraction(0.0, 0, 10.0), 0.0);
         assert_eq!(applied_fraction(-1.0, 1, 0.0), 1.0);
+        // A score that is not a number applies nothing.
+        assert_eq!(applied_fraction(f64::NAN, 1, 10.0), 0.0);
         // Continuous and never decreasing as the score falls.
         let mut last = 0.0;
         for i in 0..400 {
