@@ -25,10 +25,12 @@ METHODS = [
     ("robust PSO (default)", []),
 ]
 VARIANTS = [
-    ("default (window of 10, calibration principal-point+yaw)", []),
+    ("default (window of 10, calibration principal-point+yaw+focal)", []),
     ("no correction (--calibrate none)", ["--calibrate", "none"]),
     ("constant only (--calibrate principal-point)", ["--calibrate", "principal-point"]),
-    ("yaw, roll and pitch too", ["--calibrate", "principal-point+yaw+roll+pitch"]),
+    ("no right-camera focal (--calibrate principal-point+yaw)",
+     ["--calibrate", "principal-point+yaw"]),
+    ("roll and pitch too", ["--calibrate", "principal-point+yaw+focal+roll+pitch"]),
     ("evidence memory 0.5 s (--calibration-memory 0.5)", ["--calibration-memory", "0.5"]),
     ("evidence memory 3 s", ["--calibration-memory", "3"]),
     ("all evidence kept (--calibration-memory inf)", ["--calibration-memory", "inf"]),

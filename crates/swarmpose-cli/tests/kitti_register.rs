@@ -71,7 +71,8 @@ fn correspondences_then_register_recover_kitti_motions() {
     );
     let stderr = String::from_utf8_lossy(&out.stderr).to_string();
     assert!(out.status.success(), "{stderr}");
-    // "... (--disparity-offset A --disparity-quadratic C)": the flags to pass on.
+    // "... (--disparity-offset A --disparity-quadratic C --disparity-linear L)": the flags
+    // to pass on.
     let flags: Vec<String> = stderr
         .split("(--disparity-offset ")
         .nth(1)
@@ -81,11 +82,12 @@ fn correspondences_then_register_recover_kitti_motions() {
         .split_whitespace()
         .map(str::to_owned)
         .collect();
-    assert_eq!(flags.len(), 4, "{flags:?}");
+    assert_eq!(flags.len(), 6, "{flags:?}");
     let value = |k: usize| flags[k].parse::<f64>().expect("a number");
-    let (offset, quadratic) = (value(1), value(3));
+    let (offset, quadratic, linear) = (value(1), value(3), value(5));
     assert!((-2.0..3.0).contains(&offset), "offset {offset} px");
     assert!((0.0..8.0).contains(&quadratic), "quadratic {quadratic} px");
+    assert!((-2.0..2.0).contains(&linear), "linear {linear} px");
 
     let (mut good, mut fewest) = (0, usize::MAX);
     for k in 0..seq.len() - 1 {
@@ -129,7 +131,7 @@ fn correspondences_then_register_recover_kitti_motions() {
         );
     }
     eprintln!(
-        "disparity correction {offset:.3} px + {quadratic:.3} px x²; fewest correspondences \
+        "disparity correction {offset:.3} px + {quadratic:.3} px x² + {linear:.3} px x; fewest correspondences \
          {fewest}; within 0.2 deg and 5 cm: {good}/{}",
         seq.len() - 1
     );

@@ -11,9 +11,10 @@ use crate::window::WindowConfig;
 /// How the disparity correction of the stereo calibration is obtained.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub enum Calibration {
-    /// Chosen online by evidence ([`crate::selfcal`]): no correction, a constant offset or
-    /// an offset plus a quadratic term, whichever the held-out pairs support; updated as
-    /// frames arrive (default).
+    /// Chosen online by evidence ([`crate::selfcal`]): no correction, or any of a constant
+    /// offset, a quadratic term and a term linear in `x` (the causes of
+    /// [`CorrectionModel::DEFAULT_CANDIDATES`]), whichever the held-out pairs support;
+    /// updated as frames arrive (default).
     #[default]
     Auto,
     /// The rig's calibration as given: no correction.
@@ -31,18 +32,38 @@ pub const MAX_FIXED_CORRECTION_PX: f64 = 100.0;
 impl Calibration {
     /// The mode a user's options ask for: the `causes` self-calibration may correct, and
     /// a fixed correction's offset and quadratic term (pixels; either may be given),
-    /// whose option names `names` the messages use. A fixed correction wins; no causes
-    /// and no fixed correction is [`Calibration::Off`].
+    /// whose option names `names` the messages use. As [`Calibration::from_terms`]
+    /// without a linear term.
     ///
     /// # Errors
-    /// A term that is not finite or is larger than [`MAX_FIXED_CORRECTION_PX`].
+    /// As [`Calibration::from_terms`].
     pub fn from_options(
         causes: CorrectionModel,
         offset_px: Option<f64>,
         quadratic_px: Option<f64>,
         names: [&str; 2],
     ) -> Result<Self, String> {
-        for (name, v) in names.iter().zip([offset_px, quadratic_px]) {
+        Self::from_terms(
+            causes,
+            [offset_px, quadratic_px, None],
+            [names[0], names[1], "linear term"],
+        )
+    }
+
+    /// The mode a user's options ask for: the `causes` self-calibration may correct, and
+    /// a fixed correction's terms `[offset, quadratic, linear_x]` (pixels, the
+    /// coefficients of `1`, `x²` and `x` in [`DisparityCorrection`]; any may be given),
+    /// whose option names `names` the messages use. A fixed correction wins; no causes
+    /// and no fixed correction is [`Calibration::Off`].
+    ///
+    /// # Errors
+    /// A term that is not finite or is larger than [`MAX_FIXED_CORRECTION_PX`].
+    pub fn from_terms(
+        causes: CorrectionModel,
+        terms_px: [Option<f64>; 3],
+        names: [&str; 3],
+    ) -> Result<Self, String> {
+        for (name, v) in names.iter().zip(terms_px) {
             if v.is_some_and(|d| !d.is_finite()) {
                 return Err(format!("{name} must be a finite number of pixels"));
             }
@@ -53,12 +74,13 @@ impl Calibration {
                 ));
             }
         }
-        Ok(match (offset_px, quadratic_px) {
-            (None, None) if causes == CorrectionModel::NONE => Self::Off,
-            (None, None) => Self::Auto,
-            (a, q) => Self::Fixed(DisparityCorrection {
+        Ok(match terms_px {
+            [None, None, None] if causes == CorrectionModel::NONE => Self::Off,
+            [None, None, None] => Self::Auto,
+            [a, q, l] => Self::Fixed(DisparityCorrection {
                 offset_px: a.unwrap_or(0.0),
                 quadratic_px: q.unwrap_or(0.0),
+                linear_x_px: l.unwrap_or(0.0),
                 ..DisparityCorrection::default()
             }),
         })

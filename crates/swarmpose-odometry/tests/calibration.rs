@@ -1,6 +1,6 @@
 //! Self-calibration decisions on rigs whose error is known: the rendered synthetic street
 //! with an exact rig, a right camera whose principal point is 1 px off, and a right
-//! camera yawed by 0.004 rad; the exact rig creeping 5 cm a frame; and, on synthetic
+//! camera yawed by 0.004 rad, a right camera whose focal length is 2 px long; the exact rig creeping 5 cm a frame; and, on synthetic
 //! feature streams, how often an exact rig
 //! gets a correction it does not need (the margin's false alarms).
 
@@ -96,6 +96,28 @@ fn yaw_gets_the_quadratic_term() {
         "quadratic {q:.3} px, expected {expected:.3} px"
     );
     assert!(drift <= 0.5, "drift {drift} %");
+}
+
+/// A right camera whose focal length is 2 px (0.44 %) longer than the calibration's:
+/// disparities are short by `2 px · x`, and the term linear in `x` (cause `focal`, a
+/// default candidate) is found within 15 %. It comes out short: 0.86, 1.80, 3.83 and
+/// -1.76 px for 1, 2, 4 and -2 px (its rows are scaled too, by `focal_px · y`, which the
+/// default causes leave alone).
+#[test]
+fn right_focal_length_gets_the_linear_term() {
+    let focal_px = 2.0;
+    let (run, drift) = decide(RightCameraError {
+        focal_px,
+        ..RightCameraError::default()
+    });
+    let d = &run.calibration;
+    assert!(d.model.has(CorrectionModel::FOCAL), "{}", d.model);
+    let l = d.correction.linear_x_px;
+    assert!(
+        ((l - focal_px) / focal_px).abs() <= 0.15,
+        "linear term {l:.3} px, expected {focal_px:.3} px"
+    );
+    assert!(drift <= 0.2, "drift {drift} %");
 }
 
 /// The rendered street seen by cameras whose focal length is 2 % longer than the

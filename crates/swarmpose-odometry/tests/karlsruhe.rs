@@ -1,9 +1,15 @@
 //! The default run on the Karlsruhe sequence (112 frames, 94 m, a right turn): after
 //! the SE(3) Umeyama alignment of our camera positions onto the rough INS positions (no
-//! camera-to-INS extrinsic is given), the ATE RMSE is at most 2 % of the path length
-//! (see RESULTS.md: the INS says the scale is off, which rigidity cannot observe).
+//! camera-to-INS extrinsic is given), the ATE RMSE is at most 1.3 % of the path length
+//! (issue 12's bar) and the final position error is below the OpenCV PnP peer's 2.22 %
+//! (`tools/peers`, measured in RESULTS.md; the peer needs OpenCV, so its figure is
+//! recorded here rather than run).
 
 mod common;
+
+/// The OpenCV PnP peer's final position error on this sequence after the same alignment,
+/// percent of the INS path (`python3 tools/peers/compare.py`, RESULTS.md).
+const PEER_FINAL_PERCENT: f64 = 2.22;
 
 #[test]
 fn karlsruhe_ate_after_alignment() {
@@ -12,14 +18,18 @@ fn karlsruhe_ate_after_alignment() {
         return;
     };
     let r = common::default_run(name).expect("present");
-    let percent = common::karlsruhe_ate_percent(&dir, &r);
+    let (ate, last) = common::karlsruhe_errors_percent(&dir, &r);
     eprintln!(
-        "karlsruhe: correction {} ({}), ATE after alignment {percent:.2} % of the path, \
-         {} untracked frames",
+        "karlsruhe: correction {} ({}), ATE after alignment {ate:.3} % of the path, final \
+         error {last:.3} %, {} untracked frames",
         r.calibration.correction,
         r.calibration.model,
         r.untracked()
     );
     assert_eq!(r.untracked(), 0);
-    assert!(percent <= 2.0, "ATE {percent:.2} % > 2 %");
+    assert!(ate <= 1.3, "ATE {ate:.3} % > 1.3 %");
+    assert!(
+        last < PEER_FINAL_PERCENT,
+        "final error {last:.3} % >= the peer's {PEER_FINAL_PERCENT} %"
+    );
 }

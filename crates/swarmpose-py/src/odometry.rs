@@ -34,7 +34,7 @@ impl Odometry {
     /// ``width`` x ``height`` pixels. Options: ``method`` (one of ``swarmpose.METHODS``)
     /// and its ``threshold`` (metres), ``detector`` (``"orb"`` or ``"surf"``),
     /// ``refine`` (reprojection refinement), ``calibrate`` (the causes self-calibration
-    /// may correct, e.g. ``"principal-point+yaw"``, or ``"none"``; default as the
+    /// may correct, e.g. ``"principal-point+yaw+focal"``, or ``"none"``; default as the
     /// command line), ``disparity_correction`` (a fixed ``(offset, quadratic)`` in
     /// pixels instead), ``min_inliers``, ``seed`` (frame k uses seed + k), ``window``
     /// (keyframes of the sliding-window bundle adjustment; 0: frame to frame; default as the

@@ -79,7 +79,7 @@ pub struct CorrespondencesArgs {
     /// Self-calibrate the disparity correction on the first N consecutive pairs of the
     /// sequence, as `odometry` does online (image data only: the causes of --calibrate
     /// that the rows and the rigidity of the pairs support), print it and use it.
-    #[arg(long, value_name = "N", conflicts_with_all = ["disparity_offset", "disparity_quadratic"])]
+    #[arg(long, value_name = "N", conflicts_with_all = ["disparity_offset", "disparity_quadratic", "disparity_linear"])]
     pub self_calibrate: Option<usize>,
 }
 
@@ -121,13 +121,14 @@ fn self_calibrate(
     .map_err(|e| CliError::usage(e.to_string()))?;
     let d = odometry.calibration();
     let c = d.correction;
-    let reuse = if c.linear_x_px == 0.0 && c.linear_y_px == 0.0 && c.cross_xy_px == 0.0 {
+    let reuse = if c.linear_y_px == 0.0 && c.cross_xy_px == 0.0 {
         format!(
-            "--disparity-offset {} --disparity-quadratic {}",
-            c.offset_px, c.quadratic_px
+            "--disparity-offset {} --disparity-quadratic {} --disparity-linear {}",
+            c.offset_px, c.quadratic_px, c.linear_x_px
         )
     } else {
-        "terms beyond --disparity-offset and --disparity-quadratic: use --self-calibrate again"
+        "terms beyond --disparity-offset, --disparity-quadratic and --disparity-linear: \
+         use --self-calibrate again"
             .to_owned()
     };
     err(&format!(
@@ -326,6 +327,7 @@ mod tests {
                 detector: Detector::Orb,
                 disparity_offset: None,
                 disparity_quadratic: None,
+                disparity_linear: None,
                 calibrate: swarmpose_odometry::CorrectionModel::DEFAULT_CANDIDATES,
                 calibration_memory: swarmpose_odometry::selfcal::SelfCalConfig::default().memory_s,
             },

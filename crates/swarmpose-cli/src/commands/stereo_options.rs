@@ -43,13 +43,19 @@ pub struct StereoOptions {
     #[arg(long, value_name = "PX", allow_negative_numbers = true)]
     pub disparity_quadratic: Option<f64>,
 
+    /// A fixed disparity correction: its term in x, pixels, with x as for
+    /// --disparity-quadratic (a focal length of the right camera that is off); with
+    /// --disparity-offset (default 0); at most 100 in magnitude.
+    #[arg(long, value_name = "PX", allow_negative_numbers = true)]
+    pub disparity_linear: Option<f64>,
+
     /// The causes of a disparity error that self-calibration may correct, when they have
     /// evidence: `none` (no correction), or some of principal-point (a constant, seen as
     /// a scene that is not rigid between frames), yaw, roll, pitch (seen in the rows of
-    /// each stereo pair), focal (the right camera's) and focal-length (the rig's, both
-    /// cameras: seen when the camera turns; not a default, see docs/self-calibration.md),
-    /// joined by '+'.
-    #[arg(long, value_name = "CAUSES", default_value = "principal-point+yaw",
+    /// each stereo pair), focal (the right camera's: a term linear in x, by rigidity) and
+    /// focal-length (the rig's, both cameras: seen when the camera turns; not a default,
+    /// see docs/self-calibration.md), joined by '+'.
+    #[arg(long, value_name = "CAUSES", default_value_t = CorrectionModel::DEFAULT_CANDIDATES,
           value_parser = parse_causes)]
     pub calibrate: CorrectionModel,
 
@@ -81,11 +87,18 @@ impl StereoOptions {
             memory_s: self.calibration_memory,
             ..SelfCalConfig::default()
         };
-        let mode = Calibration::from_options(
+        let mode = Calibration::from_terms(
             self.calibrate,
-            self.disparity_offset,
-            self.disparity_quadratic,
-            ["--disparity-offset", "--disparity-quadratic"],
+            [
+                self.disparity_offset,
+                self.disparity_quadratic,
+                self.disparity_linear,
+            ],
+            [
+                "--disparity-offset",
+                "--disparity-quadratic",
+                "--disparity-linear",
+            ],
         )
         .map_err(CliError::usage)?;
         Ok((mode, selfcal))

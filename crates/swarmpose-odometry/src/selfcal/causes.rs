@@ -20,9 +20,11 @@ impl CorrectionModel {
     /// The focal length of the rectified rig, both cameras (rigidity, when the camera
     /// turns: see [`crate::refine::model::FOCAL_TERM`]).
     pub const FOCAL_LENGTH: Self = Self(1 << 5);
-    /// The causes the default configuration may choose: principal point and yaw (a
-    /// constant, and a constant plus a quadratic term).
-    pub const DEFAULT_CANDIDATES: Self = Self(Self::PRINCIPAL_POINT.0 | Self::YAW.0);
+    /// The causes the default configuration may choose: principal point, yaw and the
+    /// right camera's focal length (a constant, a constant plus a quadratic term, and a
+    /// term linear in `x`).
+    pub const DEFAULT_CANDIDATES: Self =
+        Self(Self::PRINCIPAL_POINT.0 | Self::YAW.0 | Self::FOCAL.0);
     /// Every cause.
     pub const ALL: Self = Self(0b11_1111);
     /// A correction given by the user, not chosen by evidence.

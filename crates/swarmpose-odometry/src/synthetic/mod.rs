@@ -53,6 +53,10 @@ pub struct RightCameraError {
     pub pitch_rad: f64,
     /// Roll of the right camera about its z axis (forward), radians.
     pub roll_rad: f64,
+    /// Focal length of the right camera (`fx` and `fy`) minus the calibration's, pixels:
+    /// measured disparities are short by about `focal_px · x` (`x` the right camera's
+    /// normalised column), and its rows are off by `focal_px · y`.
+    pub focal_px: f64,
 }
 
 impl SyntheticSequence {
@@ -237,6 +241,8 @@ impl StereoSequence for SyntheticSequence {
             ..RIG
         };
         let right_rig = RectifiedStereo {
+            fx: left_rig.fx + e.focal_px,
+            fy: left_rig.fy + e.focal_px,
             cx: RIG.cx + e.principal_point_px,
             ..left_rig
         };

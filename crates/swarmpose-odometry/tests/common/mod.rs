@@ -103,6 +103,13 @@ pub fn motion_error(estimate: &Isometry3<f64>, truth: &Isometry3<f64>) -> Vector
 /// ATE of a run on the Karlsruhe sequence in `dir` after the SE(3) Umeyama alignment of
 /// its camera positions onto the INS positions, percent of the INS path length.
 pub fn karlsruhe_ate_percent(dir: &std::path::Path, r: &Run) -> f64 {
+    karlsruhe_errors_percent(dir, r).0
+}
+
+/// The ATE and the final position error of a run on the Karlsruhe sequence in `dir` after
+/// the SE(3) Umeyama alignment of its camera positions onto the INS positions, percent of
+/// the INS path length (as `swarmpose odometry` prints them).
+pub fn karlsruhe_errors_percent(dir: &std::path::Path, r: &Run) -> (f64, f64) {
     use nalgebra::Point3;
     let ins = swarmpose_datasets::karlsruhe::KarlsruheSequence::open(dir)
         .expect("open")
@@ -123,5 +130,9 @@ pub fn karlsruhe_ate_percent(dir: &std::path::Path, r: &Run) -> f64 {
         .map(|(a, b)| (b - t * a).norm_squared())
         .sum();
     let length: f64 = y.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
-    100.0 * (sq / x.len() as f64).sqrt() / length
+    let last = x.len() - 1;
+    (
+        100.0 * (sq / x.len() as f64).sqrt() / length,
+        100.0 * (y[last] - t * x[last]).norm() / length,
+    )
 }
