@@ -147,16 +147,9 @@ impl OdometryConfig {
 
     /// Checks every setting as the engine will read it.
     fn check(&self) -> PyResult<()> {
-        self.engine_config()?;
+        let c = self.engine_config()?;
         methods::estimator(&self.method, self.threshold)?;
-        let defaults = swarmpose_odometry::OdometryConfig::default();
-        check_band(
-            self.min_working_pixels
-                .unwrap_or(defaults.min_working_pixels),
-            self.max_working_pixels
-                .unwrap_or(defaults.max_working_pixels),
-        )
-        .map_err(|e| odometry_error(&e))
+        check_band(c.min_working_pixels, c.max_working_pixels).map_err(|e| odometry_error(&e))
     }
 
     /// The engine's configuration (defaults: those of
