@@ -36,6 +36,34 @@ use crate::selfcal::Decision;
 /// image then has at least a quarter of them): fewer leave too few pixels for features.
 pub const MIN_WORKING_PIXELS: usize = 10_000;
 
+/// Checks a band of working sizes: `max_pixels` at least [`MIN_WORKING_PIXELS`], and
+/// `min_pixels` at most a quarter of `max_pixels`, so that a doubled image never needs
+/// halving. It does not depend on the camera: a configuration can be checked before
+/// there is one.
+///
+/// # Errors
+/// [`OdometryError::Camera`] naming the option (`max_working_pixels` or
+/// `min_working_pixels`) that is out of range.
+pub fn check_band(min_pixels: usize, max_pixels: usize) -> Result<(), OdometryError> {
+    if max_pixels < MIN_WORKING_PIXELS {
+        return Err(OdometryError::Camera {
+            message: format!(
+                "max_working_pixels {max_pixels}: at least {MIN_WORKING_PIXELS} are needed \
+                 (smaller images have too few pixels for features)"
+            ),
+        });
+    }
+    if min_pixels > max_pixels / 4 {
+        return Err(OdometryError::Camera {
+            message: format!(
+                "min_working_pixels {min_pixels}: at most a quarter of max_working_pixels \
+                 {max_pixels} (a doubled image has four times the pixels)"
+            ),
+        });
+    }
+    Ok(())
+}
+
 /// How the images are resampled: halved `levels` times when positive, doubled `−levels`
 /// times when negative.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -46,32 +74,15 @@ pub(crate) struct WorkingScale {
 
 impl WorkingScale {
     /// Halvings while the camera's images have more than `max_pixels` pixels, doublings
-    /// while they have fewer than `min_pixels` (`min_pixels` at most a quarter of
-    /// `max_pixels`, so that a doubled image never needs halving).
+    /// while they have fewer than `min_pixels` (a band [`check_band`] accepts).
     ///
     /// # Errors
-    /// [`OdometryError::Camera`] when `max_pixels` is below [`MIN_WORKING_PIXELS`] or
-    /// `min_pixels` above a quarter of `max_pixels`.
+    /// [`OdometryError::Camera`] for a band [`check_band`] refuses.
     pub fn for_camera(
         camera: &StereoCamera,
         (min_pixels, max_pixels): (usize, usize),
     ) -> Result<Self, OdometryError> {
-        if max_pixels < MIN_WORKING_PIXELS {
-            return Err(OdometryError::Camera {
-                message: format!(
-                    "max_working_pixels {max_pixels}: at least {MIN_WORKING_PIXELS} are needed \
-                     (smaller images have too few pixels for features)"
-                ),
-            });
-        }
-        if min_pixels > max_pixels / 4 {
-            return Err(OdometryError::Camera {
-                message: format!(
-                    "min_working_pixels {min_pixels}: at most a quarter of max_working_pixels \
-                     {max_pixels} (a doubled image has four times the pixels)"
-                ),
-            });
-        }
+        check_band(min_pixels, max_pixels)?;
         let (mut w, mut h) = (camera.width, camera.height);
         let mut levels = 0;
         while w.saturating_mul(h) > max_pixels {

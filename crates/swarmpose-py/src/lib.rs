@@ -8,6 +8,7 @@
 //! | Python | Rust |
 //! |---|---|
 //! | `register` | [`swarmpose_core::Estimator::estimate_seeded`] |
+//! | `OdometryConfig` | [`swarmpose_odometry::OdometryConfig`] |
 //! | `Odometry`, `Odometry.track` | [`swarmpose_odometry::Odometry`], [`swarmpose_odometry::Odometry::track`] |
 //! | `Odometry.rgbd`, `Odometry.track_rgbd` | [`swarmpose_odometry::Odometry::track_rgbd`] |
 //! | `odometry` | [`swarmpose_odometry::batch::run_sequence`] |
@@ -44,6 +45,7 @@ fn _swarmpose(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(evaluate::evaluate, m)?)?;
     m.add_class::<register::Registration>()?;
     m.add_class::<register::RunnerUp>()?;
+    m.add_class::<options::OdometryConfig>()?;
     m.add_class::<odometry::Odometry>()?;
     m.add_class::<odometry_run::OdometryRun>()?;
     m.add_class::<frame::Frame>()?;

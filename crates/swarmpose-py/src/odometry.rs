@@ -16,7 +16,7 @@ use crate::arrays::ImageArray;
 use crate::errors::odometry_error;
 use crate::evaluate::json_value;
 use crate::frame::Frame;
-use crate::options::Options;
+use crate::options::OdometryConfig;
 use crate::sequence::{Sequence, camera_dict};
 
 /// A streaming stereo visual odometry: ``track`` takes one rectified stereo pair at a
@@ -31,24 +31,14 @@ pub(crate) struct Odometry {
 impl Odometry {
     /// An engine for a rectified stereo camera: focal lengths ``fx``, ``fy`` and
     /// principal point ``cx``, ``cy`` in pixels, ``baseline`` in metres, images of
-    /// ``width`` x ``height`` pixels. Options: ``method`` (one of ``swarmpose.METHODS``)
-    /// and its ``threshold`` (metres), ``detector`` (``"orb"`` or ``"surf"``),
-    /// ``refine`` (reprojection refinement), ``calibrate`` (the causes self-calibration
-    /// may correct, e.g. ``"principal-point+yaw+focal"``, or ``"none"``; default as the
-    /// command line), ``disparity_correction`` (a fixed ``(offset, quadratic)`` in
-    /// pixels instead), ``min_inliers``, ``seed`` (frame k uses seed + k), ``window``
-    /// (keyframes of the sliding-window bundle adjustment; 0: frame to frame; default as the
-    /// command line, 10), ``marginalise`` (what happens to the window's oldest keyframe when
-    /// it leaves: ``"off"``, the default, ``"finished"`` or ``"all"``; see docs/window.md),
-    /// ``max_working_pixels`` and ``min_working_pixels`` (stereo images are halved while
-    /// they have more pixels than the first, 1 500 000 by default, and doubled while they
-    /// have fewer than the second, 0 by default: never; see ``working_camera``).
+    /// ``width`` x ``height`` pixels. Its settings: ``config`` (an ``OdometryConfig``),
+    /// or ``OdometryConfig``'s keywords themselves (``method``, ``window``, ...), not
+    /// both; the defaults are the command line's.
     #[new]
-    #[pyo3(signature = (fx, fy, cx, cy, baseline, width, height, *, method = "pso", threshold = None,
-        detector = "orb", refine = true, calibrate = None, disparity_correction = None,
-        min_inliers = None, seed = 0, window = None, marginalise = None, max_working_pixels = None, min_working_pixels = None))]
+    #[pyo3(signature = (fx, fy, cx, cy, baseline, width, height, *, config = None, **options))]
     #[allow(clippy::too_many_arguments)]
-    fn new(
+    fn new<'py>(
+        py: Python<'py>,
         fx: f64,
         fy: f64,
         cx: f64,
@@ -56,19 +46,10 @@ impl Odometry {
         baseline: f64,
         width: usize,
         height: usize,
-        method: &str,
-        threshold: Option<f64>,
-        detector: &str,
-        refine: bool,
-        calibrate: Option<&str>,
-        disparity_correction: Option<(f64, f64)>,
-        min_inliers: Option<usize>,
-        seed: u64,
-        window: Option<usize>,
-        marginalise: Option<&str>,
-        max_working_pixels: Option<usize>,
-        min_working_pixels: Option<usize>,
+        config: Option<Bound<'py, OdometryConfig>>,
+        options: Option<&Bound<'py, PyDict>>,
     ) -> PyResult<Self> {
+        let config = OdometryConfig::resolve(py, "Odometry", config, options)?;
         let camera = StereoCamera {
             rig: RectifiedStereo {
                 fx,
@@ -80,66 +61,26 @@ impl Odometry {
             width,
             height,
         };
-        let options = Options {
-            method,
-            threshold,
-            detector,
-            refine,
-            calibrate,
-            disparity_correction,
-            min_inliers,
-            seed,
-            window,
-            marginalise,
-            max_working_pixels,
-            min_working_pixels,
-            rgbd: None,
-        };
         Ok(Self {
-            inner: options.build(camera)?,
+            inner: config.get().build(camera, None)?,
         })
     }
 
     /// An engine for the camera of a sequence directory (its calibration and image
-    /// size); options as for ``Odometry(...)``.
+    /// size); settings as for ``Odometry(...)``: ``config`` or ``OdometryConfig``'s
+    /// keywords.
     #[staticmethod]
-    #[pyo3(signature = (sequence_dir, *, method = "pso", threshold = None, detector = "orb",
-        refine = true, calibrate = None, disparity_correction = None, min_inliers = None, seed = 0,
-        window = None, marginalise = None, max_working_pixels = None, min_working_pixels = None))]
-    #[allow(clippy::too_many_arguments)]
-    fn from_sequence(
+    #[pyo3(signature = (sequence_dir, *, config = None, **options))]
+    fn from_sequence<'py>(
+        py: Python<'py>,
         sequence_dir: PathBuf,
-        method: &str,
-        threshold: Option<f64>,
-        detector: &str,
-        refine: bool,
-        calibrate: Option<&str>,
-        disparity_correction: Option<(f64, f64)>,
-        min_inliers: Option<usize>,
-        seed: u64,
-        window: Option<usize>,
-        marginalise: Option<&str>,
-        max_working_pixels: Option<usize>,
-        min_working_pixels: Option<usize>,
+        config: Option<Bound<'py, OdometryConfig>>,
+        options: Option<&Bound<'py, PyDict>>,
     ) -> PyResult<Self> {
+        let config = OdometryConfig::resolve(py, "Odometry.from_sequence", config, options)?;
         let seq = Sequence::open(&sequence_dir)?;
-        let options = Options {
-            method,
-            threshold,
-            detector,
-            refine,
-            calibrate,
-            disparity_correction,
-            min_inliers,
-            seed,
-            window,
-            marginalise,
-            max_working_pixels,
-            min_working_pixels,
-            rgbd: None,
-        };
         Ok(Self {
-            inner: options.build(camera_of(seq.inner.as_ref()))?,
+            inner: config.get().build(camera_of(seq.inner.as_ref()), None)?,
         })
     }
 
@@ -181,14 +122,17 @@ impl Odometry {
 
     /// An engine for an RGB-D camera (focal lengths and principal point in pixels,
     /// images of ``width`` x ``height``): frames go to ``track_rgbd``. Depth noise
-    /// ``sigma_z = depth_coefficient * z**2`` (1/m; the Kinect v1's by default); ORB
-    /// features, no disparity correction; other options as for ``Odometry(...)``.
+    /// ``sigma_z = depth_coefficient * z**2`` (1/m; the Kinect v1's by default). Settings
+    /// as for ``Odometry(...)`` (``config`` or ``OdometryConfig``'s keywords), but ORB
+    /// features only, and ``ValueError`` for the ones only a stereo camera has a use for
+    /// (``calibrate``, ``disparity_correction``, ``max_working_pixels``,
+    /// ``min_working_pixels``).
     #[staticmethod]
     #[pyo3(signature = (fx, fy, cx, cy, width, height, *, depth_coefficient = None,
-        method = "pso", threshold = None, refine = true, min_inliers = None, seed = 0,
-        window = None, marginalise = None))]
+        config = None, **options))]
     #[allow(clippy::too_many_arguments)]
-    fn rgbd(
+    fn rgbd<'py>(
+        py: Python<'py>,
         fx: f64,
         fy: f64,
         cx: f64,
@@ -196,14 +140,10 @@ impl Odometry {
         width: usize,
         height: usize,
         depth_coefficient: Option<f64>,
-        method: &str,
-        threshold: Option<f64>,
-        refine: bool,
-        min_inliers: Option<usize>,
-        seed: u64,
-        window: Option<usize>,
-        marginalise: Option<&str>,
+        config: Option<Bound<'py, OdometryConfig>>,
+        options: Option<&Bound<'py, PyDict>>,
     ) -> PyResult<Self> {
+        let config = OdometryConfig::resolve(py, "Odometry.rgbd", config, options)?;
         let mut noise = RgbdNoise::default();
         noise.depth_coefficient = depth_coefficient.unwrap_or(noise.depth_coefficient);
         let camera = StereoCamera {
@@ -217,23 +157,8 @@ impl Odometry {
             width,
             height,
         };
-        let options = Options {
-            method,
-            threshold,
-            detector: "orb",
-            refine,
-            calibrate: None,
-            disparity_correction: None,
-            min_inliers,
-            seed,
-            window,
-            marginalise,
-            max_working_pixels: None,
-            min_working_pixels: None,
-            rgbd: Some(noise),
-        };
         Ok(Self {
-            inner: options.build(camera)?,
+            inner: config.get().build(camera, Some(noise))?,
         })
     }
 

@@ -7,6 +7,7 @@ use std::path::PathBuf;
 use numpy::{PyArray1, PyArray3};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 use swarmpose_odometry::FrameResult;
 use swarmpose_odometry::batch::{camera_of, run_sequence};
 use swarmpose_odometry::output::calibration_json;
@@ -15,57 +16,31 @@ use crate::arrays::{transforms, vector};
 use crate::errors::odometry_error;
 use crate::evaluate::json_value;
 use crate::frame::Frame;
-use crate::options::Options;
+use crate::options::OdometryConfig;
 use crate::sequence::Sequence;
 
 /// Runs the odometry over a whole stereo sequence directory (KITTI, Karlsruhe or
 /// EuRoC), frame ``i`` at ``i * frame_period`` seconds, exactly as ``swarmpose
-/// odometry`` does; options as for ``Odometry(...)``. Returns an ``OdometryRun``.
-/// The GIL is released during the run; Ctrl-C stops it between frames.
+/// odometry`` does; settings as for ``Odometry(...)``: ``config`` (an
+/// ``OdometryConfig``) or its keywords. Returns an ``OdometryRun``. The GIL is released
+/// during the run; Ctrl-C stops it between frames.
 #[pyfunction]
-#[pyo3(signature = (sequence_dir, *, frame_period = 0.1, method = "pso", threshold = None,
-    detector = "orb", refine = true, calibrate = None, disparity_correction = None,
-    min_inliers = None, seed = 0, window = None, marginalise = None, max_working_pixels = None, min_working_pixels = None))]
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn odometry(
-    py: Python<'_>,
+#[pyo3(signature = (sequence_dir, *, frame_period = 0.1, config = None, **options))]
+pub(crate) fn odometry<'py>(
+    py: Python<'py>,
     sequence_dir: PathBuf,
     frame_period: f64,
-    method: &str,
-    threshold: Option<f64>,
-    detector: &str,
-    refine: bool,
-    calibrate: Option<&str>,
-    disparity_correction: Option<(f64, f64)>,
-    min_inliers: Option<usize>,
-    seed: u64,
-    window: Option<usize>,
-    marginalise: Option<&str>,
-    max_working_pixels: Option<usize>,
-    min_working_pixels: Option<usize>,
+    config: Option<Bound<'py, OdometryConfig>>,
+    options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<OdometryRun> {
+    let config = OdometryConfig::resolve(py, "odometry", config, options)?;
     if !(frame_period.is_finite() && frame_period > 0.0) {
         return Err(PyValueError::new_err(
             "frame_period must be a positive number of seconds",
         ));
     }
     let seq = Sequence::open(&sequence_dir)?;
-    let options = Options {
-        method,
-        threshold,
-        detector,
-        refine,
-        calibrate,
-        disparity_correction,
-        min_inliers,
-        seed,
-        window,
-        marginalise,
-        max_working_pixels,
-        min_working_pixels,
-        rgbd: None,
-    };
-    let mut engine = options.build(camera_of(seq.inner.as_ref()))?;
+    let mut engine = config.get().build(camera_of(seq.inner.as_ref()), None)?;
     let mut frames: Vec<FrameResult> = Vec::with_capacity(seq.inner.len());
     let mut interrupted: Option<PyErr> = None;
     let ended = py.detach(|| {

@@ -1,60 +1,176 @@
-//! The odometry engine's settings as Python keyword arguments, shared by
-//! `swarmpose.Odometry(...)`, `Odometry.from_sequence`, `Odometry.rgbd` and
-//! `swarmpose.odometry`.
+//! `swarmpose.OdometryConfig`: the odometry engine's settings, and the one place their
+//! keywords, defaults and doc are declared. `swarmpose.Odometry(...)`,
+//! `Odometry.from_sequence`, `Odometry.rgbd` and `swarmpose.odometry` take one as
+//! `config=`, or its keywords as `**options`, which [`OdometryConfig::resolve`] hands
+//! to its constructor.
 
-use pyo3::exceptions::PyValueError;
+use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 use swarmpose_odometry::config::Calibration;
 use swarmpose_odometry::frontend::RgbdNoise;
 use swarmpose_odometry::window::Marginalisation;
-use swarmpose_odometry::{CorrectionModel, OdometryConfig, StereoCamera};
+use swarmpose_odometry::working::check_band;
+use swarmpose_odometry::{CorrectionModel, StereoCamera};
 use swarmpose_vision::frontend::Detector;
 
 use crate::errors::odometry_error;
 use crate::methods;
 
-/// The engine's settings as keyword arguments (defaults: those of
-/// [`OdometryConfig::default`] and of the command line).
-pub(crate) struct Options<'a> {
-    pub(crate) method: &'a str,
-    pub(crate) threshold: Option<f64>,
-    pub(crate) detector: &'a str,
-    pub(crate) refine: bool,
-    pub(crate) calibrate: Option<&'a str>,
-    pub(crate) disparity_correction: Option<(f64, f64)>,
-    pub(crate) min_inliers: Option<usize>,
-    pub(crate) seed: u64,
-    /// Keyframes of the sliding window (0: frame to frame; `None`: the engine's default).
-    pub(crate) window: Option<usize>,
-    /// What happens to the window's oldest keyframe when it leaves (`None`: the engine's
-    /// default, `"off"`).
-    pub(crate) marginalise: Option<&'a str>,
-    /// Most pixels of a stereo image the engine works on (`None`: the engine's default).
-    pub(crate) max_working_pixels: Option<usize>,
-    /// Fewest pixels of a stereo image the engine works on (`None`: the engine's default).
-    pub(crate) min_working_pixels: Option<usize>,
-    /// An RGB-D camera with this depth noise (frames go to `track_rgbd`).
-    pub(crate) rgbd: Option<RgbdNoise>,
+/// Declares the Python class `OdometryConfig` from one list of keywords, each `name:
+/// type = default => "doc"` (`name: &str as String = ...` for a string the constructor
+/// borrows and the class keeps): its fields (read-only properties documented by the doc),
+/// its keyword-only constructor (the defaults), its `repr`, the class docstring (every
+/// keyword's doc) and [`OdometryConfig::KEYWORDS`] (the names `**options` accepts).
+macro_rules! odometry_config {
+    (
+        $(#[doc = $class_doc:tt])*
+        keywords {
+            $($name:ident: $arg:ty $(as $field:ty)? = $default:tt => $doc:literal,)*
+        }
+    ) => {
+        $(#[doc = $class_doc])*
+        #[doc = concat!($("\n* ``", stringify!($name), "``: ", $doc),*)]
+        #[pyclass(frozen, eq, get_all, module = "swarmpose")]
+        #[derive(Debug, PartialEq)]
+        pub(crate) struct OdometryConfig {
+            $(#[doc = $doc] $name: odometry_config!(@field $arg $(as $field)?),)*
+        }
+
+        impl OdometryConfig {
+            /// The constructor's keywords, in its order.
+            pub(crate) const KEYWORDS: &'static [&'static str] = &[$(stringify!($name)),*];
+        }
+
+        #[pymethods]
+        impl OdometryConfig {
+            #[new]
+            #[pyo3(signature = (*, $($name = $default),*))]
+            #[allow(clippy::too_many_arguments)]
+            fn new($($name: $arg),*) -> PyResult<Self> {
+                let config = Self { $($name: $name.into()),* };
+                config.check()?;
+                Ok(config)
+            }
+
+            /// ``OdometryConfig(method='pso', ...)``: every keyword with its value.
+            fn __repr__(slf: &Bound<'_, Self>) -> PyResult<String> {
+                let mut fields = Vec::with_capacity(Self::KEYWORDS.len());
+                for name in Self::KEYWORDS {
+                    fields.push(format!("{name}={}", slf.getattr(*name)?.repr()?));
+                }
+                Ok(format!("OdometryConfig({})", fields.join(", ")))
+            }
+        }
+    };
+    (@field $arg:ty) => { $arg };
+    (@field $arg:ty as $field:ty) => { $field };
 }
 
-impl Options<'_> {
-    fn config(&self) -> PyResult<OdometryConfig> {
+odometry_config! {
+    /// The odometry engine's settings, checked when made (``ValueError`` with the command
+    /// line's one-line message for a bad value). Every keyword has a read-only property of
+    /// the same name; ``swarmpose.Odometry(...)``, ``Odometry.from_sequence``,
+    /// ``Odometry.rgbd`` and ``swarmpose.odometry`` take one as ``config=``, or these
+    /// keywords themselves. The keywords:
+    keywords {
+        method: &str as String = "pso" => "the estimator of each motion, one of \
+            ``swarmpose.METHODS``",
+        threshold: Option<f64> = None => "its inlier threshold in metres (``None``: ``pso`` \
+            estimates it from the data; ``svd`` and ``wls`` have none)",
+        detector: &str as String = "orb" => "the feature detector, ``\"orb\"`` or \
+            ``\"surf\"`` (RGB-D: ``\"orb\"``)",
+        refine: bool = true => "refine each motion on the reprojection error",
+        calibrate: Option<String> = None => "the causes self-calibration may correct, e.g. \
+            ``\"principal-point+yaw+focal\"``, or ``\"none\"`` (``None``: as the command line)",
+        disparity_correction: Option<(f64, f64)> = None => "a fixed ``(offset, quadratic)`` \
+            disparity correction in pixels instead of self-calibration",
+        min_inliers: Option<usize> = None => "fewest inliers for a motion, at least 3 \
+            (``None``: 12)",
+        seed: u64 = 0 => "the estimator's seed; frame k uses seed + k",
+        window: Option<usize> = None => "keyframes of the sliding-window bundle adjustment; \
+            0: frame to frame (``None``: as the command line, 10)",
+        marginalise: Option<String> = None => "what happens to the window's oldest keyframe \
+            when it leaves: ``\"off\"`` (``None``), ``\"finished\"`` or ``\"all\"`` (see \
+            docs/window.md)",
+        max_working_pixels: Option<usize> = None => "stereo images are halved while they have \
+            more pixels than this (``None``: 1 500 000; at least 10 000; see \
+            ``Odometry.working_camera``)",
+        min_working_pixels: Option<usize> = None => "stereo images are doubled while they have \
+            fewer pixels than this (``None``: 0, never; at most a quarter of \
+            max_working_pixels)",
+    }
+}
+
+impl OdometryConfig {
+    /// The settings an entry point called `caller` was given: `config`, or else its
+    /// option keywords `options` (`**options`) given to the constructor.
+    ///
+    /// # Errors
+    /// `TypeError` for both `config` and option keywords, or a keyword that is not an
+    /// option; the constructor's errors.
+    pub(crate) fn resolve<'py>(
+        py: Python<'py>,
+        caller: &str,
+        config: Option<Bound<'py, Self>>,
+        options: Option<&Bound<'py, PyDict>>,
+    ) -> PyResult<Bound<'py, Self>> {
+        let options = options.filter(|o| !o.is_empty());
+        if let Some(options) = options {
+            let given: Vec<String> = options
+                .keys()
+                .iter()
+                .map(|k| k.extract())
+                .collect::<PyResult<_>>()?;
+            if let Some(unknown) = given.iter().find(|k| !Self::KEYWORDS.contains(&k.as_str())) {
+                return Err(PyTypeError::new_err(format!(
+                    "{caller}() got an unexpected keyword argument '{unknown}' (the options \
+                     are {})",
+                    Self::KEYWORDS.join(", ")
+                )));
+            }
+            if config.is_some() {
+                return Err(PyTypeError::new_err(format!(
+                    "{caller}() takes config= or option keywords, not both (given: config and {})",
+                    given.join(", ")
+                )));
+            }
+        }
+        if let Some(config) = config {
+            return Ok(config);
+        }
+        Ok(py
+            .get_type::<Self>()
+            .call((), options)?
+            .cast_into::<Self>()?)
+    }
+
+    /// Checks every setting as the engine will read it.
+    fn check(&self) -> PyResult<()> {
+        let c = self.engine_config()?;
+        methods::estimator(&self.method, self.threshold)?;
+        check_band(c.min_working_pixels, c.max_working_pixels).map_err(|e| odometry_error(&e))
+    }
+
+    /// The engine's configuration (defaults: those of
+    /// [`swarmpose_odometry::OdometryConfig::default`] and of the command line).
+    fn engine_config(&self) -> PyResult<swarmpose_odometry::OdometryConfig> {
         let detector: Detector =
             self.detector
                 .parse()
                 .map_err(|e: swarmpose_vision::frontend::UnknownDetector| {
                     PyValueError::new_err(e.to_string())
                 })?;
-        let mut c = OdometryConfig {
+        let mut c = swarmpose_odometry::OdometryConfig {
             detector,
             refine: self.refine,
             seed: self.seed,
-            ..OdometryConfig::default()
+            ..swarmpose_odometry::OdometryConfig::default()
         };
         if let Some(k) = self.window {
             c = c.with_window(k);
         }
-        if let Some(mode) = self.marginalise {
+        if let Some(mode) = &self.marginalise {
             let mode: Marginalisation = mode
                 .parse()
                 .map_err(|e: String| PyValueError::new_err(format!("marginalise {e}")))?;
@@ -74,7 +190,7 @@ impl Options<'_> {
             }
             c.min_inliers = n;
         }
-        let causes = match self.calibrate {
+        let causes = match &self.calibrate {
             Some(text) => CorrectionModel::parse(text).map_err(PyValueError::new_err)?,
             None => c.selfcal.candidates,
         };
@@ -93,15 +209,42 @@ impl Options<'_> {
         Ok(c)
     }
 
-    pub(crate) fn build(&self, camera: StereoCamera) -> PyResult<swarmpose_odometry::Odometry> {
-        let config = self.config()?;
-        let estimator = methods::estimator(self.method, self.threshold)?;
+    /// The engine for a stereo `camera`, or for an RGB-D camera with the depth noise
+    /// `rgbd` (which has no disparity to correct and whose frames are never resampled).
+    ///
+    /// # Errors
+    /// `ValueError` for a camera that is not valid, or for an RGB-D camera, a setting it
+    /// has no use for.
+    pub(crate) fn build(
+        &self,
+        camera: StereoCamera,
+        rgbd: Option<RgbdNoise>,
+    ) -> PyResult<swarmpose_odometry::Odometry> {
+        let estimator = methods::estimator(&self.method, self.threshold)?;
         let mut builder = swarmpose_odometry::Odometry::builder(camera)
-            .config(config)
+            .config(self.engine_config()?)
             .estimator(estimator);
-        if let Some(noise) = self.rgbd {
+        if let Some(noise) = rgbd {
+            if let Some(name) = self.stereo_only() {
+                return Err(PyValueError::new_err(format!(
+                    "{name} does not apply to an RGB-D camera (no disparity to correct, \
+                     frames never resampled)"
+                )));
+            }
             builder = builder.rgbd(noise);
         }
         builder.build().map_err(|e| odometry_error(&e))
+    }
+
+    /// The first of the settings only a stereo camera has a use for that is given.
+    fn stereo_only(&self) -> Option<&'static str> {
+        [
+            ("calibrate", self.calibrate.is_some()),
+            ("disparity_correction", self.disparity_correction.is_some()),
+            ("max_working_pixels", self.max_working_pixels.is_some()),
+            ("min_working_pixels", self.min_working_pixels.is_some()),
+        ]
+        .into_iter()
+        .find_map(|(name, given)| given.then_some(name))
     }
 }

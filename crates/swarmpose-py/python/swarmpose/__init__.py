@@ -6,7 +6,9 @@ Built from the same Rust crates as the ``swarmpose`` command line:
 * ``register(src, dst, ...)`` estimates ``dst ~ R @ src + t`` from matched (N, 3)
   point sets with wrong matches among them (a ``Registration``).
 * ``Odometry(...)`` / ``Odometry.from_sequence(dir)`` is the streaming engine:
-  ``track(left, right, timestamp)`` returns each frame's pose (a ``Frame``).
+  ``track(left, right, timestamp)`` returns each frame's pose (a ``Frame``). Its
+  settings are an ``OdometryConfig(...)`` given as ``config=``, or that class's keywords
+  (``method=``, ``window=``, ...) given directly.
 * ``odometry(dir)`` runs a whole KITTI, Karlsruhe or EuRoC sequence directory;
   ``Sequence(dir)`` reads its frames as numpy images.
 * ``evaluate(estimate, ground_truth)`` returns the trajectory metrics as a dict.
@@ -19,6 +21,7 @@ from ._swarmpose import (
     EstimationError,
     Frame,
     Odometry,
+    OdometryConfig,
     OdometryRun,
     Registration,
     RunnerUp,
@@ -35,6 +38,7 @@ __all__ = [
     "EstimationError",
     "Frame",
     "Odometry",
+    "OdometryConfig",
     "OdometryRun",
     "Registration",
     "RunnerUp",

@@ -2,10 +2,11 @@
 
 import os
 import pathlib
-from typing import Any, Dict, List, Optional, Sequence as Seq, Tuple, Union
+from typing import Any, ClassVar, Dict, List, Optional, Sequence as Seq, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
+from typing_extensions import TypedDict, Unpack
 
 __version__: str
 METHODS: List[str]
@@ -149,17 +150,12 @@ class Frame:
     def ambiguous(self) -> bool:
         """Two distinct motions had comparable support; the one nearer the constant-velocity prediction was taken."""
 
-class Odometry:
-    """Streaming stereo visual odometry: one rectified pair in, its pose out."""
+class OdometryConfig:
+    """The odometry engine's settings, checked when made (ValueError for a bad value).
+    The entry points (``Odometry``, ``Odometry.from_sequence``, ``Odometry.rgbd``,
+    ``odometry``) take one as ``config=``, or these keywords themselves."""
     def __init__(
         self,
-        fx: float,
-        fy: float,
-        cx: float,
-        cy: float,
-        baseline: float,
-        width: int,
-        height: int,
         *,
         method: str = "pso",
         threshold: Optional[float] = None,
@@ -174,23 +170,78 @@ class Odometry:
         max_working_pixels: Optional[int] = None,
         min_working_pixels: Optional[int] = None,
     ) -> None: ...
+    def __eq__(self, other: object) -> bool: ...
+    __hash__: ClassVar[None]  # type: ignore[assignment]
+    @property
+    def method(self) -> str: ...
+    @property
+    def threshold(self) -> Optional[float]: ...
+    @property
+    def detector(self) -> str: ...
+    @property
+    def refine(self) -> bool: ...
+    @property
+    def calibrate(self) -> Optional[str]: ...
+    @property
+    def disparity_correction(self) -> Optional[Tuple[float, float]]: ...
+    @property
+    def min_inliers(self) -> Optional[int]: ...
+    @property
+    def seed(self) -> int: ...
+    @property
+    def window(self) -> Optional[int]: ...
+    @property
+    def marginalise(self) -> Optional[str]: ...
+    @property
+    def max_working_pixels(self) -> Optional[int]: ...
+    @property
+    def min_working_pixels(self) -> Optional[int]: ...
+
+# OdometryConfig's keywords as the entry points' ``**options`` (all optional); the
+# tests check that they are the constructor's.
+_OdometryOptions = TypedDict(
+    "_OdometryOptions",
+    {
+        "method": str,
+        "threshold": Optional[float],
+        "detector": str,
+        "refine": bool,
+        "calibrate": Optional[str],
+        "disparity_correction": Optional[Tuple[float, float]],
+        "min_inliers": Optional[int],
+        "seed": int,
+        "window": Optional[int],
+        "marginalise": Optional[str],
+        "max_working_pixels": Optional[int],
+        "min_working_pixels": Optional[int],
+    },
+    total=False,
+)
+
+class Odometry:
+    """Streaming stereo visual odometry: one rectified pair in, its pose out."""
+    def __init__(
+        self,
+        fx: float,
+        fy: float,
+        cx: float,
+        cy: float,
+        baseline: float,
+        width: int,
+        height: int,
+        *,
+        config: Optional[OdometryConfig] = None,
+        **options: Unpack[_OdometryOptions],
+    ) -> None:
+        """Settings: ``config`` or ``OdometryConfig``'s keywords, not both."""
     @staticmethod
     def from_sequence(
         sequence_dir: _Path,
         *,
-        method: str = "pso",
-        threshold: Optional[float] = None,
-        detector: str = "orb",
-        refine: bool = True,
-        calibrate: Optional[str] = None,
-        disparity_correction: Optional[Tuple[float, float]] = None,
-        min_inliers: Optional[int] = None,
-        seed: int = 0,
-        window: Optional[int] = None,
-        marginalise: Optional[str] = None,
-        max_working_pixels: Optional[int] = None,
-        min_working_pixels: Optional[int] = None,
-    ) -> "Odometry": ...
+        config: Optional[OdometryConfig] = None,
+        **options: Unpack[_OdometryOptions],
+    ) -> "Odometry":
+        """Settings: ``config`` or ``OdometryConfig``'s keywords, not both."""
     def track(
         self, left: npt.NDArray[np.uint8], right: npt.NDArray[np.uint8], timestamp: float
     ) -> Frame:
@@ -205,15 +256,12 @@ class Odometry:
         height: int,
         *,
         depth_coefficient: Optional[float] = None,
-        method: str = "pso",
-        threshold: Optional[float] = None,
-        refine: bool = True,
-        min_inliers: Optional[int] = None,
-        seed: int = 0,
-        window: Optional[int] = None,
-        marginalise: Optional[str] = None,
+        config: Optional[OdometryConfig] = None,
+        **options: Unpack[_OdometryOptions],
     ) -> "Odometry":
-        """An engine for an RGB-D camera; frames go to ``track_rgbd``."""
+        """An engine for an RGB-D camera; frames go to ``track_rgbd``. Settings:
+        ``config`` or ``OdometryConfig``'s keywords, not both (ORB only; no calibrate,
+        disparity_correction or working pixels)."""
     def track_rgbd(
         self, gray: npt.NDArray[np.uint8], depth: npt.NDArray[np.float32], timestamp: float
     ) -> Frame:
@@ -255,20 +303,11 @@ def odometry(
     sequence_dir: _Path,
     *,
     frame_period: float = 0.1,
-    method: str = "pso",
-    threshold: Optional[float] = None,
-    detector: str = "orb",
-    refine: bool = True,
-    calibrate: Optional[str] = None,
-    disparity_correction: Optional[Tuple[float, float]] = None,
-    min_inliers: Optional[int] = None,
-    seed: int = 0,
-    window: Optional[int] = None,
-    marginalise: Optional[str] = None,
-    max_working_pixels: Optional[int] = None,
-    min_working_pixels: Optional[int] = None,
+    config: Optional[OdometryConfig] = None,
+    **options: Unpack[_OdometryOptions],
 ) -> OdometryRun:
-    """Runs a whole KITTI, Karlsruhe or EuRoC sequence directory, as ``swarmpose odometry``."""
+    """Runs a whole KITTI, Karlsruhe or EuRoC sequence directory, as ``swarmpose odometry``.
+    Settings: ``config`` or ``OdometryConfig``'s keywords, not both."""
 
 class Sequence:
     """A recorded stereo sequence: ``seq[i]`` is the (left, right) uint8 images of frame i."""
