@@ -268,6 +268,34 @@ fn kitti_run_writes_its_outputs() {
     }
     let csv = std::fs::read_to_string(out_dir.join("frames.csv")).expect("frames.csv");
     assert_eq!(csv.lines().count(), 52);
+    // Every row has the header's fields (the status is quoted and may hold commas), and
+    // the correction's terms are where the header says.
+    let fields = |line: &str| -> Vec<String> {
+        let (mut out, mut cur, mut quoted) = (Vec::new(), String::new(), false);
+        for ch in line.chars() {
+            match ch {
+                '"' => quoted = !quoted,
+                ',' if !quoted => out.push(std::mem::take(&mut cur)),
+                _ => cur.push(ch),
+            }
+        }
+        out.push(cur);
+        out
+    };
+    let header = fields(csv.lines().next().expect("header"));
+    let column = |name: &str| header.iter().position(|h| h == name).expect(name);
+    for line in csv.lines().skip(1) {
+        assert_eq!(fields(line).len(), header.len(), "{line}");
+    }
+    let last = fields(csv.lines().last().expect("a row"));
+    for term in [
+        "correction_offset_px",
+        "correction_quadratic_px",
+        "correction_linear_px",
+    ] {
+        let v: f64 = last[column(term)].parse().expect("a number");
+        assert!(v.is_finite() && v.abs() < 10.0, "{term} {v}");
+    }
     // The window's last estimate of every frame, and its evaluation.
     let smoothed =
         std::fs::read_to_string(out_dir.join("trajectory.smoothed.kitti.txt")).expect("smoothed");

@@ -24,13 +24,15 @@ use crate::selfcal::Decision;
 pub const FRAMES_HEADER: &str = "frame,timestamp_s,status,reference,left_features,\
 right_features,stereo_points,matches,inliers,load_ms,features_ms,stereo_ms,match_ms,\
 estimate_ms,refine_ms,calibrate_ms,window_ms,total_ms,tx,ty,tz,qw,qx,qy,qz,x,y,z,correction_model,\
-correction_offset_px,correction_quadratic_px,focal_correction_px,keyframe,ambiguous";
+correction_offset_px,correction_quadratic_px,correction_linear_px,focal_correction_px,keyframe,\
+ambiguous";
 
 /// One row of `frames.csv` (no line end): the frame, its timestamp, status
 /// (`first`, `tracked`, `constant-velocity (why)`, `lost (why)`), the frame its motion
 /// was measured from, counts, time per stage (ms), the motion from the previous frame
 /// (`T_{k-1,k}`: translation metres and quaternion), the position of the camera, and the
-/// disparity correction and the change of the focal length (pixels of `fx`) applied, and
+/// disparity correction (its constant, `x²` and `x` terms) and the change of the focal
+/// length (pixels of `fx`) applied, and
 /// whether the frame is a keyframe (1 or 0, [`FrameResult::keyframe`]) and whether its
 /// motion was ambiguous (1 or 0, [`FrameResult::ambiguous`]).
 #[must_use]
@@ -44,7 +46,7 @@ pub fn frames_row(r: &FrameResult) -> String {
     let reference = r.reference.map_or_else(String::new, |i| i.to_string());
     format!(
         "{},{:.6},\"{status}\",{reference},{},{},{},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},\
-         {:.6},{:.6},{:.6},{:.9},{:.9},{:.9},{:.9},{:.6},{:.6},{:.6},{},{:.4},{:.4},{:.4},{},{}",
+         {:.6},{:.6},{:.6},{:.9},{:.9},{:.9},{:.9},{:.6},{:.6},{:.6},{},{:.4},{:.4},{:.4},{:.4},{},{}",
         r.index,
         r.timestamp_s,
         c.left_features,
@@ -74,6 +76,7 @@ pub fn frames_row(r: &FrameResult) -> String {
         r.correction_model.name(),
         r.correction.offset_px,
         r.correction.quadratic_px,
+        r.correction.linear_x_px,
         r.focal_px,
         u8::from(r.keyframe),
         u8::from(r.ambiguous),
