@@ -218,6 +218,7 @@ pub fn calibration_json(d: &Decision) -> serde_json::Value {
             "f_roll_px": r.rotation_px[1],
             "f_pitch_px": r.rotation_px[2],
             "held_out_score_chi2": r.score,
+            "applied_fraction": r.weight,
         },
         "rigidity": {
             "pairs": d.pairs,

@@ -42,22 +42,37 @@ fn exact_rig_gets_no_correction() {
     assert!(drift <= 0.1, "drift {drift} %");
 }
 
-/// An exact rig creeping forward 5 cm a frame: no frame gets a correction. Each pair moves
-/// the features by less than a pixel, where the front end's own sub-pixel errors bend the
-/// pair like a disparity offset; such pairs add no rigidity evidence (before they did, a
-/// -0.7 px offset was switched on and off from frame 9 on).
+/// An exact rig creeping forward 5 cm a frame: no frame gets a horizontal correction by
+/// rigidity. Each pair moves the features by less than a pixel, where the front end's own
+/// sub-pixel errors bend the pair like a disparity offset; such pairs add no rigidity
+/// evidence (before they did, a -0.7 px offset was switched on and off from frame 9 on).
+/// The rows (one frame each, no motion needed) see a small pattern of the rendered street
+/// in frames 3-6 (a yaw of 0.2-0.3 px, held-out scores 13-18 against the margin of 10):
+/// applied by the fraction its score earns, it moves no disparity by more than 0.3 px, and
+/// the rig ends with no correction.
 #[test]
 fn exact_rig_creeping_gets_no_correction() {
     let seq = SyntheticSequence::new(24, 0.05, 0.0);
     let run = common::run_sequence(&seq, OdometryConfig::default());
     assert_eq!(run.untracked(), 0);
+    let x_edge = (RIG.cx + 0.5) / RIG.fx;
+    let y_edge = (RIG.cy + 0.5) / RIG.fy;
     for r in &run.results {
+        let horizontal = CorrectionModel::PRINCIPAL_POINT
+            .with(CorrectionModel::FOCAL)
+            .with(CorrectionModel::FOCAL_LENGTH);
         assert_eq!(
-            r.correction_model,
-            CorrectionModel::NONE,
-            "frame {}",
-            r.index
+            r.correction_model.0 & horizontal.0,
+            0,
+            "frame {}: {}",
+            r.index,
+            r.correction_model
         );
+        let worst = [(x_edge, y_edge), (0.0, 0.0), (x_edge, 0.0), (0.0, y_edge)]
+            .iter()
+            .map(|&(x, y)| r.correction.at_normalised(x, y).abs())
+            .fold(0.0, f64::max);
+        assert!(worst <= 0.3, "frame {}: {}", r.index, r.correction);
     }
     assert_eq!(run.calibration.model, CorrectionModel::NONE);
 }
@@ -100,9 +115,10 @@ fn yaw_gets_the_quadratic_term() {
 
 /// A right camera whose focal length is 2 px (0.44 %) longer than the calibration's:
 /// disparities are short by `2 px · x`, and the term linear in `x` (cause `focal`, a
-/// default candidate) is found within 15 %. It comes out short: 0.86, 1.80, 3.83 and
-/// -1.76 px for 1, 2, 4 and -2 px (its rows are scaled too, by `focal_px · y`, which the
-/// default causes leave alone).
+/// default candidate) is found within 10 %: 0.97, 2.03, 3.98 and -1.99 px for 1, 2, 4 and
+/// -2 px. (Its rows are scaled too, by `focal_px · y`; before the stereo refinement
+/// aligned the rows as well, that pulled the disparities and the term came out 10-14 %
+/// short.)
 #[test]
 fn right_focal_length_gets_the_linear_term() {
     let focal_px = 2.0;
@@ -114,7 +130,7 @@ fn right_focal_length_gets_the_linear_term() {
     assert!(d.model.has(CorrectionModel::FOCAL), "{}", d.model);
     let l = d.correction.linear_x_px;
     assert!(
-        ((l - focal_px) / focal_px).abs() <= 0.15,
+        ((l - focal_px) / focal_px).abs() <= 0.1,
         "linear term {l:.3} px, expected {focal_px:.3} px"
     );
     assert!(drift <= 0.2, "drift {drift} %");

@@ -514,10 +514,10 @@ fn finish(
             decision.correction,
             decision.model,
             decision.rows.rotation_px[0],
-            if decision.rows.yaw {
-                " (used)"
-            } else {
-                " (not used)"
+            match (decision.rows.yaw, decision.rows.weight) {
+                (false, _) => " (not used)".to_owned(),
+                (true, w) if w < 1.0 => format!(" (used, applied {:.0} %)", 100.0 * w),
+                (true, _) => " (used)".to_owned(),
             },
             decision.rows.rotation_px[1],
             decision.rows.measurements,

@@ -206,6 +206,8 @@ fn rows_covariance(rows: &RowDecision) -> MatrixK {
     if rows.pitch {
         j[(4, 2)] = 1.0;
     }
+    // Not scaled by the weight the terms are applied with (`rows.weight`): like the
+    // rigidity terms', the uncertainty stays that of the fitted terms.
     let c = nalgebra::Matrix3::from_fn(|r, s| rows.rotation_covariance[r][s]);
     j * c * j.transpose()
 }

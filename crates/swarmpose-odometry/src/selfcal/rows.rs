@@ -151,6 +151,10 @@ pub struct RowDecision {
     pub rotation_px: [f64; 3],
     /// Held-out score of the terms chosen, χ² units relative to none (lower is better).
     pub score: f64,
+    /// The fraction of the supported terms applied, from their held-out score
+    /// ([`super::applied_fraction`]): 0 for terms chosen by a hair, 1 from one margin
+    /// beyond; 0 when none is supported.
+    pub weight: f64,
     /// Row offsets used, over all frames.
     pub measurements: usize,
     /// Covariance of the supported terms of `rotation_px` (pixels², zero for the others):
@@ -160,10 +164,11 @@ pub struct RowDecision {
 }
 
 impl RowDecision {
-    /// The disparity correction of the supported rotation terms.
+    /// The disparity correction of the supported rotation terms, applied with
+    /// [`RowDecision::weight`].
     #[must_use]
     pub fn correction(&self) -> DisparityCorrection {
-        let [fpsi, ftheta, fphi] = self.rotation_px;
+        let [fpsi, ftheta, fphi] = self.rotation_px.map(|r| r * self.weight);
         let mut c = DisparityCorrection::default();
         if self.yaw {
             c.offset_px -= fpsi;
@@ -259,6 +264,7 @@ impl RowEvidence {
         decision.roll = terms.contains(&ROLL);
         decision.pitch = terms.contains(&PITCH);
         decision.score = best;
+        decision.weight = super::applied_fraction(best, terms.len() - NUISANCE.len(), margin);
         // The supported terms refitted without the unsupported ones.
         let c = all.fit(&terms);
         decision.rotation_covariance = all.rotation_covariance(&terms, &c);

@@ -35,6 +35,14 @@ pub struct StereoConfig {
     /// After the parabola, refine the disparity by Gauss-Newton on the same window
     /// ([`subpixel::refine_disparity_lk`]) (default true).
     pub gauss_newton: bool,
+    /// With `gauss_newton`, refine the disparity together with the vertical offset of the
+    /// right window ([`subpixel::refine_disparity_lk_2d`]) rather than along the row alone
+    /// (default true). A rectification that leaves the rows a fraction of a pixel apart
+    /// (every real rig here: the rows' fit shows up to a pixel at the corners of KITTI's
+    /// images) biases a disparity measured along the row by the row offset times the
+    /// slant of the texture, and driving scenes are slanted towards the vanishing point in
+    /// a pattern that shears the triangulated scene; measured in RESULTS.md.
+    pub vertical_alignment: bool,
     /// Added to every measured disparity before triangulation, pixels (default 0): corrects a
     /// calibration whose right principal point is off.
     pub disparity_offset_px: f32,
@@ -71,6 +79,7 @@ impl Default for StereoConfig {
             left_right_check: true,
             subpixel_radius: 3,
             gauss_newton: true,
+            vertical_alignment: true,
             min_point_disparity_px: 5.0,
             disparity_offset_px: 0.0,
             disparity_sigma_px: 0.25,
@@ -208,7 +217,20 @@ pub fn match_stereo<D: Descriptor>(
                     let y = lk.y.round().max(0.0) as usize;
                     // The disparity of the window at (xl, y) is that of the keypoint:
                     // a shift within a constant-disparity window does not change it.
-                    if config.gauss_newton {
+                    if config.gauss_newton && config.vertical_alignment {
+                        match subpixel::refine_disparity_lk_2d(
+                            left_img,
+                            right_img,
+                            xl,
+                            y,
+                            d,
+                            config.subpixel_radius,
+                            8,
+                        ) {
+                            Some((d, _)) => d,
+                            None => continue,
+                        }
+                    } else if config.gauss_newton {
                         match refine_disparity_lk(
                             left_img,
                             right_img,

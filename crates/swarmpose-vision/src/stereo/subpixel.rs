@@ -157,6 +157,83 @@ pub fn refine_disparity_lk(
     Some(d)
 }
 
+/// Gauss-Newton (2D Lucas-Kanade) refinement of a disparity together with the vertical
+/// offset of the right image: minimises `Σ (L(x, y) - R(x - d, y + dy))²` over the
+/// `(2 r + 1)²` window at left `(xl, y)`, from `(d0, 0)`. Returns `(d, dy)` pixels.
+/// `None` near the borders, on texture that does not fix both, when `d` moves more
+/// than one pixel from `d0` or `dy` more than two.
+#[must_use]
+pub fn refine_disparity_lk_2d(
+    left: GrayView<'_>,
+    right: GrayView<'_>,
+    xl: usize,
+    y: usize,
+    d0: f32,
+    r: usize,
+    iterations: usize,
+) -> Option<(f32, f32)> {
+    const MAX_SIDE: usize = 13;
+    let n = 2 * r + 1;
+    let m = n + 2;
+    if m > MAX_SIDE
+        || y < r + 4
+        || y + r + 4 >= left.height.min(right.height)
+        || xl < r
+        || xl + r >= left.width
+    {
+        return None;
+    }
+    let mut lw = [0f32; MAX_SIDE * MAX_SIDE];
+    for (j, yy) in (y - r..=y + r).enumerate() {
+        for (i, xx) in (xl - r..=xl + r).enumerate() {
+            lw[j * n + i] = f32::from(left.data[yy * left.width + xx]);
+        }
+    }
+    let mut rw = [0f32; MAX_SIDE * MAX_SIDE];
+    let (mut d, mut dy) = (d0, 0f32);
+    for _ in 0..iterations {
+        sample_patch(
+            right,
+            xl as f32 - d - r as f32 - 1.0,
+            y as f32 + dy - r as f32 - 1.0,
+            m,
+            &mut rw,
+        )?;
+        // J = [gx, -gy] (e = L - R(x - d, y + dy)); step = -(JᵀJ)⁻¹ Jᵀ e.
+        let (mut a, mut b, mut c, mut ex, mut ey) = (0f32, 0f32, 0f32, 0f32, 0f32);
+        for j in 0..n {
+            for i in 0..n {
+                let k = (j + 1) * m + i + 1;
+                let e = lw[j * n + i] - rw[k];
+                let gx = 0.5 * (rw[k + 1] - rw[k - 1]);
+                let gy = -0.5 * (rw[k + m] - rw[k - m]);
+                a += gx * gx;
+                b += gx * gy;
+                c += gy * gy;
+                ex += gx * e;
+                ey += gy * e;
+            }
+        }
+        let det = a * c - b * b;
+        // Texture that fixes both shifts (a NaN fails too).
+        let determined = det > 1e-6 * (a * c).max(1e-3) && a >= 1e-3;
+        if !determined {
+            return None;
+        }
+        let sd = -(c * ex - b * ey) / det;
+        let sy = -(a * ey - b * ex) / det;
+        d += sd;
+        dy += sy;
+        if (d - d0).abs() > 1.0 || dy.abs() > 2.0 {
+            return None;
+        }
+        if sd.abs() < 1e-3 && sy.abs() < 1e-3 {
+            break;
+        }
+    }
+    Some((d, dy))
+}
+
 /// Vertical offset, pixels, of the right image against the left around left pixel
 /// `(xl, y)` for a known disparity `d` (pixels): Gauss-Newton on
 /// `Σ (L(x, y) - R(x - d, y + dy))²` over the `(2 r + 1)²` window. Zero on a perfectly
@@ -385,6 +462,49 @@ mod tests {
             };
             let dy = row_offset(l, r, 40, 20, 7.0, 3).expect("measured");
             assert!((dy - true_dy).abs() < 0.05, "{true_dy}: {dy}");
+        }
+    }
+
+    /// Oblique texture, the right image shifted by a disparity and a row offset: the 1D
+    /// refinement along the row is pulled off by the row offset times the slant, the 2D
+    /// one recovers both.
+    #[test]
+    fn disparity_with_a_row_offset_is_recovered_in_2d() {
+        let (w, h) = (80usize, 40usize);
+        // Stripes slanted at 45 degrees plus a weaker pattern, so both directions are fixed.
+        let f = |x: f32, y: f32| {
+            128.0 + 60.0 * ((x + y) * 0.5).sin() + 20.0 * (x * 0.31).cos() * (y * 0.23).sin()
+        };
+        for &(true_d, true_dy) in &[(7.0f32, 0.0f32), (7.3, 0.5), (6.8, -0.6), (7.5, 1.0)] {
+            let left: Vec<u8> = (0..w * h)
+                .map(|i| f((i % w) as f32, (i / w) as f32).round() as u8)
+                .collect();
+            // R(x - d, y + dy) = L(x, y).
+            let right: Vec<u8> = (0..w * h)
+                .map(|i| f((i % w) as f32 + true_d, (i / w) as f32 - true_dy).round() as u8)
+                .collect();
+            let l = GrayView {
+                width: w,
+                height: h,
+                data: &left,
+            };
+            let r = GrayView {
+                width: w,
+                height: h,
+                data: &right,
+            };
+            let (d, dy) = refine_disparity_lk_2d(l, r, 40, 20, 7.0, 3, 10).expect("2d");
+            assert!(
+                (d - true_d).abs() < 0.05 && (dy - true_dy).abs() < 0.05,
+                "({true_d}, {true_dy}): ({d}, {dy})"
+            );
+            if true_dy.abs() >= 0.5 {
+                let d1 = refine_disparity_lk(l, r, 40, 20, 7.0, 3, 10).unwrap_or(f32::NAN);
+                assert!(
+                    (d1 - true_d).abs() >= 0.2 || d1.is_nan(),
+                    "the row alone should be pulled off: {d1} against {true_d}"
+                );
+            }
         }
     }
 }
