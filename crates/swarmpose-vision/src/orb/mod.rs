@@ -196,7 +196,10 @@ fn describe_in(
         data: &s.smooth,
     };
     // The pattern's offsets depend on the row stride only: built once per image width.
-    if s.pattern.as_ref().is_some_and(|p| p.stride() != image.width) {
+    if s.pattern
+        .as_ref()
+        .is_some_and(|p| p.stride() != image.width)
+    {
         s.pattern = None;
     }
     let pattern = s
