@@ -127,8 +127,9 @@ fn steady_state_allocations_per_frame() {
 /// measured, so that an allocation per track, feature or match (hundreds) fails it.
 const MAX_CALLS: u64 = 250;
 
-/// The same on kitti_vo_seq2 (51 frames, in memory), when present, with a bound a third
-/// above the largest measured (214 per frame on average, 255 at most; 3647 and 4766 before).
+/// The same on kitti_vo_seq2 (51 frames, in memory), when present, with a bound above
+/// the largest measured (214 per frame on average, 255 at most; 3647 and 4766 before; 304
+/// at most with the focal length among the self-calibration's default causes).
 #[test]
 fn kitti_allocations_per_frame() {
     let Some(dir) = swarmpose_datasets::dataset_for_test("kitti_vo_seq2") else {
@@ -141,7 +142,7 @@ fn kitti_allocations_per_frame() {
     let counts = per_frame(camera_of(seq.as_ref()), &frames, 0.1);
     let (_, most) = summary("kitti_vo_seq2", &counts, 15);
     assert!(
-        most <= 350,
-        "{most} allocations in a frame in steady state, more than 350"
+        most <= 400,
+        "{most} allocations in a frame in steady state, more than 400"
     );
 }
