@@ -390,7 +390,8 @@ pub fn refine(
         })
         .collect();
     // The first gate also keeps the better half, in case the start is rough.
-    let mut chi2s: Vec<f64> = fitted.iter().filter_map(|f| f.map(|(_, c)| c)).collect();
+    let mut chi2s: Vec<f64> = Vec::with_capacity(fitted.len());
+    chi2s.extend(fitted.iter().filter_map(|f| f.map(|(_, c)| c)));
     let median = if chi2s.is_empty() {
         0.0
     } else {
@@ -406,13 +407,18 @@ pub fn refine(
         active: Vec::new(),
     };
     let mut iterations = 0;
-    let mut points: Vec<Vector3<f64>> = Vec::new();
+    // Each round's buffers: the matches within the gate and their points.
+    let mut active: Vec<usize> = Vec::with_capacity(fitted.len());
+    problem.active.reserve(fitted.len());
+    let mut points: Vec<Vector3<f64>> = Vec::with_capacity(fitted.len());
     for round in 0..config.rounds.max(1) {
-        let active: Vec<usize> = fitted
-            .iter()
-            .enumerate()
-            .filter_map(|(i, f)| f.and_then(|(_, c2)| (c2 <= gate).then_some(i)))
-            .collect();
+        active.clear();
+        active.extend(
+            fitted
+                .iter()
+                .enumerate()
+                .filter_map(|(i, f)| f.and_then(|(_, c2)| (c2 <= gate).then_some(i))),
+        );
         if active.len() < needed {
             return Err(RefineError::TooFewInliers {
                 got: active.len(),
@@ -420,15 +426,17 @@ pub fn refine(
             });
         }
         let settled = round > 0 && active == problem.active;
-        problem.active = active;
+        std::mem::swap(&mut problem.active, &mut active);
         if settled {
             break;
         }
-        points = problem
-            .active
-            .iter()
-            .filter_map(|&i| fitted[i].map(|(p, _)| p))
-            .collect();
+        points.clear();
+        points.extend(
+            problem
+                .active
+                .iter()
+                .filter_map(|&i| fitted[i].map(|(p, _)| p)),
+        );
         iterations += problem.solve(&mut pose, &mut points)?;
         // Every match re-fitted to the new pose, for the next gate.
         for (i, f) in fitted.iter_mut().enumerate() {

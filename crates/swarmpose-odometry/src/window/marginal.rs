@@ -41,6 +41,7 @@ use std::collections::HashSet;
 use nalgebra::{DMatrix, DVector, Matrix6, SymmetricEigen, Vector6};
 
 use super::solve::{self, Pose, Scratch};
+use super::tracks::{Tracks, tracks_of};
 use super::{Keyframe, WindowConfig};
 use crate::refine::evidence::{Matrix6xK, VectorK};
 use crate::refine::model::{CALIBRATION_TERMS, FOCAL_TERM, StereoModel};
@@ -269,7 +270,16 @@ pub(crate) fn marginalise(
     let poses: Vec<Pose> = frames.iter().map(|f| Pose::of(&f.pose_cw)).collect();
     let mut sc = Scratch::default();
     let k = config.huber_k;
-    let tracks = solve::tracks_of(model, k, frames, &poses, |t| leaving.contains(&t), &mut sc);
+    let mut tracks = Tracks::default();
+    tracks_of(
+        model,
+        k,
+        frames,
+        &poses,
+        |t| leaving.contains(&t),
+        &mut sc,
+        &mut tracks,
+    );
     let (mut s, mut g) = if tracks.is_empty() {
         (DMatrix::zeros(6 * n, 6 * n), DVector::zeros(6 * n))
     } else {

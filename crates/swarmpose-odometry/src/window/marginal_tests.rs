@@ -7,7 +7,8 @@ use rand_chacha::ChaCha8Rng;
 use super::super::tests::{measure, model, random_points};
 use super::*;
 use crate::refine::model::{CALIBRATION_TERMS as CALIBRATION, StereoObservation};
-use crate::window::solve::{huber, linearize, relative_poses, tracks_of};
+use crate::window::solve::{huber, linearize, relative_poses};
+use crate::window::tracks::{Tracks, tracks_of};
 
 /// Five keyframes 1 m apart, turning 1 degree each, given poses off by up to 2 cm and
 /// 0.1 degree, measuring 150 points with ±0.3 px of noise; the first 40 tracks are live.
@@ -73,16 +74,25 @@ fn dense_prior(
     let k = WindowConfig::default().huber_k;
     let poses: Vec<Pose> = frames.iter().map(|f| Pose::of(&f.pose_cw)).collect();
     let mut sc = Scratch::default();
-    let tracks = tracks_of(&m, k, frames, &poses, |t| leaving.contains(&t), &mut sc);
+    let mut tracks = Tracks::default();
+    tracks_of(
+        &m,
+        k,
+        frames,
+        &poses,
+        |t| leaving.contains(&t),
+        &mut sc,
+        &mut tracks,
+    );
     let n = poses.len();
     let size = 6 * n + 3 * tracks.len();
     let (mut h, mut g) = (DMatrix::zeros(size, size), DVector::zeros(size));
     let mut hc = DMatrix::zeros(size, CALIBRATION);
     let mut rel = Vec::new();
     relative_poses(&poses, &mut rel);
-    for (i, t) in tracks.iter().enumerate() {
-        let anchor = t.obs[0].0;
-        for (slot, z) in &t.obs {
+    for (i, (t, obs)) in tracks.iter().enumerate() {
+        let anchor = obs[0].0;
+        for (slot, z) in obs {
             let j = linearize(&m, (&rel, n), anchor, *slot, &t.point, z).expect("in view");
             let (w, _) = huber(j.residual.norm_squared(), k);
             let mut row = DMatrix::zeros(3, size);

@@ -42,8 +42,9 @@
 
 pub mod marginal;
 pub mod solve;
+mod tracks;
 
-use std::collections::{HashMap, VecDeque};
+use std::collections::{HashMap, HashSet, VecDeque};
 
 use nalgebra::{Isometry3, Matrix6, UnitQuaternion};
 
@@ -187,6 +188,14 @@ pub struct Window {
     next_track: u32,
     /// The prior left by the keyframes marginalised so far ([`WindowConfig::marginalise`]).
     prior: Option<marginal::Prior>,
+    /// Buffers reused from frame to frame: the refinement's, the next
+    /// [`Window::newest_tracks`], the tracks of the newest frame, the measurement buffers
+    /// of keyframes that left, and the keyframe rule's.
+    workspace: solve::Workspace,
+    next_tracks: HashMap<usize, u32>,
+    used: HashSet<u32>,
+    spare: Vec<Vec<(u32, StereoObservation)>>,
+    rule: KeyframeRule,
 }
 
 impl Window {
@@ -207,10 +216,21 @@ impl Window {
 
     /// Empties the window (after a frame that was not tracked).
     pub fn clear(&mut self) {
-        self.frames.clear();
+        while let Some(f) = self.frames.pop_back() {
+            self.recycle(f);
+        }
         self.newest_tracks.clear();
         self.templates.clear();
         self.prior = None;
+    }
+
+    /// Keeps the measurement buffer of `frame`, which left, for a next keyframe (a few).
+    fn recycle(&mut self, frame: Keyframe) {
+        if self.spare.len() < 2 {
+            let mut buffer = frame.observations;
+            buffer.clear();
+            self.spare.push(buffer);
+        }
     }
 
     /// A new track identity.
@@ -248,18 +268,27 @@ impl Window {
         self.frames.is_empty()
     }
 
-    /// Heap bytes held: keyframes, their measurements, and the newest frame's tracks.
+    /// Heap bytes held: keyframes, their measurements, the newest frame's tracks, and the
+    /// buffers kept for the next frame.
     #[must_use]
     pub fn heap_bytes(&self) -> usize {
+        let observations = |v: &Vec<(u32, StereoObservation)>| {
+            v.capacity() * size_of::<(u32, StereoObservation)>()
+        };
         self.frames.capacity() * size_of::<Keyframe>()
             + self
                 .frames
                 .iter()
-                .map(|f| f.observations.capacity() * size_of::<(u32, StereoObservation)>())
+                .map(|f| observations(&f.observations))
                 .sum::<usize>()
-            + self.newest_tracks.capacity() * (size_of::<usize>() + size_of::<u32>())
+            + self.spare.iter().map(observations).sum::<usize>()
+            + (self.newest_tracks.capacity() + self.next_tracks.capacity())
+                * (size_of::<usize>() + size_of::<u32>())
+            + self.used.capacity() * size_of::<u32>()
             + self.templates.capacity() * (size_of::<u32>() + size_of::<PatchTemplate>())
             + self.prior.as_ref().map_or(0, marginal::Prior::heap_bytes)
+            + self.workspace.heap_bytes()
+            + self.rule.heap_bytes()
     }
 
     /// Measurements held now, over all keyframes (bounded by the window's size).
@@ -307,14 +336,20 @@ impl Window {
             .frames
             .back()
             .map_or(*pose, |r| r.pose_cw.inverse() * motion);
+        let mut observations = self.spare.pop().unwrap_or_default();
+        observations.reserve(links.len());
         let mut current = Keyframe {
             index,
             pose_cw: start.inverse(),
-            observations: Vec::with_capacity(links.len()),
+            observations,
             keyframe: false,
         };
-        let mut tracks = HashMap::with_capacity(links.len());
-        let mut used = std::collections::HashSet::with_capacity(links.len());
+        let mut tracks = std::mem::take(&mut self.next_tracks);
+        tracks.clear();
+        tracks.reserve(links.len());
+        let mut used = std::mem::take(&mut self.used);
+        used.clear();
+        used.reserve(links.len());
         let at = |z: &StereoObservation| (z.u as f32, z.v as f32);
         for l in links {
             if tracks.contains_key(&l.current_feature) {
@@ -373,18 +408,20 @@ impl Window {
                 current.observations.push((track, z));
             }
         }
-        self.newest_tracks = tracks;
+        // The map of the frame before is kept for the next frame's.
+        self.next_tracks = std::mem::replace(&mut self.newest_tracks, tracks);
         // `used` holds the tracks of the newest frame: the live ones.
         self.templates.retain(|t, _| used.contains(t));
+        self.used = used;
         // The previous frame leaves unless it is a keyframe: its tracks go on in this one.
         let dropped = self.frames.back().is_some_and(|f| !f.keyframe);
-        if dropped {
-            self.frames.pop_back();
+        if dropped && let Some(f) = self.frames.pop_back() {
+            self.recycle(f);
         }
         current.keyframe = self
             .frames
             .back()
-            .is_none_or(|last| is_keyframe(last, &current, &model.noise));
+            .is_none_or(|last| self.rule.is_keyframe(last, &current, &model.noise));
         // The oldest keyframes leave to make room: their information is marginalised into
         // the prior on the others, or discarded.
         while self.frames.len() >= self.config.keyframes {
@@ -394,11 +431,13 @@ impl Window {
                     &self.config,
                     self.frames.make_contiguous(),
                     self.prior.take(),
-                    &used,
+                    &self.used,
                     self.config.marginalise,
                 );
             }
-            self.frames.pop_front();
+            if let Some(f) = self.frames.pop_front() {
+                self.recycle(f);
+            }
         }
         self.frames.push_back(current);
         // Two frames that are a pair add nothing to the pair's refinement; two that are
@@ -412,6 +451,7 @@ impl Window {
             &self.config,
             self.frames.make_contiguous(),
             self.prior.as_ref(),
+            &mut self.workspace,
         )?;
         let newest = self.frames.back()?;
         let oldest = self.frames.front()?;
@@ -433,40 +473,56 @@ impl Window {
 /// default 0.5 px. Set a priori, not measured on any sequence.
 pub const KEYFRAME_MIN_MOVE: f64 = 3.0;
 
-/// True when `current` is to be a keyframe after `last` (the window's newest keyframe):
-/// fewer than half of `current`'s measurements are of tracks `last` sees (the window would
-/// lose them), or their median change since `last`, whitened by the noise of a difference
-/// of two measurements, is above [`KEYFRAME_MIN_MOVE`] (the frame adds a view the window
-/// does not have).
-#[must_use]
-pub(crate) fn is_keyframe(
-    last: &Keyframe,
-    current: &Keyframe,
-    noise: &crate::refine::model::PixelNoise,
-) -> bool {
-    let seen: HashMap<u32, StereoObservation> = last.observations.iter().copied().collect();
-    let (sp, sd) = (
-        std::f64::consts::SQRT_2 * noise.position_px,
-        std::f64::consts::SQRT_2 * noise.disparity_px,
-    );
-    let mut moves: Vec<f64> = current
-        .observations
-        .iter()
-        .filter_map(|(t, z)| {
+/// The keyframe rule ([`KeyframeRule::is_keyframe`]) with its buffers, reused from frame
+/// to frame.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct KeyframeRule {
+    seen: HashMap<u32, StereoObservation>,
+    moves: Vec<f64>,
+}
+
+impl KeyframeRule {
+    /// True when `current` is to be a keyframe after `last` (the window's newest
+    /// keyframe): fewer than half of `current`'s measurements are of tracks `last` sees
+    /// (the window would lose them), or their median change since `last`, whitened by the
+    /// noise of a difference of two measurements, is above [`KEYFRAME_MIN_MOVE`] (the frame
+    /// adds a view the window does not have).
+    #[must_use]
+    pub(crate) fn is_keyframe(
+        &mut self,
+        last: &Keyframe,
+        current: &Keyframe,
+        noise: &crate::refine::model::PixelNoise,
+    ) -> bool {
+        let Self { seen, moves } = self;
+        seen.clear();
+        seen.extend(last.observations.iter().copied());
+        let (sp, sd) = (
+            std::f64::consts::SQRT_2 * noise.position_px,
+            std::f64::consts::SQRT_2 * noise.disparity_px,
+        );
+        moves.clear();
+        moves.extend(current.observations.iter().filter_map(|(t, z)| {
             seen.get(t).map(|y| {
                 (((z.u - y.u) / sp).powi(2)
                     + ((z.v - y.v) / sp).powi(2)
                     + ((z.d - y.d) / sd).powi(2))
                 .sqrt()
             })
-        })
-        .collect();
-    if moves.is_empty() || 2 * moves.len() < current.observations.len() {
-        return true;
+        }));
+        if moves.is_empty() || 2 * moves.len() < current.observations.len() {
+            return true;
+        }
+        let mid = moves.len() / 2;
+        let (_, median, _) = moves.select_nth_unstable_by(mid, f64::total_cmp);
+        *median > KEYFRAME_MIN_MOVE
     }
-    let mid = moves.len() / 2;
-    let (_, median, _) = moves.select_nth_unstable_by(mid, f64::total_cmp);
-    *median > KEYFRAME_MIN_MOVE
+
+    /// Heap bytes held.
+    fn heap_bytes(&self) -> usize {
+        self.seen.capacity() * (size_of::<u32>() + size_of::<StereoObservation>())
+            + self.moves.capacity() * size_of::<f64>()
+    }
 }
 
 #[cfg(test)]

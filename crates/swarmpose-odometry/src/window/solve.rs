@@ -16,14 +16,14 @@
 //! `S = H_ξξ − Σ_points H_ξp H_pp⁻¹ H_pξ` is dense, `6 (K − 1)` square, and solved by
 //! Cholesky with Levenberg-Marquardt damping; points follow by back-substitution.
 
-use std::collections::HashMap;
-
+use nalgebra::allocator::Allocator;
 use nalgebra::{
-    DMatrix, DVector, Isometry3, Matrix3, Matrix6, SMatrix, Translation3, UnitQuaternion, Vector3,
-    Vector6,
+    DMatrix, DVector, DefaultAllocator, Dim, Dyn, Isometry3, Matrix3, Matrix6, OMatrix, SMatrix,
+    Translation3, UnitQuaternion, Vector3, Vector6,
 };
 
 use super::marginal::Prior;
+use super::tracks::{Tracks, tracks_of};
 use super::{Keyframe, WindowConfig, WindowReport};
 use crate::refine::evidence::{Matrix6xK, MatrixK};
 use crate::refine::model::{
@@ -65,13 +65,6 @@ impl Pose {
         let rot = self.rot * a.rot.transpose();
         (rot, self.trans - rot * a.trans)
     }
-}
-
-/// A track seen at least twice in the window: its measurements (keyframe slot, the
-/// measurement), the first in its anchor keyframe.
-pub(super) struct Track {
-    pub(super) obs: Vec<(usize, StereoObservation)>,
-    pub(super) point: Vector3<f64>,
 }
 
 /// Huber weight and cost of a squared whitened norm.
@@ -146,13 +139,13 @@ fn cost(
     model: &StereoModel,
     k: f64,
     (rel, n): (&[Relative], usize),
-    tracks: &[Track],
+    tracks: &Tracks,
     points: &[Vector3<f64>],
 ) -> f64 {
     let mut total = 0.0;
-    for (t, p) in tracks.iter().zip(points) {
-        let anchor = t.obs[0].0;
-        for (slot, z) in &t.obs {
+    for ((_, obs), p) in tracks.iter().zip(points) {
+        let anchor = obs[0].0;
+        for (slot, z) in obs {
             let r2 = if *slot == anchor {
                 model.residual2_in_reference(p, z)
             } else {
@@ -170,6 +163,7 @@ fn cost(
 
 /// The blocks of one track kept for back-substitution; its `H_pξ` blocks are
 /// `Scratch::hpx[start..end]`.
+#[derive(Debug, Clone)]
 struct Eliminated {
     hpp_inv: Matrix3<f64>,
     gp: Vector3<f64>,
@@ -177,10 +171,11 @@ struct Eliminated {
     end: usize,
 }
 
-/// Buffers of one refinement, reused over its iterations.
-#[derive(Default)]
+/// Buffers of one refinement, reused over its iterations (and, in the window's
+/// [`Workspace`], from frame to frame).
+#[derive(Debug, Clone, Default)]
 pub(super) struct Scratch {
-    rel: Vec<Relative>,
+    pub(super) rel: Vec<Relative>,
     elim: Vec<Eliminated>,
     /// `H_pξ` per track and pose variable (index of the variable, 3x6 block).
     hpx: Vec<(usize, Matrix3x6)>,
@@ -194,6 +189,9 @@ pub(super) struct Scratch {
     /// The reduced system's pose-by-calibration blocks `S_ξc` (points eliminated), one
     /// per pose variable: how the calibration terms pull on each pose.
     pub(super) pose_calibration: Vec<Matrix6xK>,
+    /// The reduced system of the last build: `S` and the gradient `g`.
+    s: DMatrix<f64>,
+    g: DVector<f64>,
 }
 
 /// Adds `block` to the `H_pξ` of variable `v` among `hpx[start..]`.
@@ -205,16 +203,16 @@ fn add_hpx(hpx: &mut Vec<(usize, Matrix3x6)>, start: usize, v: usize, block: &Ma
 }
 
 /// The reduced system at `poses` and `points`, over the poses after the first `fixed`
-/// (held fixed: 1 in the refinement, 0 to marginalise the first); `None` if a point left
-/// a view or its block is singular.
+/// (held fixed: 1 in the refinement, 0 to marginalise the first), into `sc.s` and `sc.g`;
+/// `None` if a point left a view or its block is singular.
 fn build(
     model: &StereoModel,
     k: f64,
     (poses, fixed): (&[Pose], usize),
-    tracks: &[Track],
+    tracks: &Tracks,
     points: &[Vector3<f64>],
     sc: &mut Scratch,
-) -> Option<(DMatrix<f64>, DVector<f64>)> {
+) -> Option<()> {
     let n = poses.len();
     let m = n.checked_sub(fixed)?;
     relative_poses(poses, &mut sc.rel);
@@ -230,13 +228,13 @@ fn build(
     sc.pose_calibration.resize(m, Matrix6xK::zeros());
     // Variable of keyframe slot `i`: the first `fixed` slots have none.
     let var = |slot: usize| slot.checked_sub(fixed);
-    for (t, p) in tracks.iter().zip(points) {
-        let anchor = t.obs[0].0;
+    for ((_, obs), p) in tracks.iter().zip(points) {
+        let anchor = obs[0].0;
         let mut hpp = Matrix3::zeros();
         let mut gp = Vector3::zeros();
         let mut hpc = SMatrix::<f64, 3, CALIBRATION_TERMS>::zeros();
         let start = sc.hpx.len();
-        for (slot, z) in &t.obs {
+        for (slot, z) in obs {
             let j = linearize(model, (&sc.rel, n), anchor, *slot, p, z)?;
             let r2 = j.residual.norm_squared();
             let (w, rho) = huber(r2, k);
@@ -281,64 +279,34 @@ fn build(
             end,
         });
     }
-    let s = DMatrix::from_fn(6 * m, 6 * m, |r, c| {
-        sc.blocks[(r / 6) * m + c / 6][(r % 6, c % 6)]
-    });
-    let g = DVector::from_fn(6 * m, |r, _| sc.gradient[r / 6][r % 6]);
-    Some((s, g))
+    let size = 6 * m;
+    if sc.s.shape() != (size, size) {
+        sc.s = DMatrix::zeros(size, size);
+    }
+    if sc.g.len() != size {
+        sc.g = DVector::zeros(size);
+    }
+    for c in 0..size {
+        for r in 0..size {
+            sc.s[(r, c)] = sc.blocks[(r / 6) * m + c / 6][(r % 6, c % 6)];
+        }
+    }
+    for r in 0..size {
+        sc.g[r] = sc.gradient[r / 6][r % 6];
+    }
+    Some(())
 }
 
-/// The tracks seen at least twice in `frames` (posed at `poses`) whose identity passes
-/// `keep`, each with its point anchored in its first keyframe and fitted to the poses by
-/// one Gauss-Newton step on its own measurements (more changed no result in the
-/// ablations of RESULTS.md, and cost as much as a Levenberg-Marquardt iteration each), in
-/// a deterministic order. Leaves `sc.rel` at `poses`.
-pub(super) fn tracks_of(
-    model: &StereoModel,
-    k: f64,
-    frames: &[Keyframe],
-    poses: &[Pose],
-    keep: impl Fn(u32) -> bool,
-    sc: &mut Scratch,
-) -> Vec<Track> {
-    let mut by_track: HashMap<u32, Vec<(usize, StereoObservation)>> = HashMap::new();
-    for (slot, f) in frames.iter().enumerate() {
-        for (t, z) in f.observations.iter().filter(|(t, _)| keep(*t)) {
-            by_track.entry(*t).or_default().push((slot, *z));
-        }
+/// `dst = src`, in `dst`'s buffer when it has the size.
+fn assign<C: Dim>(dst: &mut OMatrix<f64, Dyn, C>, src: &OMatrix<f64, Dyn, C>)
+where
+    DefaultAllocator: Allocator<Dyn, C>,
+{
+    if dst.shape() == src.shape() {
+        dst.copy_from(src);
+    } else {
+        *dst = src.clone();
     }
-    let mut tracks: Vec<Track> = by_track
-        .into_values()
-        .filter(|obs| obs.len() >= 2)
-        .filter_map(|obs| {
-            let point = model.anchor(&obs[0].1);
-            (point.z > 0.0 && point.iter().all(|v| v.is_finite())).then_some(Track { obs, point })
-        })
-        .collect();
-    // Deterministic order (the map's is not).
-    tracks.sort_unstable_by_key(|t| {
-        let (s, z) = t.obs[0];
-        (s, (z.u * 64.0) as i64, (z.v * 64.0) as i64)
-    });
-    let n = poses.len();
-    relative_poses(poses, &mut sc.rel);
-    for t in &mut tracks {
-        let anchor = t.obs[0].0;
-        let mut h = Matrix3::zeros();
-        let mut g = Vector3::zeros();
-        for (slot, z) in &t.obs {
-            if let Some(j) = linearize(model, (&sc.rel, n), anchor, *slot, &t.point, z) {
-                let (w, _) = huber(j.residual.norm_squared(), k);
-                h += j.d_point.transpose() * j.d_point * w;
-                g += j.d_point.transpose() * j.residual * w;
-            }
-        }
-        if let Some(inv) = h.try_inverse() {
-            t.point -= inv * g;
-        }
-    }
-    tracks.retain(|t| t.point.z >= 0.0 && t.point.iter().all(|v| v.is_finite()));
-    tracks
 }
 
 /// The linearised system of `tracks` (from [`tracks_of`]) over every pose of `poses`,
@@ -349,11 +317,49 @@ pub(super) fn linearised_system(
     model: &StereoModel,
     k: f64,
     poses: &[Pose],
-    tracks: &[Track],
+    tracks: &Tracks,
     sc: &mut Scratch,
 ) -> Option<(DMatrix<f64>, DVector<f64>)> {
-    let points: Vec<Vector3<f64>> = tracks.iter().map(|t| t.point).collect();
-    build(model, k, (poses, 0), tracks, &points, sc)
+    let points: Vec<Vector3<f64>> = tracks.list.iter().map(|t| t.point).collect();
+    build(model, k, (poses, 0), tracks, &points, sc)?;
+    Some((std::mem::take(&mut sc.s), std::mem::take(&mut sc.g)))
+}
+
+/// The buffers of the window's refinement, kept from frame to frame: their sizes follow
+/// the window's contents, which are bounded.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Workspace {
+    sc: Scratch,
+    tracks: Tracks,
+    poses: Vec<Pose>,
+    trial: Vec<Pose>,
+    points: Vec<Vector3<f64>>,
+    trial_points: Vec<Vector3<f64>>,
+    trial_rel: Vec<Relative>,
+    /// The damped system, factorised in place.
+    damped: DMatrix<f64>,
+    dx: DVector<f64>,
+    /// The newest pose's columns of `S⁻¹` ([`newest_covariance`]).
+    columns: DMatrix<f64>,
+}
+
+impl Workspace {
+    /// Heap bytes held.
+    pub(crate) fn heap_bytes(&self) -> usize {
+        let sc = &self.sc;
+        sc.rel.capacity() * size_of::<Relative>()
+            + sc.elim.capacity() * size_of::<Eliminated>()
+            + sc.hpx.capacity() * size_of::<(usize, Matrix3x6)>()
+            + sc.blocks.capacity() * size_of::<Matrix6<f64>>()
+            + sc.gradient.capacity() * size_of::<Vector6<f64>>()
+            + sc.pose_calibration.capacity() * size_of::<Matrix6xK>()
+            + (sc.s.len() + sc.g.len() + self.damped.len() + self.dx.len() + self.columns.len())
+                * size_of::<f64>()
+            + self.tracks.heap_bytes()
+            + (self.poses.capacity() + self.trial.capacity()) * size_of::<Pose>()
+            + (self.points.capacity() + self.trial_points.capacity()) * size_of::<Vector3<f64>>()
+            + self.trial_rel.capacity() * size_of::<Relative>()
+    }
 }
 
 /// Refines the window's poses (all but the oldest) and its tracks' points in place, with
@@ -366,17 +372,31 @@ pub(crate) fn refine_window(
     config: &WindowConfig,
     frames: &mut [Keyframe],
     prior: Option<&Prior>,
+    ws: &mut Workspace,
 ) -> Option<WindowReport> {
     if frames.len() < 2 {
         return None;
     }
     let k = config.huber_k;
-    let mut poses: Vec<Pose> = frames.iter().map(|f| Pose::of(&f.pose_cw)).collect();
+    let Workspace {
+        sc,
+        tracks,
+        poses,
+        trial,
+        points,
+        trial_points,
+        trial_rel,
+        damped,
+        dx,
+        columns,
+    } = ws;
+    poses.clear();
+    poses.extend(frames.iter().map(|f| Pose::of(&f.pose_cw)));
     let n = poses.len();
-    let mut sc = Scratch::default();
-    let tracks = tracks_of(model, k, frames, &poses, |_| true, &mut sc);
-    let observations = tracks.iter().map(|t| t.obs.len()).sum();
-    let mut points: Vec<Vector3<f64>> = tracks.iter().map(|t| t.point).collect();
+    tracks_of(model, k, frames, poses, |_| true, sc, tracks);
+    let observations = tracks.observations();
+    points.clear();
+    points.extend(tracks.list.iter().map(|t| t.point));
     if tracks.is_empty() {
         return None;
     }
@@ -388,69 +408,75 @@ pub(crate) fn refine_window(
             .as_ref()
             .map_or(0.0, |(p, slots)| p.energy(slots, poses, &terms))
     };
-    let mut trial_rel = Vec::with_capacity(n * n);
-    let mut trial_points = points.clone();
+    trial_points.clear();
+    trial_points.extend_from_slice(points);
     let mut lambda = 1e-4;
     let mut iterations = 0;
     let mut covariance = None;
     'outer: for _ in 0..config.max_iterations {
         iterations += 1;
         // The cost at the current state comes with its linearisation.
-        let (mut s, mut g) = build(model, k, (&poses, 1), &tracks, &points, &mut sc)?;
+        build(model, k, (poses, 1), tracks, points, sc)?;
         if let Some((p, slots)) = &prior {
             p.add_to(
-                (slots, &poses, 1),
+                (slots, poses, 1),
                 &terms,
-                (&mut s, &mut g),
+                (&mut sc.s, &mut sc.g),
                 &mut sc.pose_calibration,
             );
         }
-        let current = sc.cost + prior_energy(&poses);
+        let current = sc.cost + prior_energy(poses);
         if !current.is_finite() {
             return None;
         }
         if iterations == 1 {
             covariance = newest_covariance(
-                &s,
+                &sc.s,
                 (sc.chi2, observations, tracks.len()),
                 &sc.pose_calibration,
                 calibration_covariance,
+                (damped, columns),
             );
         }
         loop {
             if lambda > 1e8 {
                 break 'outer;
             }
-            let mut damped = s.clone();
+            assign(damped, &sc.s);
             for d in 0..damped.nrows() {
                 damped[(d, d)] *= 1.0 + lambda;
                 damped[(d, d)] += 1e-12;
             }
-            let Some(chol) = damped.cholesky() else {
+            // Factorised in its own buffer, which is taken back after the solve.
+            let Some(chol) = std::mem::take(damped).cholesky() else {
                 lambda *= 10.0;
                 continue;
             };
-            let dx = -chol.solve(&g);
-            let mut trial = poses.clone();
+            assign(dx, &sc.g);
+            chol.solve_mut(dx);
+            dx.neg_mut();
+            *damped = chol.unpack_dirty();
+            trial.clear();
+            trial.extend_from_slice(poses);
             for (v, pose) in trial.iter_mut().enumerate().skip(1) {
                 let o = 6 * (v - 1);
                 let nu = Vector3::new(dx[o], dx[o + 1], dx[o + 2]);
                 let om = Vector3::new(dx[o + 3], dx[o + 4], dx[o + 5]);
                 *pose = pose.moved(&nu, &om);
             }
-            for ((tp, p), e) in trial_points.iter_mut().zip(&points).zip(&sc.elim) {
+            for ((tp, p), e) in trial_points.iter_mut().zip(points.iter()).zip(&sc.elim) {
                 let mut rhs = e.gp;
                 for (v, b) in &sc.hpx[e.start..e.end] {
                     rhs += b * dx.fixed_rows::<6>(6 * v);
                 }
                 *tp = p - e.hpp_inv * rhs;
             }
-            relative_poses(&trial, &mut trial_rel);
-            let c = cost(model, k, (&trial_rel, n), &tracks, &trial_points) + prior_energy(&trial);
+            relative_poses(trial, trial_rel);
+            let c = cost(model, k, (trial_rel, n), tracks, trial_points) + prior_energy(trial);
             if c < current {
                 let done = current - c < 1e-6 * current;
-                poses = trial;
-                points.copy_from_slice(&trial_points);
+                std::mem::swap(poses, trial);
+                points.copy_from_slice(trial_points);
                 lambda = (lambda * 0.1).max(1e-9);
                 if done {
                     break 'outer;
@@ -460,7 +486,7 @@ pub(crate) fn refine_window(
             lambda *= 10.0;
         }
     }
-    for (f, p) in frames.iter_mut().zip(&poses) {
+    for (f, p) in frames.iter_mut().zip(poses.iter()) {
         f.pose_cw = p.isometry();
     }
     Some(WindowReport {
@@ -480,25 +506,32 @@ pub(crate) fn refine_window(
 /// the pixel noise is as modelled), as the pair refinement's. The calibration's part:
 /// the solution moves with the calibration terms `c` as `∂ξ/∂c = −S⁻¹ S_ξc`, so their
 /// covariance `Σ_c` adds `G Σ_c Gᵀ` with `G` the newest pose's rows of `S⁻¹ S_ξc`.
-/// `None` when `S` is not positive definite.
+/// `None` when `S` is not positive definite. `factor` and `columns` are buffers.
 fn newest_covariance(
     s: &DMatrix<f64>,
     (chi2, observations, tracks): (f64, usize, usize),
     pose_calibration: &[Matrix6xK],
     calibration_covariance: &MatrixK,
+    (factor, columns): (&mut DMatrix<f64>, &mut DMatrix<f64>),
 ) -> Option<Matrix6<f64>> {
     let n = s.nrows();
     if n < 6 || pose_calibration.len() * 6 != n {
         return None;
     }
     let dof = (3 * observations).checked_sub(3 * tracks + n)?.max(1) as f64;
-    let chol = s.clone().cholesky()?;
-    let mut unit = DMatrix::zeros(n, 6);
+    assign(factor, s);
+    let chol = std::mem::take(factor).cholesky()?;
+    if columns.shape() == (n, 6) {
+        columns.fill(0.0);
+    } else {
+        *columns = DMatrix::zeros(n, 6);
+    }
     for i in 0..6 {
-        unit[(n - 6 + i, i)] = 1.0;
+        columns[(n - 6 + i, i)] = 1.0;
     }
     // The newest pose's columns of S⁻¹ (its rows, S being symmetric).
-    let columns = chol.solve(&unit);
+    chol.solve_mut(columns);
+    *factor = chol.unpack_dirty();
     let block: Matrix6<f64> = columns.fixed_view::<6, 6>(n - 6, 0).into_owned();
     let mut cov = (block + block.transpose()) * (0.5 * chi2 / dof);
     let mut g = Matrix6xK::zeros();
@@ -511,58 +544,5 @@ fn newest_covariance(
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use nalgebra::Rotation3;
-
-    /// Central differences of the residual against both pose Jacobians.
-    #[test]
-    fn pose_jacobians_match_finite_differences() {
-        let model = crate::refine::model::test_model(Default::default());
-        let pose = |r: (f64, f64, f64), t: [f64; 3]| Pose {
-            rot: *Rotation3::from_euler_angles(r.0, r.1, r.2).matrix(),
-            trans: Vector3::from(t),
-        };
-        let poses = [
-            pose((0.0, 0.0, 0.0), [0.0, 0.0, 0.0]),
-            pose((0.01, -0.03, 0.02), [0.1, -0.05, -0.9]),
-            pose((0.02, -0.07, 0.01), [0.3, -0.02, -1.8]),
-        ];
-        let p = Vector3::new(0.2, -0.1, 1.0 / 14.0);
-        let z = StereoObservation {
-            u: 740.0,
-            v: 120.0,
-            d: 27.0,
-        };
-        let (anchor, slot) = (1, 2);
-        let mut rel = Vec::new();
-        relative_poses(&poses, &mut rel);
-        let j = linearize(&model, (&rel, 3), anchor, slot, &p, &z).expect("in view");
-        let (dj, da) = j.poses.expect("two keyframes");
-        let h = 1e-6;
-        for (which, analytic) in [(slot, dj), (anchor, da)] {
-            for k in 0..6 {
-                let residual = |s: f64| {
-                    let mut xi = [0.0; 6];
-                    xi[k] = s * h;
-                    let mut moved = poses;
-                    moved[which] = poses[which].moved(
-                        &Vector3::new(xi[0], xi[1], xi[2]),
-                        &Vector3::new(xi[3], xi[4], xi[5]),
-                    );
-                    let mut rel = Vec::new();
-                    relative_poses(&moved, &mut rel);
-                    linearize(&model, (&rel, 3), anchor, slot, &p, &z)
-                        .expect("in view")
-                        .residual
-                };
-                let num = (residual(1.0) - residual(-1.0)) / (2.0 * h);
-                assert!(
-                    (num - analytic.column(k)).norm() < 1e-4 * (1.0 + num.norm()),
-                    "keyframe {which}, column {k}: {num} vs {}",
-                    analytic.column(k)
-                );
-            }
-        }
-    }
-}
+#[path = "solve_tests.rs"]
+mod tests;

@@ -280,7 +280,8 @@ fn frames_that_move_or_lose_tracks_are_keyframes() {
     let still = frame((0..10).map(|t| (t, z(100.2 + f64::from(t)))).collect());
     let moved = frame((0..10).map(|t| (t, z(105.0 + f64::from(t)))).collect());
     let new_tracks = frame((6..16).map(|t| (t, z(100.0 + f64::from(t)))).collect());
-    assert!(!is_keyframe(&last, &still, &noise));
-    assert!(is_keyframe(&last, &moved, &noise));
-    assert!(is_keyframe(&last, &new_tracks, &noise));
+    let mut rule = KeyframeRule::default();
+    assert!(!rule.is_keyframe(&last, &still, &noise));
+    assert!(rule.is_keyframe(&last, &moved, &noise));
+    assert!(rule.is_keyframe(&last, &new_tracks, &noise));
 }

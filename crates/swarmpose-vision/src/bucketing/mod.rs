@@ -33,6 +33,32 @@ pub fn bucket_indices(
     height: usize,
     config: &BucketConfig,
 ) -> Vec<usize> {
+    let mut kept = Vec::new();
+    bucket_indices_into(
+        keypoints,
+        (width, height),
+        config,
+        &mut BucketScratch::default(),
+        &mut kept,
+    );
+    kept
+}
+
+/// Buffers of [`bucket_indices_into`], reused between calls.
+#[derive(Debug, Clone, Default)]
+pub struct BucketScratch {
+    cells: Vec<usize>,
+    order: Vec<usize>,
+}
+
+/// [`bucket_indices`] into `kept` (cleared first), with buffers reused between calls.
+pub fn bucket_indices_into(
+    keypoints: &[Keypoint],
+    (width, height): (usize, usize),
+    config: &BucketConfig,
+    scratch: &mut BucketScratch,
+    kept: &mut Vec<usize>,
+) {
     let cw = config.cell_width.max(1);
     let ch = config.cell_height.max(1);
     let cols = width.div_ceil(cw).max(1);
@@ -44,18 +70,22 @@ pub fn bucket_indices(
     };
     // Each keypoint's cell once (not in every comparison). The order is total (ties by
     // index), so an unstable sort gives the same order.
-    let cells: Vec<usize> = keypoints.iter().map(cell_of).collect();
-    let mut order: Vec<usize> = (0..keypoints.len()).collect();
+    let BucketScratch { cells, order } = scratch;
+    cells.clear();
+    cells.extend(keypoints.iter().map(cell_of));
+    order.clear();
+    order.extend(0..keypoints.len());
     order.sort_unstable_by(|&a, &b| {
         cells[a]
             .cmp(&cells[b])
             .then(keypoints[b].response.total_cmp(&keypoints[a].response))
             .then(a.cmp(&b))
     });
-    let mut kept = Vec::with_capacity(keypoints.len().min(cols * rows * config.per_cell));
+    kept.clear();
+    kept.reserve(keypoints.len().min(cols * rows * config.per_cell));
     let mut current = usize::MAX;
     let mut count = 0;
-    for i in order {
+    for &i in order.iter() {
         let c = cells[i];
         if c != current {
             current = c;
@@ -67,7 +97,6 @@ pub fn bucket_indices(
         }
     }
     kept.sort_unstable();
-    kept
 }
 
 /// [`bucket_indices`] applied to keypoints and their descriptors together.

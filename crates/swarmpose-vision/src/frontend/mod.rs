@@ -282,10 +282,19 @@ impl<E: FeatureExtractor> Frontend<E> {
         right_img: GrayView<'_>,
     ) -> StereoFrame<E::Descriptor> {
         let matches = match_stereo(left, right, left_img, right_img, &self.rig, &self.stereo);
+        let n = matches.len();
         let mut f = StereoFrame {
+            left_keypoints: Vec::with_capacity(n),
+            left_descriptors: Vec::with_capacity(n),
+            right_keypoints: Vec::with_capacity(n),
+            right_descriptors: Vec::with_capacity(n),
+            points: Vec::with_capacity(n),
+            disparities_px: Vec::with_capacity(n),
+            row_offsets_px: Vec::with_capacity(n),
+            sigmas_m: Vec::with_capacity(n),
+            covariances: Vec::with_capacity(n),
             n_left_features: left.len(),
             n_right_features: right.len(),
-            ..StereoFrame::default()
         };
         for m in matches {
             f.left_keypoints.push(left.keypoints[m.left]);

@@ -70,14 +70,23 @@ fn run4(p: [u8; 8], side: impl Fn(u8) -> bool) -> bool {
         | (m70 & m12)
 }
 
+/// Buffers of [`fast9`], reused between calls: the score of every pixel, the corners
+/// before the non-maximum suppression and a row's quick rejection.
+#[derive(Debug, Clone, Default)]
+pub struct FastScratch {
+    scores: Vec<u16>,
+    candidates: Vec<Corner>,
+    pass: Vec<u8>,
+}
+
 /// FAST-9 corners at least `border` pixels (and at least 3) from every edge, after a
-/// 3x3 non-maximum suppression on the score. `scores` is scratch space reused between
-/// calls; corners are appended to `out` in raster order.
+/// 3x3 non-maximum suppression on the score. `scratch` is reused between calls; `out` is
+/// cleared and receives the corners in raster order.
 pub fn fast9(
     img: GrayView<'_>,
     threshold: u8,
     border: usize,
-    scores: &mut Vec<u16>,
+    scratch: &mut FastScratch,
     out: &mut Vec<Corner>,
 ) {
     let (w, h) = (img.width, img.height);
@@ -86,13 +95,19 @@ pub fn fast9(
     if w <= 2 * border || h <= 2 * border {
         return;
     }
+    let FastScratch {
+        scores,
+        candidates,
+        pass,
+    } = scratch;
     scores.clear();
     scores.resize(w * h, 0);
     let offs: [isize; 16] = CIRCLE.map(|(dx, dy)| dy * w as isize + dx);
     let d = img.data;
-    let mut candidates: Vec<Corner> = Vec::new();
+    candidates.clear();
     let (x0, n) = (border, w - 2 * border);
-    let mut pass = vec![0u8; n];
+    pass.clear();
+    pass.resize(n, 0);
     for y in border..h - border {
         // Quick rejection: an arc of 9 of the 16 circle points covers 4 or 5
         // consecutive even points (every other one, clockwise from the top) and 4 or 5
@@ -151,7 +166,7 @@ pub fn fast9(
             candidates.push(Corner { x, y, score: s });
         }
     }
-    for c in candidates {
+    for &c in candidates.iter() {
         let i = c.y * w + c.x;
         let s = c.score;
         // Strictly greater than the neighbours before it, at least the ones after: one
@@ -305,7 +320,7 @@ mod tests {
             data: &data,
         };
         for t in [1, 10, 20, 60, 250] {
-            let (mut s, mut out) = (Vec::new(), Vec::new());
+            let (mut s, mut out) = (FastScratch::default(), Vec::new());
             fast9(img, t, 3, &mut s, &mut out);
             assert!(t > 60 || out.len() > 20, "{} corners at {t}", out.len());
             assert_eq!(out, fast9_by_definition(img, t, 3), "threshold {t}");
@@ -326,7 +341,7 @@ mod tests {
             height: h,
             data: &data,
         };
-        let (mut s, mut out) = (Vec::new(), Vec::new());
+        let (mut s, mut out) = (FastScratch::default(), Vec::new());
         fast9(img, 20, 3, &mut s, &mut out);
         assert!(!out.is_empty());
         assert!(

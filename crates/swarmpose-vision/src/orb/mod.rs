@@ -8,12 +8,14 @@
 pub mod brief;
 pub mod fast;
 
-use crate::bucketing::{BucketConfig, bucket_indices};
+use std::sync::{Mutex, TryLockError};
+
+use crate::bucketing::{BucketConfig, BucketScratch, bucket_indices_into};
 use crate::features::{BinaryDescriptor, FeatureExtractor, Features, GrayView, Keypoint};
 use crate::image::blur5;
 
 use brief::{PATTERN_RADIUS, RotatedPattern};
-use fast::{Corner, centroid_angle, disc_half_widths, fast9, harris};
+use fast::{Corner, FastScratch, centroid_angle, disc_half_widths, fast9, harris};
 
 /// Radius of the orientation disc, pixels (ORB's half patch size).
 pub const ORIENTATION_RADIUS: usize = 15;
@@ -48,6 +50,50 @@ impl Default for OrbConfig {
 pub struct OrbExtractor {
     /// Settings.
     pub config: OrbConfig,
+    buffers: Buffers,
+}
+
+/// The detector's and descriptor's working memory: FAST scores and corners, the
+/// keypoints before bucketing, the smoothed image and the rotated test pattern.
+#[derive(Default)]
+struct Scratch {
+    fast: FastScratch,
+    corners: Vec<Corner>,
+    keypoints: Vec<Keypoint>,
+    bucket: BucketScratch,
+    kept: Vec<usize>,
+    blur: Vec<u16>,
+    smooth: Vec<u8>,
+    pattern: Option<RotatedPattern>,
+}
+
+/// [`Scratch`] kept by an extractor between images, so that extracting allocates little
+/// more than its results. A call made while another thread uses them works in buffers of
+/// its own (an extractor shared between threads never waits). A clone starts empty.
+#[derive(Default)]
+struct Buffers(Mutex<Scratch>);
+
+impl Buffers {
+    fn with<R>(&self, f: impl FnOnce(&mut Scratch) -> R) -> R {
+        match self.0.try_lock() {
+            Ok(mut s) => f(&mut s),
+            // Every use starts by clearing what it uses: a panic's leftovers do no harm.
+            Err(TryLockError::Poisoned(p)) => f(&mut p.into_inner()),
+            Err(TryLockError::WouldBlock) => f(&mut Scratch::default()),
+        }
+    }
+}
+
+impl Clone for Buffers {
+    fn clone(&self) -> Self {
+        Self::default()
+    }
+}
+
+impl std::fmt::Debug for Buffers {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Buffers")
+    }
 }
 
 /// Distance of keypoints from every edge, pixels: the orientation disc and the rotated
@@ -65,43 +111,51 @@ impl OrbExtractor {
     /// An extractor with these settings.
     #[must_use]
     pub fn new(config: OrbConfig) -> Self {
-        Self { config }
+        Self {
+            config,
+            buffers: Buffers::default(),
+        }
     }
 
     /// Detection: FAST-9 corners, Harris response, bucketing, cap, orientation.
     /// Keypoints are at integer pixels, [`BORDER`] away from every edge.
     #[must_use]
     pub fn detect(&self, image: GrayView<'_>) -> Vec<Keypoint> {
-        let mut scores = Vec::new();
-        let mut corners: Vec<Corner> = Vec::new();
+        self.buffers.with(|s| self.detect_in(image, s))
+    }
+
+    fn detect_in(&self, image: GrayView<'_>, s: &mut Scratch) -> Vec<Keypoint> {
         fast9(
             image,
             self.config.fast_threshold,
             BORDER,
-            &mut scores,
-            &mut corners,
+            &mut s.fast,
+            &mut s.corners,
         );
-        let rank = self.config.bucketing.is_some() || corners.len() > self.config.max_features;
-        let mut kps: Vec<Keypoint> = corners
-            .iter()
-            .map(|c| Keypoint {
-                x: c.x as f32,
-                y: c.y as f32,
-                scale: ORIENTATION_RADIUS as f32,
-                angle: 0.0,
-                // Harris only ranks corners for bucketing and the cap.
-                response: if rank {
-                    harris(image, c.x, c.y)
-                } else {
-                    f32::from(c.score)
-                },
-                octave: 0,
-            })
-            .collect();
-        if let Some(b) = &self.config.bucketing {
-            let keep = bucket_indices(&kps, image.width, image.height, b);
-            kps = keep.iter().map(|&i| kps[i]).collect();
-        }
+        let rank = self.config.bucketing.is_some() || s.corners.len() > self.config.max_features;
+        let keypoint = |c: &Corner| Keypoint {
+            x: c.x as f32,
+            y: c.y as f32,
+            scale: ORIENTATION_RADIUS as f32,
+            angle: 0.0,
+            // Harris only ranks corners for bucketing and the cap.
+            response: if rank {
+                harris(image, c.x, c.y)
+            } else {
+                f32::from(c.score)
+            },
+            octave: 0,
+        };
+        let mut kps: Vec<Keypoint> = match &self.config.bucketing {
+            Some(b) => {
+                s.keypoints.clear();
+                s.keypoints.extend(s.corners.iter().map(keypoint));
+                let size = (image.width, image.height);
+                bucket_indices_into(&s.keypoints, size, b, &mut s.bucket, &mut s.kept);
+                s.kept.iter().map(|&i| s.keypoints[i]).collect()
+            }
+            None => s.corners.iter().map(keypoint).collect(),
+        };
         if kps.len() > self.config.max_features {
             kps.sort_by(|a, b| b.response.total_cmp(&a.response));
             kps.truncate(self.config.max_features);
@@ -125,35 +179,52 @@ impl OrbExtractor {
     /// any closer than [`BORDER`] to an edge get an all-zero descriptor.
     #[must_use]
     pub fn describe(&self, image: GrayView<'_>, keypoints: &[Keypoint]) -> Vec<BinaryDescriptor> {
-        let (mut tmp, mut smooth) = (Vec::new(), Vec::new());
-        blur5(image, &mut tmp, &mut smooth);
-        let view = GrayView {
-            width: image.width,
-            height: image.height,
-            data: &smooth,
-        };
-        let pattern = RotatedPattern::new(image.width);
-        let inside = |k: &Keypoint| {
-            let (x, y) = (k.x.round(), k.y.round());
-            x >= BORDER as f32
-                && y >= BORDER as f32
-                && x + (BORDER as f32) < image.width as f32
-                && y + (BORDER as f32) < image.height as f32
-        };
-        keypoints
-            .iter()
-            .map(|k| {
-                if inside(k) {
-                    let (x, y) = (k.x.round() as usize, k.y.round() as usize);
-                    pattern.describe(view, x, y, k.angle)
-                } else {
-                    // Too close to the border for the pattern: an all-zero descriptor
-                    // (rarely the nearest neighbour of anything real).
-                    BinaryDescriptor([0; 32])
-                }
-            })
-            .collect()
+        self.buffers.with(|s| describe_in(image, keypoints, s))
     }
+}
+
+/// [`OrbExtractor::describe`] in the buffers `s`.
+fn describe_in(
+    image: GrayView<'_>,
+    keypoints: &[Keypoint],
+    s: &mut Scratch,
+) -> Vec<BinaryDescriptor> {
+    blur5(image, &mut s.blur, &mut s.smooth);
+    let view = GrayView {
+        width: image.width,
+        height: image.height,
+        data: &s.smooth,
+    };
+    // The pattern's offsets depend on the row stride only: built once per image width.
+    if s.pattern
+        .as_ref()
+        .is_some_and(|p| p.stride() != image.width)
+    {
+        s.pattern = None;
+    }
+    let pattern = s
+        .pattern
+        .get_or_insert_with(|| RotatedPattern::new(image.width));
+    let inside = |k: &Keypoint| {
+        let (x, y) = (k.x.round(), k.y.round());
+        x >= BORDER as f32
+            && y >= BORDER as f32
+            && x + (BORDER as f32) < image.width as f32
+            && y + (BORDER as f32) < image.height as f32
+    };
+    keypoints
+        .iter()
+        .map(|k| {
+            if inside(k) {
+                let (x, y) = (k.x.round() as usize, k.y.round() as usize);
+                pattern.describe(view, x, y, k.angle)
+            } else {
+                // Too close to the border for the pattern: an all-zero descriptor
+                // (rarely the nearest neighbour of anything real).
+                BinaryDescriptor([0; 32])
+            }
+        })
+        .collect()
 }
 
 impl FeatureExtractor for OrbExtractor {

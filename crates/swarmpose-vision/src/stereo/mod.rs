@@ -120,7 +120,8 @@ struct RowIndex {
 impl RowIndex {
     fn new(kps: &[Keypoint]) -> Self {
         let mut order: Vec<usize> = (0..kps.len()).collect();
-        order.sort_by(|&a, &b| kps[a].y.total_cmp(&kps[b].y));
+        // Ties by index: the order of a stable sort, without its buffer.
+        order.sort_unstable_by(|&a, &b| kps[a].y.total_cmp(&kps[b].y).then(a.cmp(&b)));
         let rows = order.iter().map(|&i| kps[i].y).collect();
         Self { order, rows }
     }
@@ -174,7 +175,8 @@ pub fn match_stereo<D: Descriptor>(
     let left_rows = config
         .left_right_check
         .then(|| RowIndex::new(&left.keypoints));
-    let mut out = Vec::new();
+    // At most one match per left feature.
+    let mut out = Vec::with_capacity(left.len());
     for (li, lk) in left.keypoints.iter().enumerate() {
         let cands = right_rows.around(lk.y, tol);
         let Some((ri, d1, d2)) = best_two(&left.descriptors[li], cands, &right.descriptors, |c| {

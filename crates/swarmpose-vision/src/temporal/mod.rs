@@ -40,7 +40,8 @@ type Best = (usize, f32, f32);
 /// Indices of `kps` sorted by column (stable), and the sorted columns.
 fn by_column(kps: &[Keypoint]) -> (Vec<usize>, Vec<f32>) {
     let mut order: Vec<usize> = (0..kps.len()).collect();
-    order.sort_by(|&i, &j| kps[i].x.total_cmp(&kps[j].x));
+    // Ties by index: the order of a stable sort, without its buffer.
+    order.sort_unstable_by(|&i, &j| kps[i].x.total_cmp(&kps[j].x).then(i.cmp(&j)));
     let xs = order.iter().map(|&i| kps[i].x).collect();
     (order, xs)
 }
@@ -140,14 +141,14 @@ pub fn mutual_matches<D: Descriptor>(
 ) -> Vec<(usize, usize)> {
     let (ab, ba) = nearest_both(a_kps, a, b_kps, b, config.max_displacement_px);
     let pass = |m: (usize, f32, f32)| m.1 <= config.max_distance && m.1 < config.ratio * m.2;
-    ab.iter()
-        .enumerate()
-        .filter_map(|(i, m)| {
-            let m = (*m)?;
-            let back = ba[m.0]?;
-            (back.0 == i && pass(m) && pass(back)).then_some((i, m.0))
-        })
-        .collect()
+    // At most one match per item of `a`.
+    let mut out = Vec::with_capacity(ab.len());
+    out.extend(ab.iter().enumerate().filter_map(|(i, m)| {
+        let m = (*m)?;
+        let back = ba[m.0]?;
+        (back.0 == i && pass(m) && pass(back)).then_some((i, m.0))
+    }));
+    out
 }
 
 /// The circular check: keeps the left matches `(i, j)` (index `i` into the stereo

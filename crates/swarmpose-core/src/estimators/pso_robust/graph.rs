@@ -107,14 +107,15 @@ impl PairGraph {
                 .sum();
         }
         let scored = rank_prefix(&mut pairs, max_pairs, m);
+        let lanes = scored.next_multiple_of(LANES);
         let mut graph = Self {
             points,
             words,
             rows,
             pairs,
-            a: Default::default(),
-            b: Default::default(),
-            inv_tol2: Vec::with_capacity(scored.next_multiple_of(LANES)),
+            a: std::array::from_fn(|_| Vec::with_capacity(lanes)),
+            b: std::array::from_fn(|_| Vec::with_capacity(lanes)),
+            inv_tol2: Vec::with_capacity(lanes),
             padding: scored.next_multiple_of(LANES) - scored,
         };
         for k in 0..scored {
@@ -315,7 +316,8 @@ impl PairGraph {
 /// the neighbour count: `O(pairs + points)`, deterministic.
 fn rank_prefix(pairs: &mut [(u32, u32, u32)], max_pairs: usize, points: usize) -> usize {
     if pairs.len() <= max_pairs {
-        pairs.sort_by(|x, y| y.2.cmp(&x.2).then((x.0, x.1).cmp(&(y.0, y.1))));
+        // A total order (each pair once): unstable is the same order, without a buffer.
+        pairs.sort_unstable_by(|x, y| y.2.cmp(&x.2).then((x.0, x.1).cmp(&(y.0, y.1))));
         return pairs.len();
     }
     let mut histogram = vec![0usize; points + 1];
@@ -330,8 +332,8 @@ fn rank_prefix(pairs: &mut [(u32, u32, u32)], max_pairs: usize, points: usize) -
         cut -= 1;
     }
     // Stable partition: pairs above `cut`, then those at `cut` (index order) up to the cap.
-    let mut front: Vec<(u32, u32, u32)> =
-        pairs.iter().copied().filter(|p| p.2 > cut as u32).collect();
+    let mut front: Vec<(u32, u32, u32)> = Vec::with_capacity(max_pairs.min(pairs.len()));
+    front.extend(pairs.iter().copied().filter(|p| p.2 > cut as u32));
     front.extend(
         pairs
             .iter()
@@ -339,7 +341,8 @@ fn rank_prefix(pairs: &mut [(u32, u32, u32)], max_pairs: usize, points: usize) -
             .filter(|p| p.2 == cut as u32)
             .take(max_pairs - front.len()),
     );
-    front.sort_by(|x, y| y.2.cmp(&x.2).then((x.0, x.1).cmp(&(y.0, y.1))));
+    // As above: unstable is the same order.
+    front.sort_unstable_by(|x, y| y.2.cmp(&x.2).then((x.0, x.1).cmp(&(y.0, y.1))));
     let n = front.len();
     // Put the ranked prefix first; the rest keep their order after it.
     let mut rest: Vec<(u32, u32, u32)> = Vec::with_capacity(pairs.len() - n);
