@@ -172,66 +172,7 @@ pub fn refine_disparity_lk_2d(
     r: usize,
     iterations: usize,
 ) -> Option<(f32, f32)> {
-    const MAX_SIDE: usize = 13;
-    let n = 2 * r + 1;
-    let m = n + 2;
-    if m > MAX_SIDE
-        || y < r + 4
-        || y + r + 4 >= left.height.min(right.height)
-        || xl < r
-        || xl + r >= left.width
-    {
-        return None;
-    }
-    let mut lw = [0f32; MAX_SIDE * MAX_SIDE];
-    for (j, yy) in (y - r..=y + r).enumerate() {
-        for (i, xx) in (xl - r..=xl + r).enumerate() {
-            lw[j * n + i] = f32::from(left.data[yy * left.width + xx]);
-        }
-    }
-    let mut rw = [0f32; MAX_SIDE * MAX_SIDE];
-    let (mut d, mut dy) = (d0, 0f32);
-    for _ in 0..iterations {
-        sample_patch(
-            right,
-            xl as f32 - d - r as f32 - 1.0,
-            y as f32 + dy - r as f32 - 1.0,
-            m,
-            &mut rw,
-        )?;
-        // J = [gx, -gy] (e = L - R(x - d, y + dy)); step = -(JᵀJ)⁻¹ Jᵀ e.
-        let (mut a, mut b, mut c, mut ex, mut ey) = (0f32, 0f32, 0f32, 0f32, 0f32);
-        for j in 0..n {
-            for i in 0..n {
-                let k = (j + 1) * m + i + 1;
-                let e = lw[j * n + i] - rw[k];
-                let gx = 0.5 * (rw[k + 1] - rw[k - 1]);
-                let gy = -0.5 * (rw[k + m] - rw[k - m]);
-                a += gx * gx;
-                b += gx * gy;
-                c += gy * gy;
-                ex += gx * e;
-                ey += gy * e;
-            }
-        }
-        let det = a * c - b * b;
-        // Texture that fixes both shifts (a NaN fails too).
-        let determined = det > 1e-6 * (a * c).max(1e-3) && a >= 1e-3;
-        if !determined {
-            return None;
-        }
-        let sd = -(c * ex - b * ey) / det;
-        let sy = -(a * ey - b * ex) / det;
-        d += sd;
-        dy += sy;
-        if (d - d0).abs() > 1.0 || dy.abs() > 2.0 {
-            return None;
-        }
-        if sd.abs() < 1e-3 && sy.abs() < 1e-3 {
-            break;
-        }
-    }
-    Some((d, dy))
+    align_window(left, right, (xl, y), d0, r, iterations, true)
 }
 
 /// Vertical offset, pixels, of the right image against the left around left pixel
@@ -248,6 +189,22 @@ pub fn row_offset(
     d: f32,
     r: usize,
 ) -> Option<f32> {
+    align_window(left, right, (xl, y), d, r, 10, false).map(|(_, dy)| dy)
+}
+
+/// Gauss-Newton on `Σ (L(x, y) - R(x - d, y + dy))²` over the `(2 r + 1)²` window at left
+/// `(xl, y)`, from `(d0, 0)`: `dy` alone, or `d` too when `disparity_free`. Returns
+/// `(d, dy)`; `None` near the borders, on texture that does not fix the unknowns, when
+/// `d` moves more than one pixel or `dy` more than two.
+fn align_window(
+    left: GrayView<'_>,
+    right: GrayView<'_>,
+    (xl, y): (usize, usize),
+    d0: f32,
+    r: usize,
+    iterations: usize,
+    disparity_free: bool,
+) -> Option<(f32, f32)> {
     const MAX_SIDE: usize = 13;
     let n = 2 * r + 1;
     let m = n + 2;
@@ -259,7 +216,8 @@ pub fn row_offset(
     {
         return None;
     }
-    // The left window, and the right one with a row above and below for the gradient.
+    // The left window, and the right one with a row and a column around it for the
+    // gradients.
     let mut lw = [0f32; MAX_SIDE * MAX_SIDE];
     for (j, yy) in (y - r..=y + r).enumerate() {
         for (i, xx) in (xl - r..=xl + r).enumerate() {
@@ -267,9 +225,8 @@ pub fn row_offset(
         }
     }
     let mut rw = [0f32; MAX_SIDE * MAX_SIDE];
-    let mut dy = 0f32;
-    for _ in 0..10 {
-        // An m x m patch whose rows 1..=n are the window's, shifted by (-d, dy).
+    let (mut d, mut dy) = (d0, 0f32);
+    for _ in 0..iterations {
         sample_patch(
             right,
             xl as f32 - d - r as f32 - 1.0,
@@ -277,29 +234,47 @@ pub fn row_offset(
             m,
             &mut rw,
         )?;
-        let (mut eg, mut gg) = (0f32, 0f32);
+        // The derivatives of e = L - R(x - d, y + dy): gx by d, gy by dy.
+        let (mut a, mut b, mut c, mut ex, mut ey) = (0f32, 0f32, 0f32, 0f32, 0f32);
         for j in 0..n {
             for i in 0..n {
-                let c = (j + 1) * m + i + 1;
-                let e = lw[j * n + i] - rw[c];
-                let g = 0.5 * (rw[c + m] - rw[c - m]);
-                eg += e * g;
-                gg += g * g;
+                let k = (j + 1) * m + i + 1;
+                let e = lw[j * n + i] - rw[k];
+                let gy = -0.5 * (rw[k + m] - rw[k - m]);
+                c += gy * gy;
+                ey += gy * e;
+                if disparity_free {
+                    let gx = 0.5 * (rw[k + 1] - rw[k - 1]);
+                    a += gx * gx;
+                    b += gx * gy;
+                    ex += gx * e;
+                }
             }
         }
-        if gg < 1e-3 {
+        // Steps -(JᵀJ)⁻¹ Jᵀ e, when the texture fixes them (a NaN fails too).
+        let (sd, sy) = if disparity_free {
+            let det = a * c - b * b;
+            let determined = det > 1e-6 * (a * c).max(1e-3) && a >= 1e-3;
+            if !determined {
+                return None;
+            }
+            (-(c * ex - b * ey) / det, -(a * ey - b * ex) / det)
+        } else {
+            if c < 1e-3 {
+                return None;
+            }
+            (0.0, -ey / c)
+        };
+        d += sd;
+        dy += sy;
+        if (d - d0).abs() > 1.0 || dy.abs() > 2.0 {
             return None;
         }
-        let step = eg / gg;
-        dy += step;
-        if dy.abs() > 2.0 {
-            return None;
-        }
-        if step.abs() < 1e-3 {
+        if sd.abs() < 1e-3 && sy.abs() < 1e-3 {
             break;
         }
     }
-    Some(dy)
+    Some((d, dy))
 }
 
 #[cfg(test)]
