@@ -22,6 +22,16 @@ use crate::methods;
 /// borrows and the class keeps): its fields (read-only properties documented by the doc),
 /// its keyword-only constructor (the defaults), its `repr`, the class docstring (every
 /// keyword's doc) and [`OdometryConfig::KEYWORDS`] (the names `**options` accepts).
+/// A fixed disparity correction as Python gives it: `(offset, quadratic)` or
+/// `(offset, quadratic, linear)`, pixels; the same tuple back.
+#[derive(Debug, Clone, Copy, PartialEq, FromPyObject, IntoPyObject)]
+pub(crate) enum FixedCorrection {
+    /// Offset and the term in x².
+    Two((f64, f64)),
+    /// Offset, the term in x² and the term in x.
+    Three((f64, f64, f64)),
+}
+
 macro_rules! odometry_config {
     (
         $(#[doc = $class_doc:tt])*
@@ -83,8 +93,9 @@ odometry_config! {
         refine: bool = true => "refine each motion on the reprojection error",
         calibrate: Option<String> = None => "the causes self-calibration may correct, e.g. \
             ``\"principal-point+yaw+focal\"``, or ``\"none\"`` (``None``: as the command line)",
-        disparity_correction: Option<(f64, f64)> = None => "a fixed ``(offset, quadratic)`` \
-            disparity correction in pixels instead of self-calibration",
+        disparity_correction: Option<FixedCorrection> = None => "a fixed ``(offset, \
+            quadratic)`` or ``(offset, quadratic, linear)`` disparity correction in pixels \
+            (the terms in 1, x² and x) instead of self-calibration",
         min_inliers: Option<usize> = None => "fewest inliers for a motion, at least 3 \
             (``None``: 12)",
         seed: u64 = 0 => "the estimator's seed; frame k uses seed + k",
@@ -195,14 +206,18 @@ impl OdometryConfig {
             None => c.selfcal.candidates,
         };
         c.selfcal.candidates = causes;
-        let (offset, quadratic) = self.disparity_correction.unzip();
-        c.calibration = Calibration::from_options(
+        let terms = match self.disparity_correction {
+            None => [None; 3],
+            Some(FixedCorrection::Two((a, q))) => [Some(a), Some(q), None],
+            Some(FixedCorrection::Three((a, q, l))) => [Some(a), Some(q), Some(l)],
+        };
+        c.calibration = Calibration::from_terms(
             causes,
-            offset,
-            quadratic,
+            terms,
             [
                 "disparity_correction offset",
                 "disparity_correction quadratic",
+                "disparity_correction linear",
             ],
         )
         .map_err(PyValueError::new_err)?;

@@ -222,6 +222,29 @@ def test_marginalise_matches_the_cli(kitti_seq2, swarmpose_bin, tmp_path):
         swarmpose.Odometry(**KITTI_CAMERA, marginalise="sometimes")
 
 
+def test_fixed_correction_with_a_linear_term_matches_the_cli(kitti_seq2, swarmpose_bin, tmp_path):
+    """``disparity_correction=(offset, quadratic, linear)`` is the command line's
+    ``--disparity-offset --disparity-quadratic --disparity-linear``: the same trajectory,
+    another one than without the linear term; the tuple reads back as given."""
+    out = tmp_path / "cli"
+    subprocess.run([str(swarmpose_bin), "odometry", str(kitti_seq2), "--out", str(out),
+                    "--quiet", "--window", "0", "--disparity-offset", "0.6",
+                    "--disparity-quadratic", "2.3", "--disparity-linear", "0.4"],
+                   check=True, capture_output=True)
+    cli = read_kitti(out / "trajectory.kitti.txt")
+    config = swarmpose.OdometryConfig(window=0, disparity_correction=(0.6, 2.3, 0.4))
+    assert config.disparity_correction == (0.6, 2.3, 0.4)
+    run = swarmpose.odometry(kitti_seq2, config=config)
+    assert np.max(np.abs(run.poses - cli)) < 1e-12
+    two = swarmpose.odometry(kitti_seq2, window=0, disparity_correction=(0.6, 2.3))
+    assert np.max(np.abs(run.poses - two.poses)) > 1e-6
+    assert run.frames[5].correction["linear_x_px"] == 0.4
+    with pytest.raises(ValueError, match="disparity_correction linear must be a finite number"):
+        swarmpose.Odometry(**KITTI_CAMERA, disparity_correction=(0.0, 0.0, float("inf")))
+    with pytest.raises(TypeError):
+        swarmpose.Odometry(**KITTI_CAMERA, disparity_correction=(0.0,))
+
+
 def test_large_images_are_halved(kitti_seq2):
     """A camera whose images have more than ``max_working_pixels`` pixels works on its
     images halved: each KITTI pixel repeated 2x2 (calibration to match) gives the

@@ -162,7 +162,7 @@ class OdometryConfig:
         detector: str = "orb",
         refine: bool = True,
         calibrate: Optional[str] = None,
-        disparity_correction: Optional[Tuple[float, float]] = None,
+        disparity_correction: Optional[Union[Tuple[float, float], Tuple[float, float, float]]] = None,
         min_inliers: Optional[int] = None,
         seed: int = 0,
         window: Optional[int] = None,
@@ -183,7 +183,7 @@ class OdometryConfig:
     @property
     def calibrate(self) -> Optional[str]: ...
     @property
-    def disparity_correction(self) -> Optional[Tuple[float, float]]: ...
+    def disparity_correction(self) -> Optional[Union[Tuple[float, float], Tuple[float, float, float]]]: ...
     @property
     def min_inliers(self) -> Optional[int]: ...
     @property
@@ -207,7 +207,7 @@ _OdometryOptions = TypedDict(
         "detector": str,
         "refine": bool,
         "calibrate": Optional[str],
-        "disparity_correction": Optional[Tuple[float, float]],
+        "disparity_correction": Optional[Union[Tuple[float, float], Tuple[float, float, float]]],
         "min_inliers": Optional[int],
         "seed": int,
         "window": Optional[int],
