@@ -205,52 +205,36 @@ pub fn match_stereo<D: Descriptor>(
         }
         let coarse = lk.x - rk.x;
         let disparity = if config.subpixel_radius > 0 {
-            match refine_disparity(
-                left_img,
-                right_img,
+            let (xl, y) = (
                 lk.x.round().max(0.0) as usize,
                 lk.y.round().max(0.0) as usize,
+            );
+            let r = config.subpixel_radius;
+            let Some(d) = refine_disparity(
+                left_img,
+                right_img,
+                xl,
+                y,
                 i64::from(coarse.round() as i32),
                 2,
-                config.subpixel_radius,
-            ) {
-                Some(d) => {
-                    let xl = lk.x.round().max(0.0) as usize;
-                    let y = lk.y.round().max(0.0) as usize;
-                    // The disparity of the window at (xl, y) is that of the keypoint:
-                    // a shift within a constant-disparity window does not change it.
-                    if config.gauss_newton && config.vertical_alignment {
-                        match subpixel::refine_disparity_lk_2d(
-                            left_img,
-                            right_img,
-                            xl,
-                            y,
-                            d,
-                            config.subpixel_radius,
-                            8,
-                        ) {
-                            Some((d, _)) => d,
-                            None => continue,
-                        }
-                    } else if config.gauss_newton {
-                        match refine_disparity_lk(
-                            left_img,
-                            right_img,
-                            xl,
-                            y,
-                            d,
-                            config.subpixel_radius,
-                            8,
-                        ) {
-                            Some(d) => d,
-                            None => continue,
-                        }
-                    } else {
-                        d
-                    }
+                r,
+            ) else {
+                continue;
+            };
+            // The disparity of the window at (xl, y) is that of the keypoint: a shift
+            // within a constant-disparity window does not change it.
+            let refined = match (config.gauss_newton, config.vertical_alignment) {
+                (false, _) => Some(d),
+                (true, true) => {
+                    subpixel::refine_disparity_lk_2d(left_img, right_img, xl, y, d, r, 8)
+                        .map(|(d, _)| d)
                 }
-                None => continue,
-            }
+                (true, false) => refine_disparity_lk(left_img, right_img, xl, y, d, r, 8),
+            };
+            let Some(d) = refined else {
+                continue;
+            };
+            d
         } else {
             coarse
         };

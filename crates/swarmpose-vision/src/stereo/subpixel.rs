@@ -281,28 +281,40 @@ fn align_window(
 mod tests {
     use super::*;
 
+    /// A `w x h` pair of 8-bit images of the pattern `f(x, y)`, the right one shifted so
+    /// that `R(x - d, y + dy) = L(x, y)`.
+    fn shifted_pair(
+        (w, h): (usize, usize),
+        f: impl Fn(f32, f32) -> f32,
+        d: f32,
+        dy: f32,
+    ) -> (Vec<u8>, Vec<u8>) {
+        let at = |i: usize, shift: (f32, f32)| {
+            f((i % w) as f32 + shift.0, (i / w) as f32 + shift.1).round() as u8
+        };
+        (
+            (0..w * h).map(|i| at(i, (0.0, 0.0))).collect(),
+            (0..w * h).map(|i| at(i, (d, -dy))).collect(),
+        )
+    }
+
+    /// A view of `w x h` pixels.
+    fn view(w: usize, h: usize, data: &[u8]) -> GrayView<'_> {
+        GrayView {
+            width: w,
+            height: h,
+            data,
+        }
+    }
+
     /// A smooth horizontal pattern shifted by a known sub-pixel disparity.
     #[test]
     fn sub_pixel_shift_is_recovered() {
         let (w, h) = (80, 20);
-        let f = |x: f32| 128.0 + 60.0 * (x * 0.45).sin() + 30.0 * (x * 0.17 + 1.0).cos();
+        let f = |x: f32, _: f32| 128.0 + 60.0 * (x * 0.45).sin() + 30.0 * (x * 0.17 + 1.0).cos();
         for &true_d in &[10.0f32, 10.3, 10.5, 10.75] {
-            let left: Vec<u8> = (0..w * h)
-                .map(|i| f((i % w) as f32).round() as u8)
-                .collect();
-            let right: Vec<u8> = (0..w * h)
-                .map(|i| f((i % w) as f32 + true_d).round() as u8)
-                .collect();
-            let l = GrayView {
-                width: w,
-                height: h,
-                data: &left,
-            };
-            let r = GrayView {
-                width: w,
-                height: h,
-                data: &right,
-            };
+            let (left, right) = shifted_pair((w, h), f, true_d, 0.0);
+            let (l, r) = (view(w, h, &left), view(w, h, &right));
             let p = refine_disparity(l, r, 40, 10, 10, 2, 3).expect("parabola");
             let d = refine_disparity_lk(l, r, 40, 10, p, 3, 8).expect("lk");
             assert!((d - true_d).abs() < 0.05, "{true_d}: parabola {p}, lk {d}");
@@ -372,18 +384,7 @@ mod tests {
         let right: Vec<u8> = (0..w * h)
             .map(|i| (f((i % w) as f32 + 7.3) + noise()).round() as u8)
             .collect();
-        let (l, r) = (
-            GrayView {
-                width: w,
-                height: h,
-                data: &left,
-            },
-            GrayView {
-                width: w,
-                height: h,
-                data: &right,
-            },
-        );
+        let (l, r) = (view(w, h, &left), view(w, h, &right));
         let mut found = 0;
         for xl in (5..w - 5)
             .step_by(3)
@@ -418,23 +419,8 @@ mod tests {
             128.0 + 50.0 * (x * 0.37).sin() * (y * 0.29).cos() + 30.0 * ((x + 2.0 * y) * 0.13).sin()
         };
         for &true_dy in &[0.0f32, 0.3, -0.45, 1.1] {
-            let left: Vec<u8> = (0..w * h)
-                .map(|i| f((i % w) as f32, (i / w) as f32).round() as u8)
-                .collect();
-            // R(x - d, y + dy) = L(x, y): R(x, y) = L(x + d, y - dy).
-            let right: Vec<u8> = (0..w * h)
-                .map(|i| f((i % w) as f32 + 7.0, (i / w) as f32 - true_dy).round() as u8)
-                .collect();
-            let l = GrayView {
-                width: w,
-                height: h,
-                data: &left,
-            };
-            let r = GrayView {
-                width: w,
-                height: h,
-                data: &right,
-            };
+            let (left, right) = shifted_pair((w, h), f, 7.0, true_dy);
+            let (l, r) = (view(w, h, &left), view(w, h, &right));
             let dy = row_offset(l, r, 40, 20, 7.0, 3).expect("measured");
             assert!((dy - true_dy).abs() < 0.05, "{true_dy}: {dy}");
         }
@@ -451,23 +437,8 @@ mod tests {
             128.0 + 60.0 * ((x + y) * 0.5).sin() + 20.0 * (x * 0.31).cos() * (y * 0.23).sin()
         };
         for &(true_d, true_dy) in &[(7.0f32, 0.0f32), (7.3, 0.5), (6.8, -0.6), (7.5, 1.0)] {
-            let left: Vec<u8> = (0..w * h)
-                .map(|i| f((i % w) as f32, (i / w) as f32).round() as u8)
-                .collect();
-            // R(x - d, y + dy) = L(x, y).
-            let right: Vec<u8> = (0..w * h)
-                .map(|i| f((i % w) as f32 + true_d, (i / w) as f32 - true_dy).round() as u8)
-                .collect();
-            let l = GrayView {
-                width: w,
-                height: h,
-                data: &left,
-            };
-            let r = GrayView {
-                width: w,
-                height: h,
-                data: &right,
-            };
+            let (left, right) = shifted_pair((w, h), f, true_d, true_dy);
+            let (l, r) = (view(w, h, &left), view(w, h, &right));
             let (d, dy) = refine_disparity_lk_2d(l, r, 40, 20, 7.0, 3, 10).expect("2d");
             assert!(
                 (d - true_d).abs() < 0.05 && (dy - true_dy).abs() < 0.05,
