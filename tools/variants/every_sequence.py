@@ -95,16 +95,18 @@ def main():
     p.add_argument("--out", default="/tmp/swarmpose-every-sequence")
     p.add_argument("--swarmpose", default=os.path.join(ROOT, "target", "release", "swarmpose"))
     p.add_argument("--no-default", action="store_true", help="skip the default's row")
+    p.add_argument("--label", help="the setting's row label (default: its options); with no options, "
+                   "a row for the binary and environment as they are (a development build's switch)")
     p.add_argument("extra", nargs="*", help="options of `swarmpose odometry` (after --)")
     a = p.parse_args()
     print("| setting | kitti_vo_seq2 drift / RMS eq. (20) / ATE | variants: mean drift / ATE (how many) "
           "| Karlsruhe ATE / final vs INS | EuRoC final | street drift |")
     print("|---|---|---|---|---|---|")
     settings = ([] if a.no_default else [("default", [])])
-    if a.extra:
-        settings.append((" ".join(a.extra), a.extra))
+    if a.extra or a.label:
+        settings.append((a.label or " ".join(a.extra), a.extra))
     for label, extra in settings:
-        out = os.path.join(a.out, "default" if not extra else "setting")
+        out = os.path.join(a.out, "default" if label == "default" else "setting")
         print(row(label, runs(a.swarmpose, a.data, a.variants, out, extra)), flush=True)
 
 
