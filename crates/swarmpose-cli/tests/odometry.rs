@@ -88,6 +88,28 @@ fn bad_sequences_give_one_clear_line() {
         None,
     );
     check_error(&out, &["max_working_pixels 5: at least 10000 are needed"]);
+
+    // Images doubled without end: the process was killed for want of memory.
+    let out = swarmpose(
+        &[
+            "odometry",
+            s(&two),
+            "--out",
+            s(&out_dir),
+            "--max-working-pixels",
+            &usize::MAX.to_string(),
+            "--min-working-pixels",
+            &(usize::MAX / 4).to_string(),
+        ],
+        None,
+    );
+    check_error(
+        &out,
+        &[&format!(
+            "min_working_pixels {}: at most 16777216",
+            usize::MAX / 4
+        )],
+    );
     assert!(!out_dir.exists(), "nothing written on bad input");
 }
 

@@ -117,7 +117,7 @@ pub struct OdometryArgs {
 
     /// Fewest pixels of a stereo image the engine works on: smaller images are doubled
     /// (bicubic) until they have at least this many (default 0: never; at most a quarter
-    /// of --max-working-pixels). 250000 doubles 620x188 and 480x288: it helps some
+    /// of --max-working-pixels, and at most 16777216). 250000 doubles 620x188 and 480x288: it helps some
     /// sequences and hurts others (RESULTS.md, "Other image sizes").
     #[arg(long, value_name = "N", default_value_t = OdometryConfig::default().min_working_pixels,
           value_parser = clap::value_parser!(usize))]
