@@ -110,6 +110,28 @@ fn bad_sequences_give_one_clear_line() {
             usize::MAX / 4
         )],
     );
+
+    // Fewer than 3 inliers were raised to 3 without a word (Python refuses them).
+    for n in ["0", "2", "-1"] {
+        let out = swarmpose(
+            &[
+                "odometry",
+                s(&two),
+                "--out",
+                s(&out_dir),
+                "--min-inliers",
+                n,
+            ],
+            None,
+        );
+        check_error(
+            &out,
+            &[
+                &format!("'{n}' for '--min-inliers <N>'"),
+                "at least 3 are needed",
+            ],
+        );
+    }
     assert!(!out_dir.exists(), "nothing written on bad input");
 }
 
