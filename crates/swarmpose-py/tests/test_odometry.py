@@ -182,6 +182,31 @@ def test_evaluate_arrays():
     assert str(e.value) == "estimate has shape (20, 3, 4): (N, 4, 4) expected"
 
 
+@pytest.mark.parametrize("block, message", [
+    (np.diag([1.0, 1.0, -1.0]), "estimate[3]: the 3x3 part has determinant -1.000 (a reflection)"),
+    (2 * np.eye(3), "estimate[3]: the 3x3 part is not a rotation (|R Rᵀ - I| = 5.196e0"),
+    (np.zeros((3, 3)), "estimate[3]: the 3x3 part is not a rotation"),
+])
+def test_evaluate_refuses_what_is_not_a_pose(block, message):
+    """As for trajectory files: a reflection, a scale or a zero block was projected to
+    some rotation and evaluated without a word; a last row that is not 0 0 0 1 too."""
+    steps = np.tile(np.eye(4), (20, 1, 1))
+    steps[:, 2, 3] = np.arange(20.0)
+    bad = steps.copy()
+    bad[3, :3, :3] = block
+    with pytest.raises(ValueError) as e:
+        swarmpose.evaluate(bad, steps)
+    assert str(e.value).startswith(message)
+    bad = steps.copy()
+    bad[3, 3] = [0.0, 0.0, 1.0, 1.0]
+    with pytest.raises(ValueError) as e:
+        swarmpose.evaluate(steps, bad)
+    assert str(e.value) == "ground_truth[3] has the last row [0.0, 0.0, 1.0, 1.0]: [0, 0, 0, 1] expected"
+    # Rounding as np.linalg.inv leaves it is accepted.
+    inverted = np.linalg.inv(np.linalg.inv(steps))
+    assert swarmpose.evaluate(inverted, steps)["eq20_rms"] < 1e-9
+
+
 def test_window_matches_the_cli(kitti_seq2, swarmpose_bin, tmp_path):
     """``window=K`` is the command line's ``--window K``: the same trajectory (another
     one than the default window's), and a bad value is refused."""
