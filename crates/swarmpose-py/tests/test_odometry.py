@@ -2,6 +2,7 @@
 the streaming engine from Python gives the trajectory of `swarmpose odometry`, and bad
 input raises with the Rust messages."""
 
+import shutil
 import subprocess
 
 import numpy as np
@@ -148,6 +149,34 @@ def test_images_given_the_wrong_way_round(kitti_seq2):
         odo.track(right, left, 0.0)
     assert str(e.value).startswith("the left and right images look exchanged: ")
     assert odo.track(left, right, 0.0).status == "first"
+
+
+def copy_kitti(src, dst, n):
+    """The first ``n`` frames of a KITTI sequence (images, calib.txt, poses) in ``dst``."""
+    for side in ("image_0", "image_1"):
+        (dst / side).mkdir(parents=True)
+        for i in range(n):
+            shutil.copy(src / side / f"{i:06}.png", dst / side / f"{i:06}.png")
+    shutil.copy(src / "calib.txt", dst / "calib.txt")
+    poses = (src / "poses.txt").read_text().splitlines()[:n]
+    (dst / "poses.txt").write_text("\n".join(poses) + "\n")
+
+
+def test_a_corrupt_frame_keeps_the_frames_before_it(kitti_seq2, tmp_path):
+    """As on the command line: the run stops at the frame, says how many were done, and
+    keeps them (the exception's ``run``); they used to be lost with the exception."""
+    copy_kitti(kitti_seq2, tmp_path / "bad", 5)
+    corrupt = tmp_path / "bad" / "image_0" / "000003.png"
+    corrupt.write_bytes(b"\x89PNG\r\n\x1a\nnot really a png")
+    with pytest.raises(ValueError) as e:
+        swarmpose.odometry(tmp_path / "bad")
+    message = str(e.value)
+    assert message.startswith(f"frame 3: {corrupt}: not a readable PNG image"), message
+    assert message.endswith("; stopped after 3 frame(s): the exception's `run` holds them")
+    run = e.value.run
+    assert len(run) == 3 and run.poses.shape == (3, 4, 4)
+    copy_kitti(kitti_seq2, tmp_path / "good", 3)
+    assert np.array_equal(run.poses, swarmpose.odometry(tmp_path / "good").poses)
 
 
 def test_paths_that_do_not_exist(tmp_path):
