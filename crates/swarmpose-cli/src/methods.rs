@@ -8,7 +8,7 @@
 use std::fmt::Display;
 
 use clap::{Args, ValueEnum};
-use swarmpose_core::pso::PsoConfig;
+use swarmpose_core::pso::{MAX_SWARM_SIZE, PsoConfig};
 use swarmpose_core::{
     Estimator, MsacConfig, MsacEstimator, PsoEstimator, PsoEstimatorConfig, PsoPaperConfig,
     PsoPaperEstimator, Threshold,
@@ -59,7 +59,7 @@ pub struct EstimatorOptions {
     pub threshold: Option<f64>,
 
     /// Swarm size.
-    #[arg(long, value_name = "N", value_parser = at_least_one, help_heading = PSO_HEADING,
+    #[arg(long, value_name = "N", value_parser = swarm_size, help_heading = PSO_HEADING,
           allow_negative_numbers = true, help = pso_help("Swarm size", |c| c.swarm_size))]
     pub particles: Option<usize>,
 
@@ -89,7 +89,7 @@ pub struct EstimatorOptions {
     pub stall: Option<Stall>,
 
     /// Particles started from 3-point minimal samples (pso only).
-    #[arg(long, value_name = "N", value_parser = count, help_heading = PSO_HEADING,
+    #[arg(long, value_name = "N", value_parser = seeded_particles, help_heading = PSO_HEADING,
           allow_negative_numbers = true, help = format!(
               "Particles started from 3-point minimal samples, pso only [default: {}]",
               PsoEstimatorConfig::default().seeded_particles))]
@@ -193,6 +193,22 @@ fn at_least_one(s: &str) -> Result<usize, String> {
     match s.trim().parse::<usize>() {
         Ok(n) if n >= 1 => Ok(n),
         _ => Err("must be a whole number >= 1".into()),
+    }
+}
+
+/// `--particles`: 1 to [`MAX_SWARM_SIZE`] (more were allocated at once and aborted).
+fn swarm_size(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(n) if (1..=MAX_SWARM_SIZE).contains(&n) => Ok(n),
+        _ => Err(format!("must be a whole number from 1 to {MAX_SWARM_SIZE}")),
+    }
+}
+
+/// `--seeded-particles`: 0 to [`MAX_SWARM_SIZE`].
+fn seeded_particles(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(n) if n <= MAX_SWARM_SIZE => Ok(n),
+        _ => Err(format!("must be a whole number from 0 to {MAX_SWARM_SIZE}")),
     }
 }
 

@@ -227,7 +227,15 @@ fn all_cases() -> Vec<Case> {
     let good = csv_with(false, |_, _| {});
     for (opt, values) in [
         ("--threshold", &["-0.1", "0", "NaN", "inf", "-inf", "x"][..]),
-        ("--particles", &["0", "-1", "x", "1.5"][..]),
+        // 10^12 particles were allocated at once: the process aborted.
+        (
+            "--particles",
+            &["0", "-1", "x", "1.5", "1000001", "1000000000000"][..],
+        ),
+        (
+            "--seeded-particles",
+            &["-1", "1000001", "1000000000000"][..],
+        ),
         ("--iterations", &["-3", "x", "1e3"][..]),
         ("--inertia", &["NaN", "inf", "x"][..]),
         ("--stall", &["0", "x", "-2"][..]),

@@ -88,6 +88,50 @@ fn bad_sequences_give_one_clear_line() {
         None,
     );
     check_error(&out, &["max_working_pixels 5: at least 10000 are needed"]);
+
+    // Images doubled without end: the process was killed for want of memory.
+    let out = swarmpose(
+        &[
+            "odometry",
+            s(&two),
+            "--out",
+            s(&out_dir),
+            "--max-working-pixels",
+            &usize::MAX.to_string(),
+            "--min-working-pixels",
+            &(usize::MAX / 4).to_string(),
+        ],
+        None,
+    );
+    check_error(
+        &out,
+        &[&format!(
+            "min_working_pixels {}: at most 16777216",
+            usize::MAX / 4
+        )],
+    );
+
+    // Fewer than 3 inliers were raised to 3 without a word (Python refuses them).
+    for n in ["0", "2", "-1"] {
+        let out = swarmpose(
+            &[
+                "odometry",
+                s(&two),
+                "--out",
+                s(&out_dir),
+                "--min-inliers",
+                n,
+            ],
+            None,
+        );
+        check_error(
+            &out,
+            &[
+                &format!("'{n}' for '--min-inliers <N>'"),
+                "at least 3 are needed",
+            ],
+        );
+    }
     assert!(!out_dir.exists(), "nothing written on bad input");
 }
 

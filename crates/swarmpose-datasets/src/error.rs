@@ -36,8 +36,9 @@ pub enum DatasetError {
     /// An image could not be read or decoded (the message names the file).
     #[error(transparent)]
     Image(#[from] ImageError),
-    /// A malformed line in a calibration, list or ground-truth file.
-    #[error("{}:{line}: {message}", path.display())]
+    /// A malformed line in a calibration, list or ground-truth file (`FILE:LINE: ...`,
+    /// or `FILE: ...` when the problem is the whole file).
+    #[error("{}{}: {message}", path.display(), if *line > 0 { format!(":{line}") } else { String::new() })]
     Parse {
         /// The file.
         path: PathBuf,

@@ -230,3 +230,21 @@ fn a_ground_truth_pose_that_is_not_a_rotation_is_named() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn a_problem_of_the_whole_file_names_no_line() {
+    // These were "FILE:0: ...", a line that does not exist.
+    let k = Kitti::new("whole", 3);
+    std::fs::write(k.path("calib.txt"), "P0: 700 0 20 0 0 700 15 0 0 0 1 0\n").expect("calib");
+    let e = error_of(&k.0);
+    let calib = k.path("calib.txt");
+    assert!(
+        e.starts_with(&format!("{}: needs the P0: and P1:", calib.display())),
+        "{e}"
+    );
+    let k = Kitti::new("whole-poses", 3);
+    std::fs::write(k.path("poses.txt"), "1 0 0 0 0 1 0 0 0 0 1 0\n").expect("poses");
+    let e = error_of(&k.0);
+    let poses = k.path("poses.txt");
+    assert_eq!(e, format!("{}: 1 poses for 3 frames", poses.display()));
+}

@@ -222,26 +222,32 @@ fn numbers(line: &str, path: &Path, line_no: usize) -> Result<Vec<f64>, EvalErro
         .collect()
 }
 
-fn pose_from_3x4(m: &[f64], path: &Path, line_no: usize) -> Result<Isometry3<f64>, EvalError> {
-    let r = Matrix3::new(m[0], m[1], m[2], m[4], m[5], m[6], m[8], m[9], m[10]);
+/// Checks that `r` is a rotation to within rounding: not a reflection (determinant
+/// below 0) and `|R Rᵀ - I| <= 1e-2` (the Frobenius norm). Every reader of poses (files,
+/// and arrays from Python) uses it, so that a scaled, sheared or zero block is refused
+/// rather than projected to some rotation.
+///
+/// # Errors
+/// What is wrong, with the value (the caller names where the block comes from).
+pub fn check_rotation(r: &Matrix3<f64>) -> Result<(), String> {
     let err = (r * r.transpose() - Matrix3::identity()).norm();
     let det = r.determinant();
     if det < 0.0 {
-        return Err(EvalError::parse(
-            path,
-            line_no,
-            format!("the 3x3 part has determinant {det:.3} (a reflection): a rotation has +1"),
+        return Err(format!(
+            "the 3x3 part has determinant {det:.3} (a reflection): a rotation has +1"
         ));
     }
-    if err > 1e-2 {
-        return Err(EvalError::parse(
-            path,
-            line_no,
-            format!(
-                "the 3x3 part is not a rotation (|R Rᵀ - I| = {err:.3e}, at most 1e-2 accepted)"
-            ),
+    if err.is_nan() || err > 1e-2 {
+        return Err(format!(
+            "the 3x3 part is not a rotation (|R Rᵀ - I| = {err:.3e}, at most 1e-2 accepted)"
         ));
     }
+    Ok(())
+}
+
+fn pose_from_3x4(m: &[f64], path: &Path, line_no: usize) -> Result<Isometry3<f64>, EvalError> {
+    let r = Matrix3::new(m[0], m[1], m[2], m[4], m[5], m[6], m[8], m[9], m[10]);
+    check_rotation(&r).map_err(|message| EvalError::parse(path, line_no, message))?;
     let rot = Rotation3::from_matrix_eps(&r, 1e-15, 100, Rotation3::identity());
     Ok(Isometry3::from_parts(
         Translation3::new(m[3], m[7], m[11]),

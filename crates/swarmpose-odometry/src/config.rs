@@ -126,7 +126,8 @@ pub struct OdometryConfig {
     pub max_working_pixels: usize,
     /// Fewest pixels of a stereo image the engine works on: smaller images are doubled
     /// (bicubic, as SIFT doubles its input) until they have at least this many (default
-    /// 0: never; at most a quarter of the maximum). Not the default, because it helps some
+    /// 0: never; at most a quarter of the maximum, and at most
+    /// [`crate::working::MAX_MIN_WORKING_PIXELS`]). Not the default, because it helps some
     /// measurements and hurts others (RESULTS.md, "Other image sizes"): with 250 000,
     /// kitti_vo_seq2 at half size (620x188) ends 1.148 % instead of 1.986 % and the
     /// built-in street (480x288) 0.010 % instead of 0.039 %, but the street's

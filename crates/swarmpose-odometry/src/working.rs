@@ -36,9 +36,14 @@ use crate::selfcal::Decision;
 /// image then has at least a quarter of them): fewer leave too few pixels for features.
 pub const MIN_WORKING_PIXELS: usize = 10_000;
 
+/// Most pixels [`OdometryConfig::min_working_pixels`] may ask for (4096x4096; a doubled
+/// image has fewer than four times as many): a larger bound had small images doubled
+/// until the process was killed for want of memory.
+pub const MAX_MIN_WORKING_PIXELS: usize = 1 << 24;
+
 /// Checks a band of working sizes: `max_pixels` at least [`MIN_WORKING_PIXELS`], and
 /// `min_pixels` at most a quarter of `max_pixels`, so that a doubled image never needs
-/// halving. It does not depend on the camera: a configuration can be checked before
+/// halving, and at most [`MAX_MIN_WORKING_PIXELS`]. It does not depend on the camera: a configuration can be checked before
 /// there is one.
 ///
 /// # Errors
@@ -50,6 +55,14 @@ pub fn check_band(min_pixels: usize, max_pixels: usize) -> Result<(), OdometryEr
             message: format!(
                 "max_working_pixels {max_pixels}: at least {MIN_WORKING_PIXELS} are needed \
                  (smaller images have too few pixels for features)"
+            ),
+        });
+    }
+    if min_pixels > MAX_MIN_WORKING_PIXELS {
+        return Err(OdometryError::Camera {
+            message: format!(
+                "min_working_pixels {min_pixels}: at most {MAX_MIN_WORKING_PIXELS} (images \
+                 doubled to more pixels would not fit in memory)"
             ),
         });
     }
@@ -86,6 +99,16 @@ impl WorkingScale {
         let (mut w, mut h) = (camera.width, camera.height);
         let mut levels = 0;
         while w.saturating_mul(h) > max_pixels {
+            if w < 2 || h < 2 {
+                // Halving would leave an empty image (and doubling it would never end).
+                return Err(OdometryError::Camera {
+                    message: format!(
+                        "images of {}x{} cannot be halved to at most {max_pixels} pixels \
+                         (max_working_pixels): a side would be empty",
+                        camera.width, camera.height
+                    ),
+                });
+            }
             (w, h) = (w / 2, h / 2);
             levels += 1;
         }
@@ -278,6 +301,46 @@ mod tests {
         assert!((u(&twice) - (2.0 * u(&full) + 0.5)).abs() < 1e-9);
         assert_eq!(half.rig.baseline_m, full.rig.baseline_m);
         assert_eq!(twice.rig.baseline_m, full.rig.baseline_m);
+    }
+
+    #[test]
+    fn images_too_thin_to_halve_are_refused() {
+        // A 1x20000 image halved once has no column: it was worked on as 0x10000, and
+        // with a lower bound the doubling of the empty image never ended.
+        for band in [(0, MIN_WORKING_PIXELS), (100, MIN_WORKING_PIXELS)] {
+            let e = WorkingScale::for_camera(&camera(1, 20_000), band).expect_err("empty");
+            assert!(
+                e.to_string()
+                    .contains("images of 1x20000 cannot be halved to at most 10000 pixels"),
+                "{e}"
+            );
+        }
+        let e = WorkingScale::for_camera(&camera(30_000, 3), (0, MIN_WORKING_PIXELS))
+            .expect_err("empty");
+        assert!(e.to_string().contains("30000x3"), "{e}");
+        // A lower bound beyond any camera (the images were doubled until the process
+        // was killed for want of memory).
+        let e = WorkingScale::for_camera(&camera(1241, 376), (usize::MAX / 4, usize::MAX))
+            .expect_err("too large");
+        assert!(
+            e.to_string().contains(&format!(
+                "min_working_pixels {}: at most 16777216",
+                usize::MAX / 4
+            )),
+            "{e}"
+        );
+        let at_most = (MAX_MIN_WORKING_PIXELS, usize::MAX);
+        assert_eq!(
+            WorkingScale::for_camera(&camera(1241, 376), at_most)
+                .expect("at the bound")
+                .levels,
+            -3
+        );
+        // Thin images that can be halved still are.
+        let levels = WorkingScale::for_camera(&camera(4, 20_000), (100, MIN_WORKING_PIXELS))
+            .expect("a working size")
+            .levels;
+        assert_eq!(levels, 2);
     }
 
     #[test]

@@ -12,6 +12,7 @@ use numpy::{
 };
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
+use swarmpose_eval::trajectory::check_rotation;
 
 /// A float array borrowed from Python, read-only, in its own dtype.
 enum Floats<'py> {
@@ -104,8 +105,9 @@ pub(crate) fn matrices(
     })
 }
 
-/// A (N, 4, 4) float array of rigid transforms (the last row `0 0 0 1`, the rotation
-/// projected to the nearest proper one).
+/// A (N, 4, 4) float array of rigid transforms: the last row `0 0 0 1` and the 3x3 block
+/// a rotation to within rounding ([`swarmpose_eval::trajectory::check_rotation`], as for
+/// trajectory files), projected to the nearest proper one.
 pub(crate) fn poses(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Vec<Isometry3<f64>>> {
     let shape_error = |shape: &[usize]| {
         PyValueError::new_err(format!(
@@ -149,7 +151,20 @@ pub(crate) fn poses(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Vec<Isometry
                     "{name}[{i}] has a non-finite entry"
                 )));
             }
+            let last = [m[(3, 0)], m[(3, 1)], m[(3, 2)], m[(3, 3)]];
+            // Within rounding: np.linalg.inv of a transform leaves 1e-17 there.
+            let off = last
+                .iter()
+                .zip([0.0, 0.0, 0.0, 1.0])
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            if off > 1e-6 {
+                return Err(PyValueError::new_err(format!(
+                    "{name}[{i}] has the last row {last:?}: [0, 0, 0, 1] expected"
+                )));
+            }
             let r: Matrix3<f64> = m.fixed_view::<3, 3>(0, 0).into_owned();
+            check_rotation(&r).map_err(|e| PyValueError::new_err(format!("{name}[{i}]: {e}")))?;
             let rotation = Rotation3::from_matrix_eps(&r, 1e-12, 100, Rotation3::identity());
             Ok(Isometry3::from_parts(
                 Translation3::new(m[(0, 3)], m[(1, 3)], m[(2, 3)]),

@@ -81,6 +81,11 @@ pub(crate) fn eval_error(e: &EvalError) -> PyErr {
 /// The odometry engine's error: the type of its cause, the whole message (which names
 /// the frame of a run).
 pub(crate) fn odometry_error(e: &OdometryError) -> PyErr {
+    odometry_error_then(e, "")
+}
+
+/// [`odometry_error`] with `more` after the message (what a run kept).
+pub(crate) fn odometry_error_then(e: &OdometryError, more: &str) -> PyErr {
     let mut root = e;
     while let OdometryError::AtFrame { source, .. } = root {
         root = source;
@@ -91,5 +96,5 @@ pub(crate) fn odometry_error(e: &OdometryError) -> PyErr {
         OdometryError::Write { .. } => Kind::Os,
         _ => Kind::Value,
     };
-    kind.err(e.to_string())
+    kind.err(format!("{e}{more}"))
 }

@@ -13,7 +13,7 @@ use swarmpose_odometry::batch::{camera_of, run_sequence};
 use swarmpose_odometry::output::calibration_json;
 
 use crate::arrays::{transforms, vector};
-use crate::errors::odometry_error;
+use crate::errors::odometry_error_then;
 use crate::evaluate::json_value;
 use crate::frame::Frame;
 use crate::options::OdometryConfig;
@@ -23,7 +23,10 @@ use crate::sequence::Sequence;
 /// EuRoC), frame ``i`` at ``i * frame_period`` seconds, exactly as ``swarmpose
 /// odometry`` does; settings as for ``Odometry(...)``: ``config`` (an
 /// ``OdometryConfig``) or its keywords. Returns an ``OdometryRun``. The GIL is released
-/// during the run; Ctrl-C stops it between frames.
+/// during the run; Ctrl-C stops it between frames. A frame that cannot be read stops the
+/// run, as on the command line: the exception names the frame and how many were done,
+/// and its ``run`` attribute is the ``OdometryRun`` of those frames (so is a
+/// ``KeyboardInterrupt``'s).
 #[pyfunction]
 #[pyo3(signature = (sequence_dir, *, frame_period = 0.1, config = None, **options))]
 pub(crate) fn odometry<'py>(
@@ -55,16 +58,31 @@ pub(crate) fn odometry<'py>(
             }
         })
     });
-    if let Some(e) = interrupted {
-        return Err(e);
-    }
-    ended.map_err(|e| odometry_error(&e))?;
+    let error = match (interrupted, ended) {
+        (Some(e), _) => Some(e),
+        (None, Err(e)) => Some(odometry_error_then(
+            &e,
+            &format!(
+                "; stopped after {} frame(s): the exception's `run` holds them",
+                frames.len()
+            ),
+        )),
+        (None, Ok(_)) => None,
+    };
     let calibration = json_value(py, &calibration_json(&engine.calibration()))?.unbind();
-    Ok(OdometryRun {
+    let run = OdometryRun {
         frames,
         ground_truth: seq.inner.ground_truth().map(<[_]>::to_vec),
         calibration,
-    })
+    };
+    match error {
+        None => Ok(run),
+        Some(e) => {
+            // The frames done are kept (the command line keeps their poses on disk).
+            e.value(py).setattr("run", Py::new(py, run)?)?;
+            Err(e)
+        }
+    }
 }
 
 /// The result of ``swarmpose.odometry``: every frame, and the sequence's ground truth.

@@ -109,7 +109,7 @@ odometry_config! {
             ``Odometry.working_camera``)",
         min_working_pixels: Option<usize> = None => "stereo images are doubled while they have \
             fewer pixels than this (``None``: 0, never; at most a quarter of \
-            max_working_pixels)",
+            max_working_pixels, and at most 16 777 216)",
     }
 }
 

@@ -2,6 +2,7 @@
 the streaming engine from Python gives the trajectory of `swarmpose odometry`, and bad
 input raises with the Rust messages."""
 
+import shutil
 import subprocess
 
 import numpy as np
@@ -150,6 +151,34 @@ def test_images_given_the_wrong_way_round(kitti_seq2):
     assert odo.track(left, right, 0.0).status == "first"
 
 
+def copy_kitti(src, dst, n):
+    """The first ``n`` frames of a KITTI sequence (images, calib.txt, poses) in ``dst``."""
+    for side in ("image_0", "image_1"):
+        (dst / side).mkdir(parents=True)
+        for i in range(n):
+            shutil.copy(src / side / f"{i:06}.png", dst / side / f"{i:06}.png")
+    shutil.copy(src / "calib.txt", dst / "calib.txt")
+    poses = (src / "poses.txt").read_text().splitlines()[:n]
+    (dst / "poses.txt").write_text("\n".join(poses) + "\n")
+
+
+def test_a_corrupt_frame_keeps_the_frames_before_it(kitti_seq2, tmp_path):
+    """As on the command line: the run stops at the frame, says how many were done, and
+    keeps them (the exception's ``run``); they used to be lost with the exception."""
+    copy_kitti(kitti_seq2, tmp_path / "bad", 5)
+    corrupt = tmp_path / "bad" / "image_0" / "000003.png"
+    corrupt.write_bytes(b"\x89PNG\r\n\x1a\nnot really a png")
+    with pytest.raises(ValueError) as e:
+        swarmpose.odometry(tmp_path / "bad")
+    message = str(e.value)
+    assert message.startswith(f"frame 3: {corrupt}: not a readable PNG image"), message
+    assert message.endswith("; stopped after 3 frame(s): the exception's `run` holds them")
+    run = e.value.run
+    assert len(run) == 3 and run.poses.shape == (3, 4, 4)
+    copy_kitti(kitti_seq2, tmp_path / "good", 3)
+    assert np.array_equal(run.poses, swarmpose.odometry(tmp_path / "good").poses)
+
+
 def test_paths_that_do_not_exist(tmp_path):
     missing = tmp_path / "nowhere"
     with pytest.raises(FileNotFoundError) as e:
@@ -180,6 +209,31 @@ def test_evaluate_arrays():
     with pytest.raises(ValueError) as e:
         swarmpose.evaluate(steps[:, :3], steps)
     assert str(e.value) == "estimate has shape (20, 3, 4): (N, 4, 4) expected"
+
+
+@pytest.mark.parametrize("block, message", [
+    (np.diag([1.0, 1.0, -1.0]), "estimate[3]: the 3x3 part has determinant -1.000 (a reflection)"),
+    (2 * np.eye(3), "estimate[3]: the 3x3 part is not a rotation (|R Rᵀ - I| = 5.196e0"),
+    (np.zeros((3, 3)), "estimate[3]: the 3x3 part is not a rotation"),
+])
+def test_evaluate_refuses_what_is_not_a_pose(block, message):
+    """As for trajectory files: a reflection, a scale or a zero block was projected to
+    some rotation and evaluated without a word; a last row that is not 0 0 0 1 too."""
+    steps = np.tile(np.eye(4), (20, 1, 1))
+    steps[:, 2, 3] = np.arange(20.0)
+    bad = steps.copy()
+    bad[3, :3, :3] = block
+    with pytest.raises(ValueError) as e:
+        swarmpose.evaluate(bad, steps)
+    assert str(e.value).startswith(message)
+    bad = steps.copy()
+    bad[3, 3] = [0.0, 0.0, 1.0, 1.0]
+    with pytest.raises(ValueError) as e:
+        swarmpose.evaluate(steps, bad)
+    assert str(e.value) == "ground_truth[3] has the last row [0.0, 0.0, 1.0, 1.0]: [0, 0, 0, 1] expected"
+    # Rounding as np.linalg.inv leaves it is accepted.
+    inverted = np.linalg.inv(np.linalg.inv(steps))
+    assert swarmpose.evaluate(inverted, steps)["eq20_rms"] < 1e-9
 
 
 def test_window_matches_the_cli(kitti_seq2, swarmpose_bin, tmp_path):

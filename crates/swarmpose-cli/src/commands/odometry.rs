@@ -104,8 +104,9 @@ pub struct OdometryArgs {
     #[arg(long, value_name = "MODE", default_value = "off", value_parser = |s: &str| s.parse::<Marginalisation>())]
     pub marginalise: Marginalisation,
 
-    /// Fewest inliers for a motion to be accepted.
-    #[arg(long, value_name = "N", default_value_t = OdometryConfig::default().min_inliers)]
+    /// Fewest inliers for a motion to be accepted (at least 3).
+    #[arg(long, value_name = "N", default_value_t = OdometryConfig::default().min_inliers,
+          value_parser = min_inliers, allow_negative_numbers = true)]
     pub min_inliers: usize,
 
     /// Most pixels of a stereo image the engine works on: larger images are halved (2x2
@@ -117,7 +118,7 @@ pub struct OdometryArgs {
 
     /// Fewest pixels of a stereo image the engine works on: smaller images are doubled
     /// (bicubic) until they have at least this many (default 0: never; at most a quarter
-    /// of --max-working-pixels). 250000 doubles 620x188 and 480x288: it helps some
+    /// of --max-working-pixels, and at most 16777216). 250000 doubles 620x188 and 480x288: it helps some
     /// sequences and hurts others (RESULTS.md, "Other image sizes").
     #[arg(long, value_name = "N", default_value_t = OdometryConfig::default().min_working_pixels,
           value_parser = clap::value_parser!(usize))]
@@ -142,6 +143,15 @@ pub struct OdometryArgs {
 
     #[command(flatten)]
     pub options: EstimatorOptions,
+}
+
+/// `--min-inliers`: at least 3 (fewer used to be raised to 3 without a word; Python's
+/// `min_inliers=` refuses them with the same message).
+fn min_inliers(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(n) if n >= 3 => Ok(n),
+        _ => Err("at least 3 are needed for a motion".into()),
+    }
 }
 
 fn odometry_error(e: OdometryError) -> CliError {
@@ -195,7 +205,7 @@ fn config(args: &OdometryArgs) -> Result<OdometryConfig, CliError> {
         detector: args.stereo.detector,
         refine: !args.no_refine,
         calibration,
-        min_inliers: args.min_inliers.max(3),
+        min_inliers: args.min_inliers,
         seed: args.seed,
         selfcal,
         max_working_pixels: args.max_working_pixels,

@@ -5,6 +5,11 @@ use rand::RngExt;
 use crate::error::PoseError;
 use crate::rng::SeededRng;
 
+/// Most particles a swarm may have (a million: tens of megabytes, and seconds of work
+/// per estimate). More were allocated at once: 10^12 particles asked for 24 TB and
+/// aborted the process.
+pub const MAX_SWARM_SIZE: usize = 1_000_000;
+
 /// Settings of a [`ParticleSwarm`]. Defaults in brackets.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PsoConfig {
@@ -58,8 +63,8 @@ impl PsoConfig {
         self
     }
 
-    /// Checks the ranges: at least one particle, finite non-negative coefficients, a
-    /// clamp in `(0, 1]`.
+    /// Checks the ranges: 1 to [`MAX_SWARM_SIZE`] particles, finite non-negative
+    /// coefficients, a clamp in `(0, 1]`.
     ///
     /// # Errors
     /// [`PoseError::InvalidConfig`] naming the bad field.
@@ -67,6 +72,12 @@ impl PsoConfig {
         let bad = |m: &str| Err(PoseError::InvalidConfig(m.to_string()));
         if self.swarm_size == 0 {
             return bad("swarm_size must be at least 1");
+        }
+        if self.swarm_size > MAX_SWARM_SIZE {
+            return bad(&format!(
+                "swarm_size {} is more than the {MAX_SWARM_SIZE} a swarm may have",
+                self.swarm_size
+            ));
         }
         if !(self.inertia.is_finite() && self.inertia >= 0.0) {
             return bad("inertia must be finite and >= 0");
@@ -361,6 +372,16 @@ mod tests {
             swarm
                 .minimize([1.0], [0.0], &[], &mut seeded(0), |x: &[f64; 1]| x[0])
                 .is_err()
+        );
+        // 10^12 particles: refused, not allocated (the process aborted).
+        let swarm = ParticleSwarm::new(PsoConfig::default().with_swarm_size(1_000_000_000_000));
+        let e = swarm
+            .minimize([0.0], [1.0], &[], &mut seeded(0), |x: &[f64; 1]| x[0])
+            .expect_err("too many particles");
+        assert!(
+            e.to_string()
+                .contains("swarm_size 1000000000000 is more than the 1000000"),
+            "{e}"
         );
     }
 }

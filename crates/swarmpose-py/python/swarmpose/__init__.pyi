@@ -307,7 +307,9 @@ def odometry(
     **options: Unpack[_OdometryOptions],
 ) -> OdometryRun:
     """Runs a whole KITTI, Karlsruhe or EuRoC sequence directory, as ``swarmpose odometry``.
-    Settings: ``config`` or ``OdometryConfig``'s keywords, not both."""
+    Settings: ``config`` or ``OdometryConfig``'s keywords, not both. A frame that cannot be
+    read (or Ctrl-C) stops the run: the exception's ``run`` attribute is the
+    ``OdometryRun`` of the frames done."""
 
 class Sequence:
     """A recorded stereo sequence: ``seq[i]`` is the (left, right) uint8 images of frame i."""

@@ -3,7 +3,7 @@
 use super::check_threshold;
 use crate::error::PoseError;
 use crate::geometry::MIN_CORRESPONDENCES;
-use crate::pso::PsoConfig;
+use crate::pso::{MAX_SWARM_SIZE, PsoConfig};
 
 /// How `pso` chooses its inlier threshold when the data carry no per-point noise.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -168,6 +168,12 @@ impl PsoEstimatorConfig {
         }
         check_threshold(self.sigma_multiplier)?;
         self.pso.validate()?;
+        if self.seeded_particles > MAX_SWARM_SIZE {
+            return Err(PoseError::InvalidConfig(format!(
+                "seeded_particles {} is more than the {MAX_SWARM_SIZE} a swarm may have",
+                self.seeded_particles
+            )));
+        }
         if self.max_points < MIN_CORRESPONDENCES || self.max_pairs == 0 || self.refine_rounds == 0 {
             return Err(PoseError::InvalidConfig(
                 "max_points must be >= 4, max_pairs and refine_rounds >= 1".into(),

@@ -328,3 +328,25 @@ fn chance_consensus_is_an_error_not_a_pose() {
         );
     }
 }
+
+#[test]
+fn swarms_too_large_to_allocate_are_refused() {
+    // 10^12 particles (or seeded particles) were allocated at once: the process aborted.
+    let s = SyntheticSpec::default().generate(3).expect("valid");
+    for config in [
+        PsoEstimatorConfig {
+            pso: crate::pso::PsoConfig::default().with_swarm_size(1_000_000_000_000),
+            ..PsoEstimatorConfig::default()
+        },
+        PsoEstimatorConfig::default().with_seeded_particles(1_000_000_000_000),
+    ] {
+        let e = PsoEstimator::new(config)
+            .estimate_seeded(&s.data, 0)
+            .expect_err("too many particles");
+        assert!(
+            e.to_string()
+                .contains("1000000000000 is more than the 1000000 a swarm may have"),
+            "{e}"
+        );
+    }
+}
