@@ -29,6 +29,29 @@ pub enum Calibration {
 /// camera and every motion at the identity).
 pub const MAX_FIXED_CORRECTION_PX: f64 = 100.0;
 
+/// Fewest inliers [`OdometryConfig::min_inliers`] may ask for: a rigid motion needs
+/// three points that are not collinear.
+pub const MIN_INLIERS: usize = 3;
+
+impl OdometryConfig {
+    /// Checks the settings that have a range of their own (the working-size band and the
+    /// camera are checked with the camera).
+    ///
+    /// # Errors
+    /// [`crate::OdometryError::Config`] naming the setting.
+    pub fn check(&self) -> Result<(), crate::OdometryError> {
+        if self.min_inliers < MIN_INLIERS {
+            return Err(crate::OdometryError::Config {
+                message: format!(
+                    "min_inliers {}: at least {MIN_INLIERS} are needed for a motion",
+                    self.min_inliers
+                ),
+            });
+        }
+        Ok(())
+    }
+}
+
 impl Calibration {
     /// The mode a user's options ask for: the `causes` self-calibration may correct, and
     /// a fixed correction's offset and quadratic term (pixels; either may be given),
@@ -98,7 +121,8 @@ pub struct OdometryConfig {
     pub refine: bool,
     /// The disparity correction (default [`Calibration::Auto`]).
     pub calibration: Calibration,
-    /// Fewest inliers for a motion to be accepted (default 12).
+    /// Fewest inliers for a motion to be accepted (default 12; at least
+    /// [`MIN_INLIERS`], checked when the engine is made).
     pub min_inliers: usize,
     /// Seed of the estimator: frame `k` uses `seed + k` (default 0).
     pub seed: u64,

@@ -112,10 +112,12 @@ impl OdometryBuilder {
     ///
     /// # Errors
     /// [`OdometryError::Camera`] for a camera that is not valid, or an RGB-D camera with
-    /// a detector other than ORB.
+    /// a detector other than ORB; [`OdometryError::Config`] for a setting out of its
+    /// range ([`OdometryConfig::check`]).
     pub fn build(self) -> Result<Odometry, OdometryError> {
         let mut camera = self.camera;
         let config = self.config;
+        config.check()?;
         if let Some(noise) = &self.rgbd {
             noise.validate()?;
             camera.rig.baseline_m = noise.virtual_baseline_m;

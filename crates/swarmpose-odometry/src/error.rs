@@ -23,6 +23,12 @@ pub enum OdometryError {
         /// What is wrong.
         message: String,
     },
+    /// A setting of [`crate::OdometryConfig`] out of its range (bad input).
+    #[error("{message}")]
+    Config {
+        /// What is wrong, naming the setting.
+        message: String,
+    },
     /// A frame that does not fit the camera, or a timestamp that does not increase (bad
     /// input); the engine's state is unchanged.
     #[error("{message}")]
@@ -76,6 +82,7 @@ impl OdometryError {
                 | Self::TooFewFrames { .. }
                 | Self::Rgbd { .. }
                 | Self::Camera { .. }
+                | Self::Config { .. }
                 | Self::Frame { .. }
         )
     }

@@ -45,7 +45,7 @@ pub mod tracker;
 pub mod window;
 pub mod working;
 
-pub use config::{Calibration, OdometryConfig};
+pub use config::{Calibration, MIN_INLIERS, OdometryConfig};
 pub use engine::{Odometry, OdometryBuilder, OwnedStereoFrame};
 pub use error::OdometryError;
 pub use intake::{DepthView, RgbdInput, StereoCamera, StereoInput};

@@ -121,3 +121,27 @@ fn a_camera_that_is_not_one_is_refused() {
         assert!(e.starts_with("camera:"), "{e}");
     }
 }
+
+#[test]
+fn fewer_than_three_inliers_is_refused_not_raised() {
+    // Fewer than three points fix no motion: the engine used to take 0, 1 or 2 as 3
+    // without a word (the CLI and Python refuse them with the same message).
+    let camera = camera_of(&SyntheticSequence::new(2, 0.5, 0.0));
+    for n in [0, 1, 2] {
+        let config = OdometryConfig {
+            min_inliers: n,
+            ..OdometryConfig::default()
+        };
+        let e = Odometry::new(camera, config).err().expect("refused");
+        assert!(e.is_input(), "{e}");
+        assert_eq!(
+            e.to_string(),
+            format!("min_inliers {n}: at least 3 are needed for a motion")
+        );
+    }
+    let three = OdometryConfig {
+        min_inliers: swarmpose_odometry::MIN_INLIERS,
+        ..OdometryConfig::default()
+    };
+    assert!(Odometry::new(camera, three).is_ok());
+}

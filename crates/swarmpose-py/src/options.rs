@@ -160,6 +160,7 @@ impl OdometryConfig {
     fn check(&self) -> PyResult<()> {
         let c = self.engine_config()?;
         methods::estimator(&self.method, self.threshold)?;
+        c.check().map_err(|e| odometry_error(&e))?;
         check_band(c.min_working_pixels, c.max_working_pixels).map_err(|e| odometry_error(&e))
     }
 
@@ -194,11 +195,6 @@ impl OdometryConfig {
             c.min_working_pixels = n;
         }
         if let Some(n) = self.min_inliers {
-            if n < 3 {
-                return Err(PyValueError::new_err(format!(
-                    "min_inliers {n}: at least 3 are needed for a motion"
-                )));
-            }
             c.min_inliers = n;
         }
         let causes = match &self.calibrate {

@@ -145,12 +145,15 @@ pub struct OdometryArgs {
     pub options: EstimatorOptions,
 }
 
-/// `--min-inliers`: at least 3 (fewer used to be raised to 3 without a word; Python's
-/// `min_inliers=` refuses them with the same message).
+/// `--min-inliers`: at least [`swarmpose_odometry::MIN_INLIERS`] (fewer used to be raised
+/// to 3 without a word; the engine and Python's `min_inliers=` refuse them too).
 fn min_inliers(s: &str) -> Result<usize, String> {
     match s.trim().parse::<usize>() {
-        Ok(n) if n >= 3 => Ok(n),
-        _ => Err("at least 3 are needed for a motion".into()),
+        Ok(n) if n >= swarmpose_odometry::MIN_INLIERS => Ok(n),
+        _ => Err(format!(
+            "at least {} are needed for a motion",
+            swarmpose_odometry::MIN_INLIERS
+        )),
     }
 }
 

@@ -110,7 +110,9 @@ pub struct Tracker<D: Descriptor> {
 
 impl<D: Descriptor> Tracker<D> {
     /// A tracker for `camera` whose measurements have `noise`, matching frames with
-    /// `temporal`.
+    /// `temporal`. The engine refuses a `config` it cannot honour
+    /// ([`OdometryConfig::check`]); a tracker made directly takes `min_inliers` as at
+    /// least [`crate::config::MIN_INLIERS`].
     #[must_use]
     pub fn new(
         camera: StereoCamera,
@@ -231,7 +233,7 @@ impl<D: Descriptor> Tracker<D> {
         };
         let (ref_pose, ref_timestamp_s, ref_index) =
             (reference.pose, reference.timestamp_s, reference.index);
-        let min = self.config.min_inliers.max(3);
+        let min = self.config.min_inliers.max(crate::config::MIN_INLIERS);
         let t = Instant::now();
         let m = match_frames(&reference.frame, frame, &self.temporal)
             .map_err(|e| format!("matching failed: {e}"))?;
@@ -435,7 +437,7 @@ impl<D: Descriptor> Tracker<D> {
             stereo_points: frame.len(),
             ..Counts::default()
         };
-        let min = self.config.min_inliers.max(3);
+        let min = self.config.min_inliers.max(crate::config::MIN_INLIERS);
         let enough_points = frame.len() >= min;
         let n_points = frame.len();
 
