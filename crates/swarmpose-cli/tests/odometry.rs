@@ -61,76 +61,46 @@ fn bad_sequences_give_one_clear_line() {
     check_error(&out, &["/nonexistent/seq"]);
 
     let two = kitti_dir(&tmp, "two", 2, None);
-    let out = swarmpose(
-        &[
-            "odometry",
-            s(&two),
-            "--out",
-            s(&out_dir),
-            "--method",
-            "svd",
-            "--particles",
-            "5",
-        ],
-        None,
-    );
-    check_error(&out, &["--particles does not apply to --method svd"]);
-
-    let out = swarmpose(
-        &[
-            "odometry",
-            s(&two),
-            "--out",
-            s(&out_dir),
-            "--max-working-pixels",
-            "5",
-        ],
-        None,
-    );
-    check_error(&out, &["max_working_pixels 5: at least 10000 are needed"]);
-
-    // Images doubled without end: the process was killed for want of memory.
-    let out = swarmpose(
-        &[
-            "odometry",
-            s(&two),
-            "--out",
-            s(&out_dir),
-            "--max-working-pixels",
-            &usize::MAX.to_string(),
-            "--min-working-pixels",
-            &(usize::MAX / 4).to_string(),
-        ],
-        None,
-    );
-    check_error(
-        &out,
-        &[&format!(
-            "min_working_pixels {}: at most 16777216",
-            usize::MAX / 4
-        )],
-    );
-
+    // Each: options after `odometry TWO --out OUT`, and what the one line must say.
+    let max = usize::MAX.to_string();
+    let quarter = (usize::MAX / 4).to_string();
+    let too_many = format!("min_working_pixels {quarter}: at most 16777216");
+    let mut cases: Vec<(Vec<&str>, Vec<String>)> = vec![
+        (
+            vec!["--method", "svd", "--particles", "5"],
+            vec!["--particles does not apply to --method svd".into()],
+        ),
+        (
+            vec!["--max-working-pixels", "5"],
+            vec!["max_working_pixels 5: at least 10000 are needed".into()],
+        ),
+        // Images doubled without end: the process was killed for want of memory.
+        (
+            vec![
+                "--max-working-pixels",
+                &max,
+                "--min-working-pixels",
+                &quarter,
+            ],
+            vec![too_many],
+        ),
+    ];
     // Fewer than 3 inliers were raised to 3 without a word (Python refuses them).
     for n in ["0", "2", "-1"] {
-        let out = swarmpose(
-            &[
-                "odometry",
-                s(&two),
-                "--out",
-                s(&out_dir),
-                "--min-inliers",
-                n,
+        cases.push((
+            vec!["--min-inliers", n],
+            vec![
+                format!("'{n}' for '--min-inliers <N>'"),
+                "at least 3 are needed".into(),
             ],
-            None,
-        );
-        check_error(
-            &out,
-            &[
-                &format!("'{n}' for '--min-inliers <N>'"),
-                "at least 3 are needed",
-            ],
-        );
+        ));
+    }
+    for (options, expected) in &cases {
+        let mut args = vec!["odometry", s(&two), "--out", s(&out_dir)];
+        args.extend(options);
+        let out = swarmpose(&args, None);
+        let expected: Vec<&str> = expected.iter().map(String::as_str).collect();
+        check_error(&out, &expected);
     }
     assert!(!out_dir.exists(), "nothing written on bad input");
 }
