@@ -33,25 +33,6 @@ pub const MAX_FIXED_CORRECTION_PX: f64 = 100.0;
 /// three points that are not collinear.
 pub const MIN_INLIERS: usize = 3;
 
-impl OdometryConfig {
-    /// Checks the settings that have a range of their own (the working-size band and the
-    /// camera are checked with the camera).
-    ///
-    /// # Errors
-    /// [`crate::OdometryError::Config`] naming the setting.
-    pub fn check(&self) -> Result<(), crate::OdometryError> {
-        if self.min_inliers < MIN_INLIERS {
-            return Err(crate::OdometryError::Config {
-                message: format!(
-                    "min_inliers {}: at least {MIN_INLIERS} are needed for a motion",
-                    self.min_inliers
-                ),
-            });
-        }
-        Ok(())
-    }
-}
-
 impl Calibration {
     /// The mode a user's options ask for: the `causes` self-calibration may correct, and
     /// a fixed correction's offset and quadratic term (pixels; either may be given),
@@ -175,6 +156,23 @@ impl OdometryConfig {
     pub fn with_marginalisation(mut self, mode: crate::window::Marginalisation) -> Self {
         self.window.marginalise = mode;
         self
+    }
+
+    /// Checks the settings that have a range of their own (the working-size band and the
+    /// camera are checked with the camera).
+    ///
+    /// # Errors
+    /// [`crate::OdometryError::Config`] naming the setting.
+    pub fn check(&self) -> Result<(), crate::OdometryError> {
+        if self.min_inliers < MIN_INLIERS {
+            return Err(crate::OdometryError::Config {
+                message: format!(
+                    "min_inliers {}: at least {MIN_INLIERS} are needed for a motion",
+                    self.min_inliers
+                ),
+            });
+        }
+        Ok(())
     }
 }
 
