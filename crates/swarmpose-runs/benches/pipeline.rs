@@ -12,7 +12,7 @@
 //! (bicubic, 2482x752, the calibration to match): halved back by the engine (the default
 //! [`OdometryConfig::max_working_pixels`]) and at full size.
 //!
-//! `cargo bench -p swarmpose-odometry --bench pipeline`
+//! `cargo bench -p swarmpose-runs --bench pipeline`
 
 use std::hint::black_box;
 use std::time::{Duration, Instant};
@@ -21,8 +21,8 @@ use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use std::ops::ControlFlow;
 use swarmpose_datasets::open;
 
-use swarmpose_odometry::batch::{camera_of, collect, run_sequence_two_threads};
 use swarmpose_odometry::{Odometry, OdometryConfig, StageTimes, StereoInput};
+use swarmpose_runs::batch::{camera_of, collect, run_sequence_two_threads};
 use swarmpose_vision::image::{GrayImage, double};
 
 fn percentile(sorted: &[f64], p: f64) -> f64 {

@@ -6,16 +6,16 @@
 //! (`Marginalisation::Finished` or `All`; without, its information is discarded).
 //!
 //! ```sh
-//! cargo run --release -p swarmpose-odometry --example synthetic_suite -- 0 10 20 10f 10a
+//! cargo run --release -p swarmpose-runs --example synthetic_suite -- 0 10 20 10f 10a
 //! ```
 
 use swarmpose_datasets::StereoSequence;
 use swarmpose_eval::associate::by_index;
 use swarmpose_eval::{Trajectory, evaluate};
-use swarmpose_odometry::batch::{camera_of, collect};
-use swarmpose_odometry::synthetic::SyntheticSequence;
 use swarmpose_odometry::window::Marginalisation;
 use swarmpose_odometry::{Odometry, OdometryConfig, Status};
+use swarmpose_runs::batch::{camera_of, collect};
+use swarmpose_runs::synthetic::SyntheticSequence;
 
 fn main() {
     let windows: Vec<String> = std::env::args().skip(1).collect();

@@ -6,12 +6,18 @@ use std::time::Instant;
 
 use swarmpose_datasets::StereoSequence;
 
-use crate::engine::{Odometry, OwnedStereoFrame};
-use crate::error::OdometryError;
-use crate::frontend::ms;
-use crate::intake::{DepthView, RgbdInput, StereoCamera, StereoInput};
-use crate::record::FrameResult;
+use swarmpose_odometry::{
+    DepthView, FrameResult, Odometry, OwnedStereoFrame, RgbdInput, RunEnd, RunFailure,
+    StereoCamera, StereoInput,
+};
+
+use crate::error::RunError;
 use crate::rgbd::RgbdSequence;
+
+/// Milliseconds since `t`.
+fn ms(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
+}
 
 /// The camera of a stereo sequence.
 #[must_use]
@@ -30,34 +36,22 @@ pub fn time_of(seq: &dyn StereoSequence, i: usize, frame_period_s: f64) -> f64 {
     seq.timestamp_s(i).unwrap_or(i as f64 * frame_period_s)
 }
 
-/// How a run ended.
-#[derive(Debug)]
-pub enum RunEnd {
-    /// Every frame was processed.
-    Finished,
-    /// `on_frame` asked to stop after this many frames.
-    Stopped(usize),
-}
-
 /// Feeds the frames of `seq` to `odometry` in order, frame `i` at the time the sequence
 /// records for it ([`StereoSequence::timestamp_s`]) or else `i × frame_period_s`, and
 /// calls `on_frame` with each result as soon as it exists; it
 /// may stop the run by returning [`ControlFlow::Break`].
 ///
 /// # Errors
-/// [`OdometryError::AtFrame`] with the index of the first frame that cannot be loaded or
+/// [`RunError::AtFrame`] with the index of the first frame that cannot be loaded or
 /// taken; the frames before it were given to `on_frame`.
 pub fn run_sequence(
     seq: &dyn StereoSequence,
     odometry: &mut Odometry,
     frame_period_s: f64,
     on_frame: &mut dyn FnMut(&FrameResult) -> ControlFlow<()>,
-) -> Result<RunEnd, OdometryError> {
+) -> Result<RunEnd, RunError> {
     for i in 0..seq.len() {
-        let at = |e: OdometryError| OdometryError::AtFrame {
-            index: i,
-            source: Box::new(e),
-        };
+        let at = |e: RunError| e.at_frame(i);
         let t = Instant::now();
         let pair = seq.frame(i).map_err(|e| at(e.into()))?;
         let load_ms = ms(t);
@@ -66,7 +60,9 @@ pub fn run_sequence(
             right: pair.right.view(),
             timestamp_s: time_of(seq, i, frame_period_s),
         };
-        let r = odometry.track_timed(input, load_ms).map_err(at)?;
+        let r = odometry
+            .track_timed(input, load_ms)
+            .map_err(|e| at(e.into()))?;
         if on_frame(&r).is_break() {
             return Ok(RunEnd::Stopped(i + 1));
         }
@@ -85,10 +81,10 @@ pub fn run_sequence_two_threads(
     odometry: &mut Odometry,
     frame_period_s: f64,
     on_frame: &mut dyn FnMut(&FrameResult) -> ControlFlow<()>,
-) -> Result<RunEnd, OdometryError> {
+) -> Result<RunEnd, RunError> {
     let frames = (0..seq.len()).map(|i| {
         let t = Instant::now();
-        let pair = seq.frame(i).map_err(OdometryError::from)?;
+        let pair = seq.frame(i).map_err(RunError::from)?;
         Ok(OwnedStereoFrame {
             load_ms: ms(t),
             left: pair.left,
@@ -107,13 +103,10 @@ pub fn run_rgbd_sequence(
     seq: &RgbdSequence,
     odometry: &mut Odometry,
     on_frame: &mut dyn FnMut(&FrameResult) -> ControlFlow<()>,
-) -> Result<RunEnd, OdometryError> {
+) -> Result<RunEnd, RunError> {
     let stamps = seq.stamps();
     for (i, &stamp) in stamps.iter().enumerate() {
-        let at = |e: OdometryError| OdometryError::AtFrame {
-            index: i,
-            source: Box::new(e),
-        };
+        let at = |e: RunError| e.at_frame(i);
         let t = Instant::now();
         let (gray, depth) = seq.frame(i).map_err(at)?;
         let load_ms = ms(t);
@@ -126,7 +119,9 @@ pub fn run_rgbd_sequence(
             },
             timestamp_s: stamp,
         };
-        let r = odometry.track_rgbd_timed(input, load_ms).map_err(at)?;
+        let r = odometry
+            .track_rgbd_timed(input, load_ms)
+            .map_err(|e| at(e.into()))?;
         if on_frame(&r).is_break() {
             return Ok(RunEnd::Stopped(i + 1));
         }
@@ -143,7 +138,7 @@ pub fn collect(
     seq: &dyn StereoSequence,
     odometry: &mut Odometry,
     frame_period_s: f64,
-) -> Result<Vec<FrameResult>, OdometryError> {
+) -> Result<Vec<FrameResult>, RunError> {
     let mut out = Vec::with_capacity(seq.len());
     run_sequence(seq, odometry, frame_period_s, &mut |r| {
         out.push(r.clone());

@@ -17,8 +17,7 @@ use nalgebra::Isometry3;
 use swarmpose_core::geometry::quaternion_wxyz;
 use swarmpose_eval::trajectory::{kitti_text, tum_text};
 
-use crate::record::{FrameResult, Status};
-use crate::selfcal::Decision;
+use swarmpose_odometry::{Decision, FrameResult, Status};
 
 /// The header of `frames.csv`.
 pub const FRAMES_HEADER: &str = "frame,timestamp_s,status,reference,left_features,\

@@ -13,7 +13,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use swarmpose_eval::Evaluation;
 
-use crate::error::OdometryError;
+use crate::error::RunError;
 
 /// DejaVu Sans, the copy `swarmpose-sim` ships (Bitstream Vera license, see
 /// `crates/swarmpose-sim/assets/DejaVuSans-LICENSE.txt`).
@@ -43,8 +43,8 @@ pub struct PlotTrack<'a> {
     pub label: &'a str,
 }
 
-fn err(path: &Path, e: impl std::fmt::Display) -> OdometryError {
-    OdometryError::Write {
+fn err(path: &Path, e: impl std::fmt::Display) -> RunError {
+    RunError::Write {
         path: path.to_owned(),
         message: e.to_string(),
     }
@@ -84,7 +84,7 @@ fn draw_trajectory<DB: DrawingBackend>(
     gt: Option<&[Isometry3<f64>]>,
     title: &str,
     path: &Path,
-) -> Result<(), OdometryError> {
+) -> Result<(), RunError> {
     root.fill(&WHITE).map_err(|e| err(path, e))?;
     let est = top_view(run.poses);
     let truth = gt.map(top_view).unwrap_or_default();
@@ -146,7 +146,7 @@ fn draw_errors<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     e: &Evaluation,
     path: &Path,
-) -> Result<(), OdometryError> {
+) -> Result<(), RunError> {
     root.fill(&WHITE).map_err(|x| err(path, x))?;
     let (top, bottom) = root.split_vertically(root.dim_in_pixel().1 / 2);
     let panels = [
@@ -203,7 +203,7 @@ fn draw_errors<DB: DrawingBackend>(
     root.present().map_err(|x| err(path, x))
 }
 
-fn encode_png(path: &Path, buf: &[u8], size: (u32, u32)) -> Result<Vec<u8>, OdometryError> {
+fn encode_png(path: &Path, buf: &[u8], size: (u32, u32)) -> Result<Vec<u8>, RunError> {
     let mut out = Vec::new();
     PngEncoder::new_with_quality(&mut out, CompressionType::Default, FilterType::Adaptive)
         .write_image(buf, size.0, size.1, ExtendedColorType::Rgb8)
@@ -215,13 +215,13 @@ fn encode_png(path: &Path, buf: &[u8], size: (u32, u32)) -> Result<Vec<u8>, Odom
 /// with an evaluation, `errors.png`.
 ///
 /// # Errors
-/// [`OdometryError::Write`] naming the plot that could not be drawn.
+/// [`RunError::Write`] naming the plot that could not be drawn.
 pub fn render_plots(
     run: &PlotTrack<'_>,
     title: &str,
     gt: Option<&[Isometry3<f64>]>,
     evaluation: Option<&Evaluation>,
-) -> Result<Vec<(&'static str, Vec<u8>)>, OdometryError> {
+) -> Result<Vec<(&'static str, Vec<u8>)>, RunError> {
     register_font();
     let mut out = Vec::new();
     let size = (1000u32, 1000u32);

@@ -16,8 +16,8 @@ use nalgebra::Isometry3;
 use swarmpose_eval::{Format, Trajectory};
 use swarmpose_vision::image::GrayImage;
 
-use crate::error::OdometryError;
-use crate::intake::StereoCamera;
+use crate::error::RunError;
+use swarmpose_odometry::StereoCamera;
 
 /// Depth PNG units per metre.
 pub const DEPTH_SCALE: f64 = 5000.0;
@@ -64,15 +64,15 @@ pub fn detect(dir: &Path) -> bool {
     dir.join("rgb.txt").is_file() && dir.join("depth.txt").is_file()
 }
 
-fn rgbd_err(path: &Path, line: usize, message: impl Into<String>) -> OdometryError {
-    OdometryError::Rgbd {
+fn rgbd_err(path: &Path, line: usize, message: impl Into<String>) -> RunError {
+    RunError::Rgbd {
         path: path.to_owned(),
         line,
         message: message.into(),
     }
 }
 
-fn read_list(dir: &Path, name: &str) -> Result<Vec<(f64, PathBuf)>, OdometryError> {
+fn read_list(dir: &Path, name: &str) -> Result<Vec<(f64, PathBuf)>, RunError> {
     let path = dir.join(name);
     let text = std::fs::read_to_string(&path)
         .map_err(|e| rgbd_err(&path, 0, format!("cannot read: {e}")))?;
@@ -111,10 +111,10 @@ impl RgbdSequence {
     /// Opens a TUM RGB-D directory.
     ///
     /// # Errors
-    /// [`OdometryError::Rgbd`] naming the file (and line) that is missing or malformed,
+    /// [`RunError::Rgbd`] naming the file (and line) that is missing or malformed,
     /// or a colour image without a depth image within 20 ms, or a frame without a
     /// ground-truth pose within 20 ms when `groundtruth.txt` exists.
-    pub fn open(dir: &Path) -> Result<Self, OdometryError> {
+    pub fn open(dir: &Path) -> Result<Self, RunError> {
         let rgb = read_list(dir, "rgb.txt")?;
         let depth = read_list(dir, "depth.txt")?;
         let depth_stamps: Vec<f64> = depth.iter().map(|d| d.0).collect();
@@ -205,8 +205,8 @@ impl RgbdSequence {
     /// baseline is the RGB-D engine's virtual one).
     ///
     /// # Errors
-    /// [`OdometryError::Rgbd`] when the first image cannot be read.
-    pub fn camera(&self) -> Result<StereoCamera, OdometryError> {
+    /// [`RunError::Rgbd`] when the first image cannot be read.
+    pub fn camera(&self) -> Result<StereoCamera, RunError> {
         let Some((_, rgb, _)) = self.frames.first() else {
             return Err(rgbd_err(&self.root, 0, "no frame"));
         };
@@ -219,7 +219,7 @@ impl RgbdSequence {
                 fy: k.fy,
                 cx: k.cx,
                 cy: k.cy,
-                baseline_m: crate::frontend::RgbdNoise::default().virtual_baseline_m,
+                baseline_m: swarmpose_odometry::frontend::RgbdNoise::default().virtual_baseline_m,
             },
             width: w as usize,
             height: h as usize,
@@ -229,8 +229,8 @@ impl RgbdSequence {
     /// Loads frame `i`: the gray image and the depth in metres (0 = none).
     ///
     /// # Errors
-    /// [`OdometryError::Rgbd`] naming an unreadable image or sizes that differ.
-    pub fn frame(&self, i: usize) -> Result<(GrayImage, Vec<f32>), OdometryError> {
+    /// [`RunError::Rgbd`] naming an unreadable image or sizes that differ.
+    pub fn frame(&self, i: usize) -> Result<(GrayImage, Vec<f32>), RunError> {
         let Some((_, rgb, depth)) = self.frames.get(i) else {
             return Err(rgbd_err(&self.root, 0, format!("frame {i} out of range")));
         };
@@ -262,7 +262,7 @@ impl RgbdSequence {
     }
 }
 
-fn read_intrinsics(path: &Path) -> Result<Intrinsics, OdometryError> {
+fn read_intrinsics(path: &Path) -> Result<Intrinsics, RunError> {
     if !path.is_file() {
         return Ok(Intrinsics::default());
     }

@@ -7,9 +7,9 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
 use swarmpose_datasets::{StereoPair, StereoSequence};
-use swarmpose_odometry::batch::camera_of;
-use swarmpose_odometry::synthetic::{RightCameraError, SyntheticSequence};
 use swarmpose_odometry::{Odometry, OdometryConfig, StereoInput};
+use swarmpose_runs::batch::camera_of;
+use swarmpose_runs::synthetic::{RightCameraError, SyntheticSequence};
 
 /// The system allocator, counting this thread's allocations (calls and bytes).
 struct Counting;

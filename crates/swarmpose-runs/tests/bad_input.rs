@@ -6,9 +6,9 @@
 //! engine goes on with the next good frames.
 
 use swarmpose_datasets::StereoSequence;
-use swarmpose_odometry::batch::camera_of;
-use swarmpose_odometry::synthetic::SyntheticSequence;
 use swarmpose_odometry::{Odometry, OdometryConfig, Status, StereoCamera, StereoInput};
+use swarmpose_runs::batch::camera_of;
+use swarmpose_runs::synthetic::SyntheticSequence;
 use swarmpose_vision::features::GrayView;
 use swarmpose_vision::image::GrayImage;
 
@@ -133,7 +133,10 @@ fn fewer_than_three_inliers_is_refused_not_raised() {
             ..OdometryConfig::default()
         };
         let e = Odometry::new(camera, config).err().expect("refused");
-        assert!(e.is_input(), "{e}");
+        assert!(
+            matches!(e, swarmpose_odometry::OdometryError::Config { .. }),
+            "{e}"
+        );
         assert_eq!(
             e.to_string(),
             format!("min_inliers {n}: at least 3 are needed for a motion")

@@ -8,9 +8,9 @@ mod common;
 
 use swarmpose_datasets::StereoSequence;
 
-use swarmpose_odometry::synthetic::features::{FeatureSequence, FeatureSequenceConfig};
-use swarmpose_odometry::synthetic::{RIG, RightCameraError, SyntheticSequence};
 use swarmpose_odometry::{CorrectionModel, OdometryConfig};
+use swarmpose_runs::synthetic::features::{FeatureSequence, FeatureSequenceConfig};
+use swarmpose_runs::synthetic::{RIG, RightCameraError, SyntheticSequence};
 
 fn decide(error: RightCameraError) -> (common::Run, f64) {
     let seq = SyntheticSequence::default().with_right_camera_error(error);

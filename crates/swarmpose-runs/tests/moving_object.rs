@@ -5,9 +5,9 @@
 
 mod common;
 
-use swarmpose_odometry::synthetic::features::{FeatureSequence, FeatureSequenceConfig};
-use swarmpose_odometry::synthetic::vehicle::Vehicle;
 use swarmpose_odometry::{FrameResult, OdometryConfig};
+use swarmpose_runs::synthetic::features::{FeatureSequence, FeatureSequenceConfig};
+use swarmpose_runs::synthetic::vehicle::Vehicle;
 
 /// Runs `frames` frames of `seq` through a tracker with `config`, printing each result
 /// under `label`.

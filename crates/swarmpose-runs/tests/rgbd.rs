@@ -5,11 +5,11 @@ use std::ops::ControlFlow;
 
 use swarmpose_eval::associate::by_index;
 use swarmpose_eval::{Trajectory, evaluate};
-use swarmpose_odometry::batch::run_rgbd_sequence;
 use swarmpose_odometry::frontend::RgbdNoise;
-use swarmpose_odometry::rgbd::RgbdSequence;
-use swarmpose_odometry::synthetic::SyntheticSequence;
 use swarmpose_odometry::{Odometry, OdometryConfig, Status};
+use swarmpose_runs::batch::run_rgbd_sequence;
+use swarmpose_runs::rgbd::RgbdSequence;
+use swarmpose_runs::synthetic::SyntheticSequence;
 
 fn tmp(tag: &str) -> std::path::PathBuf {
     let d = std::env::temp_dir().join(format!("swarmpose-rgbd-{tag}-{}", std::process::id()));

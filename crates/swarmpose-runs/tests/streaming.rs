@@ -4,8 +4,8 @@
 
 mod common;
 
-use swarmpose_odometry::synthetic::features::{FeatureSequence, FeatureSequenceConfig};
 use swarmpose_odometry::{OdometryConfig, StageTimes, Status};
+use swarmpose_runs::synthetic::features::{FeatureSequence, FeatureSequenceConfig};
 use swarmpose_vision::frontend::StereoFrame;
 
 /// 2000 frames generated on the fly: the engine's state after 2000 frames is within 10 %

@@ -4,8 +4,8 @@
 mod common;
 
 use swarmpose_datasets::StereoSequence;
-use swarmpose_odometry::synthetic::SyntheticSequence;
 use swarmpose_odometry::{CorrectionModel, OdometryConfig};
+use swarmpose_runs::synthetic::SyntheticSequence;
 
 #[test]
 fn synthetic_sequence_is_followed() {
@@ -38,7 +38,7 @@ fn synthetic_sequence_is_followed() {
 #[test]
 fn results_do_not_depend_on_the_unit_of_the_baseline() {
     use swarmpose_odometry::Odometry;
-    use swarmpose_odometry::batch::{camera_of, collect};
+    use swarmpose_runs::batch::{camera_of, collect};
 
     let seq = SyntheticSequence::new(10, 0.8, 1f64.to_radians());
     let run = |scale: f64| {
@@ -94,8 +94,8 @@ fn results_do_not_depend_on_the_unit_of_the_baseline() {
 /// changed ended 1.12 % off, now 0.94 %).
 #[test]
 fn a_changing_exposure_is_followed() {
-    use swarmpose_odometry::batch::camera_of;
     use swarmpose_odometry::{Odometry, StereoInput};
+    use swarmpose_runs::batch::camera_of;
 
     let seq = SyntheticSequence::default();
     let gt = seq.ground_truth().expect("known path").to_vec();
@@ -150,9 +150,9 @@ fn a_changing_exposure_is_followed() {
 /// images are used as they are.
 #[test]
 fn a_larger_camera_is_halved_to_the_same_result() {
-    use swarmpose_odometry::batch::camera_of;
     use swarmpose_odometry::config::Calibration;
     use swarmpose_odometry::{Odometry, StereoInput};
+    use swarmpose_runs::batch::camera_of;
     use swarmpose_vision::frontend::DisparityCorrection;
     use swarmpose_vision::image::GrayImage;
 

@@ -7,9 +7,10 @@ mod common;
 use std::ops::ControlFlow;
 
 use swarmpose_datasets::{StereoSequence, open};
-use swarmpose_odometry::batch::{RunEnd, camera_of, run_sequence, run_sequence_two_threads};
-use swarmpose_odometry::synthetic::SyntheticSequence;
-use swarmpose_odometry::{FrameResult, Odometry, OdometryConfig, OdometryError, OwnedStereoFrame};
+use swarmpose_odometry::{FrameResult, Odometry, OdometryConfig, OwnedStereoFrame, RunEnd};
+use swarmpose_runs::RunError;
+use swarmpose_runs::batch::{camera_of, run_sequence, run_sequence_two_threads};
+use swarmpose_runs::synthetic::SyntheticSequence;
 use swarmpose_vision::image::GrayImage;
 
 type Runner = fn(
@@ -17,7 +18,7 @@ type Runner = fn(
     &mut Odometry,
     f64,
     &mut dyn FnMut(&FrameResult) -> ControlFlow<()>,
-) -> Result<RunEnd, OdometryError>;
+) -> Result<RunEnd, RunError>;
 
 fn results(
     seq: &dyn StereoSequence,
@@ -117,7 +118,7 @@ fn a_bad_frame_stops_the_stream_and_is_named() {
     let seq = SyntheticSequence::default();
     let mut odo = Odometry::new(camera_of(&seq), OdometryConfig::default()).expect("engine");
     let frames = (0..8).map(|i| {
-        let pair = seq.frame(i).map_err(OdometryError::from)?;
+        let pair = seq.frame(i).map_err(RunError::from)?;
         let right = if i == 6 {
             GrayImage::new(3, 3) // not the camera's size
         } else {
@@ -131,7 +132,7 @@ fn a_bad_frame_stops_the_stream_and_is_named() {
         })
     });
     let mut seen = 0;
-    let e = odo
+    let e: RunError = odo
         .run_two_threads(frames, &mut |_| {
             seen += 1;
             ControlFlow::Continue(())
@@ -139,5 +140,5 @@ fn a_bad_frame_stops_the_stream_and_is_named() {
         .expect_err("frame 6 is bad");
     assert_eq!(seen, 6, "frames 0-5 are given out");
     assert!(e.to_string().starts_with("frame 6: "), "{e}");
-    assert!(matches!(e, OdometryError::AtFrame { index: 6, .. }), "{e}");
+    assert!(matches!(e, RunError::AtFrame { index: 6, .. }), "{e}");
 }

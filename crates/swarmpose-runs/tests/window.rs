@@ -5,9 +5,9 @@
 mod common;
 
 use swarmpose_datasets::open;
-use swarmpose_odometry::batch::{camera_of, collect, run_sequence_two_threads};
-use swarmpose_odometry::synthetic::SyntheticSequence;
 use swarmpose_odometry::{Odometry, OdometryConfig};
+use swarmpose_runs::batch::{camera_of, collect, run_sequence_two_threads};
+use swarmpose_runs::synthetic::SyntheticSequence;
 
 fn with_window(keyframes: usize) -> OdometryConfig {
     OdometryConfig::default().with_window(keyframes)

@@ -2,7 +2,7 @@
 //! landmarks along a gently curving path, measured by a stereo camera with known pixel
 //! noise, wrong matches, clutter and, optionally, a right camera that is not the
 //! calibrated one. No images: the frames go straight to the back end
-//! ([`crate::tracker::Tracker`]), so thousands of frames take seconds, with every
+//! ([`swarmpose_odometry::tracker::Tracker`]), so thousands of frames take seconds, with every
 //! quantity known (for the covariance's honesty, the self-calibration's decisions and the
 //! memory of long runs).
 //!
@@ -17,10 +17,10 @@ use swarmpose_vision::features::{BinaryDescriptor, Keypoint};
 use swarmpose_vision::frontend::StereoFrame;
 use swarmpose_vision::stereo::RectifiedStereo;
 
-use crate::config::OdometryConfig;
-use crate::intake::StereoCamera;
-use crate::refine::model::PixelNoise;
-use crate::tracker::Tracker;
+use swarmpose_odometry::OdometryConfig;
+use swarmpose_odometry::StereoCamera;
+use swarmpose_odometry::refine::model::PixelNoise;
+use swarmpose_odometry::tracker::Tracker;
 
 use super::vehicle::Vehicle;
 

@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use swarmpose_datasets::{DatasetError, StereoPair, StereoSequence};
 
-use crate::error::OdometryError;
+use crate::error::RunError;
 use swarmpose_vision::render::{TexturedPlane, depth_at, render};
 use swarmpose_vision::stereo::RectifiedStereo;
 
@@ -125,9 +125,9 @@ impl SyntheticSequence {
     /// that is not the first camera's) and `intrinsics.txt`; frames at 30 Hz.
     ///
     /// # Errors
-    /// [`OdometryError::Write`] naming the file.
-    pub fn write_tum_rgbd(&self, dir: &Path) -> Result<(), OdometryError> {
-        let werr = |path: &Path, e: &dyn std::fmt::Display| OdometryError::Write {
+    /// [`RunError::Write`] naming the file.
+    pub fn write_tum_rgbd(&self, dir: &Path) -> Result<(), RunError> {
+        let werr = |path: &Path, e: &dyn std::fmt::Display| RunError::Write {
             path: path.to_owned(),
             message: e.to_string(),
         };

@@ -7,8 +7,8 @@ use nalgebra::{Isometry3, Vector6};
 use swarmpose_datasets::open;
 use swarmpose_eval::associate::by_index;
 use swarmpose_eval::{Evaluation, Trajectory, evaluate};
-use swarmpose_odometry::batch::{camera_of, collect};
 use swarmpose_odometry::{Decision, FrameResult, Odometry, OdometryConfig, Status};
+use swarmpose_runs::batch::{camera_of, collect};
 
 /// The directory of a shared data set (see [`swarmpose_datasets::dataset_for_test`]).
 pub fn dataset(name: &str) -> Option<PathBuf> {
@@ -72,7 +72,7 @@ pub fn evaluate_run(name: &str, r: &Run) -> Evaluation {
 /// Feeds frames `0..n` of a synthetic feature stream to `tracker`, calling `each` with
 /// every result.
 pub fn stream(
-    seq: &swarmpose_odometry::synthetic::features::FeatureSequence,
+    seq: &swarmpose_runs::synthetic::features::FeatureSequence,
     tracker: &mut swarmpose_odometry::tracker::Tracker<
         swarmpose_vision::features::BinaryDescriptor,
     >,
