@@ -30,13 +30,15 @@ def common_arguments(parser):
 
 
 def provenance():
-    """One line: the commit (with "+ uncommitted changes" when the tree differs), the
+    """One line: the commit (with "+ uncommitted changes" when a file other than
+    Markdown differs from it), the
     date, the machine (CPU model, cores, memory) and its load average."""
     def git(*args):
         return subprocess.run(["git", "-C", ROOT, *args], capture_output=True, text=True).stdout.strip()
 
     commit = git("rev-parse", "--short", "HEAD") or "unknown commit"
-    if git("status", "--porcelain", "--untracked-files=no"):
+    # Changes to documentation (the file being regenerated) do not change a figure.
+    if git("status", "--porcelain", "--untracked-files=no", "--", ".", ":!*.md"):
         commit += " + uncommitted changes"
     cpu = platform.processor() or platform.machine()
     try:

@@ -51,10 +51,13 @@ def main():
         ours = swarmpose_segments(a.swarmpose, est, gt)
         worst = max(worst, largest_difference(ours, kitti_segments.evaluate(est, gt)))
         results.append((name, ours))
+    poses = kitti_segments.read_kitti(gt)
+    path_m = kitti_segments.trajectory_distances(poses)[-1]
     if worst > 1e-6:
         sys.exit(f"swarmpose and the numpy implementation differ by {worst:.2e} (> 1e-6)")
     lines = [
-        "KITTI odometry sequence 00 (4541 frames, 3.7 km): the KITTI devkit's segment errors of the "
+        f"KITTI odometry sequence 00 ({len(poses)} frames, {path_m / 1000:.2f} km): the KITTI devkit's "
+        "segment errors of the "
         "ORB-SLAM2 and S-PTAM estimates published with evo (`../shared/data/trajectories`), by "
         "`swarmpose evaluate EST KITTI_00_gt.txt --kitti-segments`; translation error in % of the "
         "segment length, rotation error in degrees per 100 m, segments starting every 10 frames. "
