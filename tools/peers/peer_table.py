@@ -15,9 +15,10 @@ The pooled row averages the per-clip differences over kitti_vo_seq2 and its vari
 resampling each clip's frames independently. Final drift (one number per run) is shown
 without an interval.
 
-With --shared-peer PATH, a second table holds the repo's peer against that script (its
-"pnp" pipeline; KITTI layouts and Karlsruhe; it cannot read EuRoC), with the same
-intervals: the repo's peer must be at least as strong.
+With --shared-peer PATH (../shared/peers/opencv_pnp_vo.py, its "pnp" pipeline; KITTI
+layouts and Karlsruhe, it cannot read EuRoC), two more tables, with the same intervals:
+swarmpose against that script itself, and the repo's peer against it (where the script is
+the stronger, the comparison with it is the one that counts).
 
     python3 tools/peers/peer_table.py --variants DIR [--data DIR] [--out DIR]
         [--shared-peer ../shared/peers/opencv_pnp_vo.py] [--reuse] [--update FILE]
@@ -157,9 +158,11 @@ def table(rows, a_name, b_name, rng):
             x, y = pairs[key]
             if kitti:
                 pooled.setdefault(key, []).append((x, y))
+            if unit == "m" and max(rms(x), rms(y)) < 0.01:  # millimetres (the still EuRoC clip)
+                x, y, unit = 1e3 * x, 1e3 * y, "mm"
             text, lo, hi = cell(*differences([(x, y)], rng), unit, digits)
             lower = a_name if hi < 0 else b_name if lo > 0 else "not resolved"
-            line += f" {rms(x):.{digits}f} / {rms(y):.{digits}f} {unit} | {text} | {lower} |"
+            line += f" {rms(x):.{digits}f} / {rms(y):.{digits}f}{' ' + unit if unit else ''} | {text} | {lower} |"
         lines.append(line)
     if pooled:
         n = len(next(iter(pooled.values())))
@@ -170,7 +173,7 @@ def table(rows, a_name, b_name, rng):
             lower = a_name if hi < 0 else b_name if lo > 0 else "not resolved"
             mean_a = np.mean([rms(x) for x, _ in pairs])
             mean_b = np.mean([rms(y) for _, y in pairs])
-            line += f" {mean_a:.{digits}f} / {mean_b:.{digits}f} {unit} | {text} | **{lower}** |"
+            line += f" {mean_a:.{digits}f} / {mean_b:.{digits}f}{' ' + unit if unit else ''} | {text} | **{lower}** |"
         lines.append(line)
     return lines
 
@@ -183,26 +186,26 @@ def main():
     p.add_argument("--shared-peer", help="../shared/peers/opencv_pnp_vo.py, to compare the peer with")
     p.add_argument("--reuse", action="store_true", help="keep the runs already in --out")
     a = p.parse_args()
-    main_rows, shared_rows = [], []
+    comparisons = {("swarmpose", "peer"): [], ("swarmpose", "shared peer"): [], ("peer", "shared peer"): []}
     for label, seq, opts, kitti in clips(a.data, a.variants):
         files, gt = trajectories(a, label, seq, opts)
         s = {k: scores(a, f, gt, seq) for k, f in files.items()}
         keys = [m[0] for m in METRICS if m[0] in s["swarmpose"]]
-        main_rows.append((label, {k: (s["swarmpose"][k], s["peer"][k]) for k in keys},
-                          (s["swarmpose"]["drift"], s["peer"]["drift"]), kitti))
-        if "shared peer" in s:
-            shared_rows.append((label, {k: (s["peer"][k], s["shared peer"][k]) for k in keys},
-                                (s["peer"]["drift"], s["shared peer"]["drift"]), kitti))
+        for (x, y), rows in comparisons.items():
+            if x in s and y in s:
+                rows.append((label, {k: (s[x][k], s[y][k]) for k in keys}, (s[x]["drift"], s[y]["drift"]), kitti))
         print(f"{label}: done", file=sys.stderr)
     rng = np.random.default_rng(SEED)
-    text = [f"Generated {provenance()}. Differences are swarmpose minus peer (negative: swarmpose "
-            "lower); \"lower\" names a system only where the 95 % interval excludes 0.", ""]
-    text += table(main_rows, "swarmpose", "peer", rng)
-    if shared_rows:
-        text += ["", "The repo's peer (`tools/peers/opencv_vo.py`) against `../shared/peers/opencv_pnp_vo.py` "
-                 "(its `pnp` pipeline; it cannot read EuRoC), the same way (difference: repo peer minus "
-                 "shared script):", ""]
-        text += table(shared_rows, "repo peer", "shared", rng)
+    text = [f"Generated {provenance()}. Differences are the first system minus the second (negative: "
+            "the first lower); \"lower\" names a system only where the 95 % interval excludes 0.", "",
+            "swarmpose's default against the peer (`tools/peers/opencv_vo.py`):", ""]
+    text += table(comparisons[("swarmpose", "peer")], "swarmpose", "peer", rng)
+    if comparisons[("peer", "shared peer")]:
+        text += ["", "swarmpose's default against `../shared/peers/opencv_pnp_vo.py` itself (its `pnp` pipeline, "
+                 "called where it lies; it cannot read EuRoC):", ""]
+        text += table(comparisons[("swarmpose", "shared peer")], "swarmpose", "shared", rng)
+        text += ["", "The peer against that script, the same way:", ""]
+        text += table(comparisons[("peer", "shared peer")], "peer", "shared", rng)
     out = "\n".join(text) + "\n"
     publish(a.update, "peer-table", COMMAND, out)
 
