@@ -1,7 +1,8 @@
 """The KITTI devkit's segment errors of swarmpose (Python and the CLI) against the
 independent numpy implementation in tools/kitti_segments, on KITTI 00's ground truth
 and the ORB-SLAM2 and S-PTAM estimates of it (../shared/data/trajectories): the same
-segments, and every figure within 1e-6 (percent, degrees per 100 m)."""
+segments, and every figure per length and overall within 1e-6 (percent, degrees per
+100 m)."""
 
 import importlib.util
 import json
@@ -44,8 +45,13 @@ def assert_same(ours, theirs):
             assert abs(a[k] - b[k]) <= TOLERANCE, (a, b)
     for k in keys:
         assert abs(ours[k] - theirs[k]) <= TOLERANCE, (k, ours[k], theirs[k])
-    worst = max(abs(a[k] - b[k]) for a, b in zip(ours["segments"], theirs["segments"]) for k in keys)
-    assert worst <= TOLERANCE, worst
+    # Per segment: translation within 1e-6 too; a rotation error near 0 is acos of a trace
+    # near 3, where a rounding of 1e-15 in the trace moves the angle by about 5e-8 rad
+    # (3e-6 deg/100 m on a 100 m segment): per segment the rotation agrees to 1e-5.
+    pairs = list(zip(ours["segments"], theirs["segments"]))
+    worst_t = max(abs(a[keys[0]] - b[keys[0]]) for a, b in pairs)
+    worst_r = max(abs(a[keys[1]] - b[keys[1]]) for a, b in pairs)
+    assert worst_t <= TOLERANCE and worst_r <= 10 * TOLERANCE, (worst_t, worst_r)
 
 
 @pytest.mark.parametrize("name", ["gt", "ORB", "SPTAM"])
