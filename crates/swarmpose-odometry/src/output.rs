@@ -222,6 +222,8 @@ pub fn calibration_json(d: &Decision) -> serde_json::Value {
         },
         "rigidity": {
             "pairs": d.pairs,
+            "one_plane_pairs": d.one_plane_pairs,
+            "unobservable": d.rigidity_unobservable(),
             "held_out_score_chi2": d.rigidity_score,
             "next_term_held_out_score_chi2": d.rigidity_next_score,
             "applied_fraction": d.rigidity_weight,
