@@ -217,6 +217,8 @@ pub fn calibration_json(d: &Decision) -> serde_json::Value {
             "f_yaw_px": r.rotation_px[0],
             "f_roll_px": r.rotation_px[1],
             "f_pitch_px": r.rotation_px[2],
+            "vertical_scale_px": r.vertical_scale_px,
+            "vertical_scale": r.vertical_scale,
             "held_out_score_chi2": r.score,
             "applied_fraction": r.weight,
         },

@@ -121,19 +121,23 @@ impl Default for SelfCalConfig {
     }
 }
 
+/// Index of the linear term (cause [`CorrectionModel::FOCAL`]) among the coefficients.
+const FOCAL_INDEX: usize = 2;
+
 /// The horizontal causes, seen by rigidity, and their coefficient index.
 const RIGID_CAUSES: [(CorrectionModel, usize); 3] = [
     (CorrectionModel::PRINCIPAL_POINT, 0),
-    (CorrectionModel::FOCAL, 2),
+    (CorrectionModel::FOCAL, FOCAL_INDEX),
     (CorrectionModel::FOCAL_LENGTH, FOCAL_TERM),
 ];
 
-/// The horizontal causes with the `x²` term fitted by rigidity alone (a yaw that the
-/// rows do not show, or something else that bends disparities towards the edges).
-const RIGID_CAUSES_WITH_YAW: [(CorrectionModel, usize); 4] = [
+/// The horizontal causes with the `x²` term fitted by rigidity alone (cause
+/// [`CorrectionModel::QUADRATIC`]: a disparity error growing towards the image's left and
+/// right edges that the rows do not explain as a yaw).
+const RIGID_CAUSES_WITH_QUADRATIC: [(CorrectionModel, usize); 4] = [
     (CorrectionModel::PRINCIPAL_POINT, 0),
-    (CorrectionModel::YAW, 1),
-    (CorrectionModel::FOCAL, 2),
+    (CorrectionModel::QUADRATIC, 1),
+    (CorrectionModel::FOCAL, FOCAL_INDEX),
     (CorrectionModel::FOCAL_LENGTH, FOCAL_TERM),
 ];
 
@@ -329,15 +333,26 @@ impl SelfCalibration {
         rows.roll &= c.candidates.has(CorrectionModel::ROLL);
         rows.pitch &= c.candidates.has(CorrectionModel::PITCH);
         // With the rows' rotation terms as they are, the horizontal terms by rigidity.
-        let mut chosen = self.select(&rows, &RIGID_CAUSES);
+        let quadratic_alone = !rows.yaw && c.candidates.has(CorrectionModel::QUADRATIC);
+        let mut chosen = self.select(
+            &rows,
+            if quadratic_alone {
+                &RIGID_CAUSES_WITH_QUADRATIC
+            } else {
+                &RIGID_CAUSES
+            },
+        );
         if rows.yaw {
             // The rows' x y term need not be a yaw (a rectification left with some
             // distortion bends the rows too): their yaw is kept only if rigidity does
-            // not prefer its own x² term by the margin.
+            // not prefer its own x² term by the margin; that term is then named after
+            // what rigidity sees, `quadratic`, not a yaw.
             let mut no_yaw = rows;
             no_yaw.yaw = false;
-            let own = self.select(&no_yaw, &RIGID_CAUSES_WITH_YAW);
-            if own.model.has(CorrectionModel::YAW) && own.absolute < chosen.absolute - c.margin {
+            let own = self.select(&no_yaw, &RIGID_CAUSES_WITH_QUADRATIC);
+            if own.model.has(CorrectionModel::QUADRATIC)
+                && own.absolute < chosen.absolute - c.margin
+            {
                 chosen = own;
                 rows.yaw = false;
             }
@@ -401,7 +416,11 @@ impl SelfCalibration {
             let candidate = causes
                 .iter()
                 .filter(|(cause, k)| {
-                    c.candidates.has(*cause) && !free.contains(k) && determined(*k)
+                    // Rigidity's own x² term is the alternative to the rows' yaw.
+                    let allowed = c.candidates.has(*cause)
+                        || (*cause == CorrectionModel::QUADRATIC
+                            && c.candidates.has(CorrectionModel::YAW));
+                    allowed && !free.contains(k) && determined(*k)
                 })
                 .map(|&(cause, k)| {
                     let mut f = free.clone();
@@ -474,5 +493,8 @@ mod tests {
         assert_eq!(CorrectionModel::parse(&m.name()), Ok(m));
         assert_eq!(CorrectionModel::parse("none"), Ok(CorrectionModel::NONE));
         assert!(CorrectionModel::parse("tilt").is_err());
+        let q = CorrectionModel::PRINCIPAL_POINT.with(CorrectionModel::QUADRATIC);
+        assert_eq!(q.name(), "principal-point+quadratic");
+        assert_eq!(CorrectionModel::parse(&q.name()), Ok(q));
     }
 }
