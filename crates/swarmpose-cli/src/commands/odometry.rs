@@ -542,6 +542,17 @@ fn finish(
                 String::new()
             }
         ))?;
+        if decision.one_plane_pairs > 0 {
+            out(&format!(
+                "calibration {}: {} pair(s) saw one plane, where a disparity offset cannot be                  told from the scene's scale; they corrected nothing",
+                if decision.rigidity_unobservable() {
+                    "unobservable by rigidity"
+                } else {
+                    "partly unobservable"
+                },
+                decision.one_plane_pairs
+            ))?;
+        }
     }
     out(&format!(
         "time per frame: {total:.1} ms ({:.1} frames/s): load {:.1}, features {:.1}, stereo {:.1}, \

@@ -101,6 +101,27 @@ impl SyntheticSequence {
         }
     }
 
+    /// `n` frames of a rig facing one flat textured wall `distance_m` metres ahead (normal
+    /// along the first camera's `z`, texture cells of `cell_m` metres), moving by `step_m`
+    /// (metres, the first camera's `x`, `y`, `z`: `[0, 0, 0.3]` approaches the wall along
+    /// the optical axis) per frame without turning. Every point of the scene is at the same
+    /// depth in a frame, so a disparity offset and a scale of the scene are nearly
+    /// indistinguishable: the self-calibration must not correct anything here.
+    #[must_use]
+    pub fn facing_wall(n: usize, distance_m: f64, step_m: [f64; 3], cell_m: f64) -> Self {
+        let step = Vector3::from(step_m);
+        Self {
+            root: PathBuf::from("<built-in synthetic wall>"),
+            planes: vec![TexturedPlane::fronto_parallel(distance_m, cell_m, 21)],
+            poses: (0..n)
+                .map(|i| Isometry3::from(Translation3::from(step * i as f64)))
+                .collect(),
+            samples: 2,
+            right_error: RightCameraError::default(),
+            focal_scale: 1.0,
+        }
+    }
+
     /// The same sequence rendered with a right camera that is not the calibrated one.
     #[must_use]
     pub fn with_right_camera_error(mut self, error: RightCameraError) -> Self {
