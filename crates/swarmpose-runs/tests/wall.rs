@@ -9,7 +9,7 @@ mod common;
 
 use nalgebra::Isometry3;
 use swarmpose_datasets::StereoSequence;
-use swarmpose_odometry::synthetic::SyntheticSequence;
+use swarmpose_runs::synthetic::SyntheticSequence;
 use swarmpose_odometry::{CorrectionModel, OdometryConfig};
 
 fn path_length_m(poses: &[Isometry3<f64>]) -> f64 {
