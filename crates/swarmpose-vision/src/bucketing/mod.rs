@@ -99,24 +99,6 @@ pub fn bucket_indices_into(
     kept.sort_unstable();
 }
 
-/// [`bucket_indices`] applied to keypoints and their descriptors together.
-#[must_use]
-pub fn bucket_features<D: Clone>(
-    features: &Features<D>,
-    width: usize,
-    height: usize,
-    config: &BucketConfig,
-) -> Features<D> {
-    let keep = bucket_indices(&features.keypoints, width, height, config);
-    Features {
-        keypoints: keep.iter().map(|&i| features.keypoints[i]).collect(),
-        descriptors: keep
-            .iter()
-            .map(|&i| features.descriptors[i].clone())
-            .collect(),
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

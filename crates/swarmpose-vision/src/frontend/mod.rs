@@ -139,19 +139,6 @@ impl FrameMatches {
             .clone()
             .with_noise_covariance(self.src_covariances.clone(), self.dst_covariances.clone())
     }
-
-    /// The same matches with `offset_px` added to every disparity: each point `p` of
-    /// disparity `d` becomes `p d / (d + offset)` (a correction of the stereo
-    /// calibration). Covariances follow exactly (see
-    /// `offset_jacobian`): the depth part shrinks with `k²`, the lateral part with `k`, for
-    /// `k = d / (d + offset)`.
-    ///
-    /// # Errors
-    /// [`PoseError::NonFinite`] if an offset makes a disparity non-positive.
-    pub fn with_disparity_offset(&self, offset_px: f64) -> Result<Self, PoseError> {
-        // A constant does not depend on the position, so the baseline does not matter.
-        self.with_disparity_correction(DisparityCorrection::constant(offset_px), 0.0)
-    }
 }
 
 /// Detector, calibration and matching settings of the front end.
