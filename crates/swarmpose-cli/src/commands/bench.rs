@@ -192,6 +192,9 @@ pub fn run(args: &BenchArgs) -> Result<(), CliError> {
             )));
         }
     }
+    if let Some(path) = &args.runs_csv {
+        crate::output_file::check_target(path)?;
+    }
     // results[(mode, noise)][fraction in ppm][method] = outcomes
     let mut results: BTreeMap<CellKey, BTreeMap<u64, BTreeMap<String, Vec<Outcome>>>> =
         BTreeMap::new();

@@ -34,9 +34,12 @@ impl OutputDir {
         let manifest = path.join(MANIFEST);
         if let Ok(text) = std::fs::read_to_string(&manifest) {
             for name in text.lines().map(str::trim).filter(|n| !n.is_empty()) {
-                // Only plain names inside the folder.
-                if !name.contains('/') && !name.contains('\\') && name != ".." {
-                    let _ = std::fs::remove_file(path.join(name));
+                // Only plain names inside the folder, and only regular files: a FIFO, a
+                // device or a link put in their place stays.
+                let old = path.join(name);
+                let regular = std::fs::symlink_metadata(&old).is_ok_and(|m| m.is_file());
+                if !name.contains('/') && !name.contains('\\') && name != ".." && regular {
+                    let _ = std::fs::remove_file(old);
                 }
             }
         }
@@ -84,14 +87,16 @@ pub struct StreamFile {
 }
 
 impl StreamFile {
-    /// Creates `name` in `dir`, with a first line `header` if given.
+    /// Creates `name` in `dir`, with a first line `header` if given (a FIFO or a
+    /// character device there is written through; a folder there is refused).
     ///
     /// # Errors
     /// Exit status 1 naming the file.
     pub fn create(dir: &OutputDir, name: &str, header: Option<&str>) -> Result<Self, CliError> {
         dir.record(name)?;
         let path = dir.path.join(name);
-        let file = File::create(&path).map_err(|e| write_error(&path, &e))?;
+        let file =
+            swarmpose_data::output::create_stream(&path).map_err(|e| write_error(&path, &e))?;
         let mut s = Self { path, file, len: 0 };
         if let Some(h) = header {
             s.line(h)?;

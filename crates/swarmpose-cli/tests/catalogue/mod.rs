@@ -29,6 +29,16 @@ pub fn expect(out: &Output, code: i32, start: &str) -> String {
     stderr
 }
 
+/// Checks exit status 0, showing standard error otherwise.
+pub fn succeeded(out: &Output) {
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 fn copy(from: &Path, to: &Path) {
     if let Some(d) = to.parent() {
         std::fs::create_dir_all(d).expect("mkdir");
