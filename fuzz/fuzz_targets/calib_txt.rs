@@ -10,10 +10,10 @@ fuzz_target!(|data: &[u8]| {
         return;
     };
     let path = Path::new("calib.txt");
-    if let Ok(rig) = swarmpose_datasets::kitti::parse_calibration(text, path) {
+    if let Ok((rig, _)) = swarmpose_datasets::kitti::parse_calibration(text, path) {
         assert!(rig.baseline_m.is_finite() && rig.baseline_m > 0.0);
     }
-    if let Ok(rig) = swarmpose_datasets::karlsruhe::parse_calibration(text, path) {
+    if let Ok((rig, _)) = swarmpose_datasets::karlsruhe::parse_calibration(text, path) {
         assert!(rig.baseline_m.is_finite() && rig.baseline_m > 0.0);
     }
 });

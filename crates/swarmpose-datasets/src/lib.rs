@@ -23,6 +23,7 @@ pub mod euroc;
 mod frames;
 pub mod karlsruhe;
 pub mod kitti;
+pub mod projection;
 mod text;
 
 use std::path::{Path, PathBuf};
