@@ -116,3 +116,46 @@ fn rows_the_rectified_model_cannot_represent_are_refused() {
         refused(&tmp, &seq, &format!("{}:2", s(&calib)), message);
     }
 }
+
+/// Issue 29, cause 3: numbers that are no camera for the images are refused by every
+/// loader, naming the file (before, each ran with exit 0 on points in the wrong place).
+#[test]
+fn implausible_intrinsics_are_refused_by_every_loader() {
+    let tmp = TempDir::new("calib-plausible");
+    if let Some(seq) = kitti(&tmp.0, "k", 2) {
+        // A principal point with its decimal point one place off.
+        let calib = seq.join("calib.txt");
+        let p1 = row("P1", [-0.537, 0.0, 0.0]).replace(&format!("{CX:e}"), "6.071928e3");
+        let p0 = row("P0", [0.0; 3]).replace(&format!("{CX:e}"), "6.071928e3");
+        std::fs::write(&calib, format!("{p0}\n{p1}\n")).expect("write");
+        refused(
+            &tmp,
+            &seq,
+            s(&calib),
+            "cx = 6071.928 px is outside the 1241x376 image",
+        );
+    }
+    if let Some(seq) = catalogue::karlsruhe(&tmp.0, "ka", 2) {
+        // The principal point of the uncropped images (cy 194.1 of the crop, typed 1941).
+        let calib = seq.join("calib.txt");
+        let text = std::fs::read_to_string(&calib).expect("calib");
+        std::fs::write(&calib, text.replace("1.941291e+02", "1.941291e+03")).expect("write");
+        refused(
+            &tmp,
+            &seq,
+            s(&calib),
+            "cy = 1941.291 px is outside the 1344x372 image",
+        );
+    }
+    if let Some(seq) = catalogue::euroc(&tmp.0, "e", 3) {
+        // fv a tenth of fu.
+        let yaml = seq.join("mav0/cam0/sensor.yaml");
+        catalogue::edit_line(
+            &yaml,
+            "intrinsics:",
+            "intrinsics: [458.654, 45.7296, 367.215, 248.375]",
+            false,
+        );
+        refused(&tmp, &seq, s(&yaml), "fx / fy = 10.030");
+    }
+}

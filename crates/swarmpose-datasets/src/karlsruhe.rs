@@ -13,7 +13,7 @@ use nalgebra::Isometry3;
 use crate::error::DatasetError;
 use crate::frames::{check_pairs, list_numbered};
 use crate::projection::{Row, rectified_pair};
-use crate::text::{KeyLines, numbers, parse_error, read_text, strip_bom};
+use crate::text::{KeyLines, check_plausible, numbers, parse_error, read_text, strip_bom};
 use crate::{RectifiedStereo, StereoPair, StereoSequence, first_image, load_listed_pair};
 
 fn is_left(name: &str) -> bool {
@@ -161,6 +161,7 @@ impl KarlsruheSequence {
             .unwrap_or_else(|| dir.join("calib.txt"));
         let (rig, note) = read_calibration(&calib)?;
         let (size, mut notes) = first_image(&left[0])?;
+        check_plausible(&calib, &rig, size)?;
         notes.extend(note);
         Ok(Self {
             images,

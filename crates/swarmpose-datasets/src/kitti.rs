@@ -10,7 +10,7 @@ use nalgebra::Isometry3;
 use crate::error::DatasetError;
 use crate::frames::{check_pairs, list_numbered};
 use crate::projection::{Row, rectified_pair};
-use crate::text::{KeyLines, numbers, parse_error, read_text, strip_bom};
+use crate::text::{KeyLines, check_plausible, numbers, parse_error, read_text, strip_bom};
 use crate::{
     RectifiedStereo, StereoPair, StereoSequence, first_image, load_listed_pair, pose_from_3x4,
 };
@@ -190,6 +190,7 @@ impl KittiSequence {
         let right: Vec<PathBuf> = right.into_iter().map(|x| x.1).collect();
         let (rig, note) = read_calibration(&dir.join("calib.txt"))?;
         let (size, mut notes) = first_image(&left[0])?;
+        check_plausible(&dir.join("calib.txt"), &rig, size)?;
         notes.extend(note);
         let pose_file = official_poses(dir).unwrap_or_else(|| dir.join("poses.txt"));
         let poses = if pose_file.is_file() {

@@ -205,7 +205,8 @@ impl RgbdSequence {
     /// baseline is the RGB-D engine's virtual one).
     ///
     /// # Errors
-    /// [`OdometryError::Rgbd`] when the first image cannot be read.
+    /// [`OdometryError::Rgbd`] when the first image cannot be read, or naming
+    /// `intrinsics.txt` when its numbers are not a plausible camera for the images.
     pub fn camera(&self) -> Result<StereoCamera, OdometryError> {
         let Some((_, rgb, _)) = self.frames.first() else {
             return Err(rgbd_err(&self.root, 0, "no frame"));
@@ -213,7 +214,7 @@ impl RgbdSequence {
         let (w, h) = image::image_dimensions(rgb)
             .map_err(|e| rgbd_err(rgb, 0, format!("cannot read: {e}")))?;
         let k = self.intrinsics;
-        Ok(StereoCamera {
+        let camera = StereoCamera {
             rig: swarmpose_vision::stereo::RectifiedStereo {
                 fx: k.fx,
                 fy: k.fy,
@@ -223,7 +224,11 @@ impl RgbdSequence {
             },
             width: w as usize,
             height: h as usize,
-        })
+        };
+        match camera.rig.implausibility(camera.width, camera.height) {
+            Some(why) => Err(rgbd_err(&self.root.join("intrinsics.txt"), 0, why)),
+            None => Ok(camera),
+        }
     }
 
     /// Loads frame `i`: the gray image and the depth in metres (0 = none).

@@ -1,6 +1,6 @@
 """Calibrations checked as the command line checks them (issue 29): projection rows read
-in full (both rows' offsets give the baseline; a skew is refused) by Sequence and
-Odometry.from_sequence."""
+in full (both rows' offsets give the baseline; a skew is refused) and intrinsics that are
+no camera for the images refused, by Sequence, Odometry.from_sequence and Odometry."""
 
 import shutil
 
@@ -9,6 +9,7 @@ import pytest
 import swarmpose
 
 FX, CX, CY = 718.856, 607.1928, 185.2157
+KITTI_CAMERA = dict(fx=FX, fy=FX, cx=CX, cy=CY, baseline=0.53717, width=1241, height=376)
 
 
 def row(name, t, skew=0.0):
@@ -39,9 +40,26 @@ def test_both_rows_offsets_give_the_baseline(clip):
         pytest.approx(0.53717, abs=1e-9)
 
 
-def test_a_skew_is_refused(clip):
+def test_a_skew_and_a_principal_point_off_the_image_are_refused(clip):
     clip.write_text(row("P0", (0, 0, 0)) + row("P1", (-0.537, 0, 0), skew=2.5))
     with pytest.raises(ValueError) as e:
         swarmpose.Sequence(clip.parent)
     assert str(e.value) == (f"{clip}:2: P1[0][1] = 2.5 is a skew: the rectified model has "
                             "none (a rectified camera matrix has 0 there)")
+    clip.write_text((row("P0", (0, 0, 0)) + row("P1", (-0.537, 0, 0)))
+                    .replace(f" {CX} ", " 6071.928 "))
+    with pytest.raises(ValueError) as e:
+        swarmpose.Odometry.from_sequence(clip.parent)
+    assert str(e.value).startswith(f"{clip}: cx = 6071.928 px is outside the 1241x376 image")
+
+
+@pytest.mark.parametrize("change, message", [
+    ({"cx": 6071.928}, "camera: cx = 6071.928 px is outside the 1241x376 image"),
+    ({"fy": 71.8856}, "camera: fx / fy = 10.000"),
+    ({"fx": 7.18856, "fy": 7.18856}, "camera: fx = 7.18856 px is not a focal length"),
+    ({"baseline": 537.17}, "camera: a baseline of 5.372e2 m is outside"),
+])
+def test_the_engine_refuses_what_is_no_camera_for_its_images(change, message):
+    with pytest.raises(ValueError) as e:
+        swarmpose.Odometry(**{**KITTI_CAMERA, **change})
+    assert str(e.value).startswith(message)

@@ -18,7 +18,7 @@ use swarmpose_vision::rectify::{
 
 use crate::error::DatasetError;
 use crate::frames::check_pairs;
-use crate::text::{check_baseline, numbers, parse_error, read_text};
+use crate::text::{check_baseline, check_plausible, numbers, parse_error, read_text};
 use crate::{RectifiedStereo, StereoPair, StereoSequence, load_indexed_pair};
 
 pub use yaml::{SensorYaml, parse_sensor_yaml, read_sensor_yaml};
@@ -228,6 +228,23 @@ impl EurocSequence {
             0,
             rectification.rig.baseline_m,
             "T_BS of cam0 and cam1",
+        )?;
+        // Each camera's own intrinsics for its raw images, then the common rectified one.
+        for (cam, s) in [(&c0, &s0), (&c1, &s1)] {
+            let c = &s.camera;
+            let raw = RectifiedStereo {
+                fx: c.fx,
+                fy: c.fy,
+                cx: c.cx,
+                cy: c.cy,
+                ..rectification.rig
+            };
+            check_plausible(&cam.join("sensor.yaml"), &raw, (c.width, c.height))?;
+        }
+        check_plausible(
+            &c1.join("sensor.yaml"),
+            &rectification.rig,
+            (rectification.width, rectification.height),
         )?;
         let (w, h) = (rectification.width, rectification.height);
         let left_map = rectify_map(
