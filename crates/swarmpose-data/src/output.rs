@@ -124,23 +124,19 @@ pub fn temporary(path: &Path) -> PathBuf {
     ))
 }
 
-/// Whether `name` (a file name) is the temporary name [`temporary`] gives `final_name`
-/// for some process: what a killed writer may have left.
+/// The final name of which `name` (a file name) is a temporary ([`temporary`], of any
+/// process: what a killed writer may have left), or `None`.
 #[must_use]
-pub fn is_temporary_of(name: &str, final_name: &str) -> bool {
-    let Some(rest) = name
-        .strip_prefix('.')
-        .and_then(|n| n.strip_prefix(final_name))
-        .and_then(|n| n.strip_prefix(TEMPORARY_MARKER))
-    else {
-        return false;
-    };
+pub fn temporary_of(name: &str) -> Option<&str> {
+    let at = name.rfind(TEMPORARY_MARKER)?;
+    let final_name = name.get(1..at).filter(|_| name.starts_with('.'))?;
+    let rest = &name[at + TEMPORARY_MARKER.len()..];
     let digits = rest.bytes().take_while(u8::is_ascii_digit).count();
     let ext = Path::new(final_name)
         .extension()
         .map(|e| format!(".{}", e.to_string_lossy()))
         .unwrap_or_default();
-    digits > 0 && rest[digits..] == ext
+    (!final_name.is_empty() && digits > 0 && rest[digits..] == ext).then_some(final_name)
 }
 
 /// A new temporary file at `tmp` (one a killed run of the same process id left is
@@ -247,17 +243,22 @@ mod tests {
     fn temporary_names_are_recognised() {
         let tmp = temporary(Path::new("/x/runs.csv"));
         let name = tmp.file_name().unwrap().to_string_lossy().into_owned();
-        assert!(is_temporary_of(&name, "runs.csv"), "{name}");
-        assert!(is_temporary_of(".runs.csv.partial-12.csv", "runs.csv"));
-        assert!(is_temporary_of(".LICENSE.partial-7", "LICENSE"));
+        assert_eq!(temporary_of(&name), Some("runs.csv"), "{name}");
+        assert_eq!(temporary_of(".runs.csv.partial-12.csv"), Some("runs.csv"));
+        assert_eq!(temporary_of(".LICENSE.partial-7"), Some("LICENSE"));
+        assert_eq!(
+            temporary_of(".a.partial-1.png.partial-2.png"),
+            Some("a.partial-1.png")
+        );
         for other in [
             "runs.csv",
             ".runs.csv.partial-.csv",
             ".runs.csv.partial-12.png",
             ".runs.csv.partial-12x.csv",
-            ".other.csv.partial-12.csv",
+            "x.runs.csv.partial-12.csv",
+            "..partial-12",
         ] {
-            assert!(!is_temporary_of(other, "runs.csv"), "{other}");
+            assert_eq!(temporary_of(other), None, "{other}");
         }
     }
 
