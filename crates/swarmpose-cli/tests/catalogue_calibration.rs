@@ -41,17 +41,7 @@ fn trajectory(seq: &Path, out: &Path) -> Vec<f64> {
 /// Checks that `correspondences` on `seq` is refused (status 2) with the one line
 /// `FILE: message` (`file` and its line, if any, joined by the caller).
 fn refused(tmp: &TempDir, seq: &Path, file: &str, message: &str) {
-    let csv = tmp.0.join("c.csv");
-    let args = [
-        "correspondences",
-        s(seq),
-        "--frames",
-        "0",
-        "1",
-        "--out",
-        s(&csv),
-    ];
-    let out = swarmpose(&args, None);
+    let out = catalogue::corr(tmp, seq, &[]);
     expect(&out, 2, &format!("swarmpose: error: {file}: {message}"));
 }
 
