@@ -21,7 +21,7 @@ impl StereoCamera {
     /// Checks that the numbers describe a camera: finite positive focal lengths and
     /// baseline, a finite principal point, a non-empty image, and a plausible camera for
     /// that image ([`RectifiedStereo::implausibility`]: focal lengths, pixel aspect,
-    /// principal point, baseline).
+    /// principal point; the baseline may be in any unit of length).
     ///
     /// # Errors
     /// [`OdometryError::Camera`] naming the value.
