@@ -68,12 +68,18 @@ fn bad_arguments_fail_before_any_work() {
         &["runs"],
     );
     assert!(!out.exists(), "nothing is written for bad settings");
+    // An --out that cannot be a folder: an output that cannot be written, status 1 as
+    // docs/testing.md says for every command (issue 29, cause 11: it was 2).
     let file = dir.file("a-file", "x");
     let inside = file.join("sub").to_string_lossy().to_string();
-    check_error(
-        &swarmpose(&["simulate", "--out", &inside], None),
-        &["a-file"],
+    let run = swarmpose(&["simulate", "--out", &inside], None);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.starts_with("swarmpose: error: cannot write ") && stderr.contains("a-file"),
+        "{stderr}"
     );
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
 }
 
 #[test]

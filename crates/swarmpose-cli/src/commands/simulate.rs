@@ -86,8 +86,8 @@ const _: () = assert!(DEFAULT_FRACTIONS.len() == 10 && QUICK_FRACTIONS.len() == 
 /// Runs `simulate`.
 ///
 /// # Errors
-/// Bad settings or an unwritable folder (exit status 2, before any work), or a failure
-/// while writing the results (exit status 1).
+/// Bad settings (exit status 2, before any work), an unwritable folder (exit status 1,
+/// before any work), or a failure while writing the results (exit status 1).
 pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
     let stop = StopRequest::install();
     // --quick sets the defaults; --runs and --fractions given explicitly still win.
@@ -119,12 +119,15 @@ pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
         progress: true,
     };
     // Settings and folders first: nothing runs when one is bad.
-    opts.check().map_err(|e| CliError::usage(e.to_string()))?;
-    let stopped = || stop.exit_status().is_some();
-    let outcome = simulate_until(&opts, &default_estimators(), &stopped).map_err(|e| match e {
+    // Bad settings are bad usage (2); a folder that cannot be written is an output that
+    // cannot be written (1), as for every command.
+    let sim_error = |e: SimError| match e {
         SimError::InvalidConfig(_) => CliError::usage(e.to_string()),
         other => CliError::failure(other.to_string()),
-    })?;
+    };
+    opts.check().map_err(sim_error)?;
+    let stopped = || stop.exit_status().is_some();
+    let outcome = simulate_until(&opts, &default_estimators(), &stopped).map_err(sim_error)?;
     let total = opts.experiment.scenarios();
     let mut text = if outcome.scenarios_done < total {
         String::new()
