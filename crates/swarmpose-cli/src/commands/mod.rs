@@ -10,5 +10,6 @@ pub mod odometry;
 pub mod odometry_ins;
 pub mod odometry_output;
 pub mod register;
+pub mod segments;
 pub mod simulate;
 pub mod stereo_options;

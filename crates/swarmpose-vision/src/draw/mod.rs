@@ -66,6 +66,7 @@ impl Canvas {
         }
     }
 
+    #[cfg(feature = "png")]
     /// The canvas as the bytes of an RGB PNG file (the caller writes them where it
     /// chooses).
     ///
