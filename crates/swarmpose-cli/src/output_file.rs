@@ -1,9 +1,10 @@
-//! Output files that are never left half-written: each is written under a temporary name
-//! beside its final one (in a folder created if missing) and renamed when complete, so a
-//! full disk, an error or a kill leaves no truncated file under the final name.
+//! Output files that harm nothing ([`swarmpose_data::output`]): each is written whole
+//! under a temporary name beside its final one (in a folder created if missing) and
+//! renamed when complete, so a full disk, an error or a kill leaves no truncated file
+//! under the final name; a FIFO or a character device (`--out /dev/stdout`) is written
+//! through and never replaced; a folder or a block device is refused.
 
-use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use crate::error::CliError;
 
@@ -25,55 +26,24 @@ pub fn create_parent(path: &Path) -> Result<(), CliError> {
     }
 }
 
-/// The temporary name of `path` while it is written: `.NAME.partial-PID.EXT` in the same
-/// folder (same extension, for writers that choose the format by it).
-fn temporary(path: &Path) -> PathBuf {
-    let name = path
-        .file_name()
-        .map_or_else(|| "output".into(), |n| n.to_string_lossy().into_owned());
-    let ext = path
-        .extension()
-        .map(|e| format!(".{}", e.to_string_lossy()))
-        .unwrap_or_default();
-    path.with_file_name(format!(".{name}.partial-{}{ext}", std::process::id()))
-}
-
-/// Writes `path` through `write` (given the temporary path), then renames it into place.
+/// Checks before any work that `path` can be an output: not a folder, a block device or
+/// a socket (nor a link to one).
 ///
 /// # Errors
-/// Exit status 1 naming `path`; the temporary file is removed.
-pub fn write_with(
-    path: &Path,
-    write: impl FnOnce(&Path) -> Result<(), String>,
-) -> Result<(), CliError> {
-    create_parent(path)?;
-    let tmp = temporary(path);
-    let result = write(&tmp).and_then(|()| {
-        // Data on disk before the name points at it.
-        std::fs::File::open(&tmp)
-            .and_then(|f| f.sync_all())
-            .and_then(|()| std::fs::rename(&tmp, path))
-            .map_err(|e| e.to_string())
-    });
-    if let Err(e) = result {
-        let _ = std::fs::remove_file(&tmp);
-        // Messages of writers may name the temporary file: name the final one instead.
-        let e = e.replace(&format!("{}: ", tmp.display()), "");
-        return Err(write_error(path, &e));
-    }
-    Ok(())
+/// Exit status 1 naming `path` and what it is.
+pub fn check_target(path: &Path) -> Result<(), CliError> {
+    swarmpose_data::output::target(path)
+        .map(drop)
+        .map_err(|e| write_error(path, &e))
 }
 
-/// Writes `bytes` to `path` whole (see [`write_with`]).
+/// Writes `bytes` to `path` whole (see the module documentation).
 ///
 /// # Errors
-/// Exit status 1 naming `path`.
+/// Exit status 1 naming `path`; no temporary file is left.
 pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<(), CliError> {
-    write_with(path, |tmp| {
-        std::fs::File::create(tmp)
-            .and_then(|mut f| f.write_all(bytes).and_then(|()| f.flush()))
-            .map_err(|e| e.to_string())
-    })
+    create_parent(path)?;
+    swarmpose_data::output::write_file(path, bytes).map_err(|e| write_error(path, &e))
 }
 
 #[cfg(test)]
@@ -81,31 +51,26 @@ mod tests {
     use super::*;
 
     #[test]
-    fn a_file_is_renamed_into_place_and_a_failure_leaves_nothing() {
+    fn a_file_is_renamed_into_place_in_a_new_folder_and_a_folder_is_refused() {
         let dir = std::env::temp_dir().join(format!("swarmpose-outfile-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         let path = dir.join("a/b/c.csv");
         write_bytes(&path, b"x\n").expect("write");
         assert_eq!(std::fs::read(&path).expect("read"), b"x\n");
-        let e = write_with(&dir.join("a/d.png"), |tmp| {
-            std::fs::write(tmp, b"half").map_err(|e| e.to_string())?;
-            Err("disk full".into())
-        })
-        .expect_err("fails");
+        let e = write_bytes(&dir.join("a/b"), b"x\n").expect_err("a folder");
         assert_eq!(e.code, 1);
         assert!(
-            e.message.ends_with("a/d.png: cannot write: disk full"),
+            e.message
+                .ends_with("a/b: cannot write: a folder, not a file: refused (nothing written)"),
             "{e}"
         );
-        let left: Vec<_> = std::fs::read_dir(dir.join("a"))
+        assert!(check_target(&dir.join("a")).is_err());
+        assert!(check_target(&dir.join("a/new.csv")).is_ok());
+        let left: Vec<_> = std::fs::read_dir(dir.join("a/b"))
             .expect("list")
             .filter_map(|e| e.ok().map(|e| e.file_name()))
             .collect();
-        assert_eq!(
-            left.len(),
-            1,
-            "b/ only, no d.png nor its temporary: {left:?}"
-        );
+        assert_eq!(left.len(), 1, "c.csv only: {left:?}");
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -155,3 +155,19 @@ fn bad_arguments_are_one_line_errors() {
         &["/nonexistent/suite"],
     );
 }
+
+/// Issue 29, cause 11: `bench --stereo 0` (or a filter that matches no generated
+/// scenario) printed empty tables with exit 0.
+#[test]
+fn no_scenario_is_an_error() {
+    let out = swarmpose(&["bench", "--stereo", "0"], None);
+    check_error(
+        &out,
+        &["--stereo 0: give 1 to 100000 scenarios per outlier fraction"],
+    );
+    let out = swarmpose(&["bench", "--stereo", "1", "--filter", "nothing"], None);
+    check_error(
+        &out,
+        &["--filter \"nothing\" matches none of the 3 generated scenarios"],
+    );
+}

@@ -7,24 +7,8 @@
 mod catalogue;
 mod common;
 
-use catalogue::{edit_line, euroc, expect, karlsruhe, kitti, line_of, s};
+use catalogue::{corr, edit_line, euroc, expect, karlsruhe, kitti, line_of, s};
 use common::{TempDir, swarmpose};
-
-/// `correspondences` on frames 0 and 1 of `seq`, writing into `tmp`.
-fn corr(tmp: &TempDir, seq: &std::path::Path, extra: &[&str]) -> std::process::Output {
-    let out = tmp.0.join("c.csv");
-    let mut args = vec![
-        "correspondences",
-        s(seq),
-        "--frames",
-        "0",
-        "1",
-        "--out",
-        s(&out),
-    ];
-    args.extend_from_slice(extra);
-    swarmpose(&args, None)
-}
 
 #[test]
 fn kitti_calibration_twice_or_inconsistent_is_refused() {

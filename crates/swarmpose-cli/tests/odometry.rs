@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use common::{TempDir, check_error, json_of, swarmpose};
 use swarmpose_vision::image::GrayImage;
 
-const CALIB: &str = "P0: 700 0 320 0 0 700 240 0 0 0 1 0\nP1: 700 0 320 -350 0 700 240 0 0 0 1 0\n";
+const CALIB: &str = "P0: 700 0 32 0 0 700 24 0 0 0 1 0\nP1: 700 0 32 -350 0 700 24 0 0 0 1 0\n";
 const IDENTITY: &str = "1 0 0 0 0 1 0 0 0 0 1 0\n";
 
 /// A KITTI-layout sequence of `n` blank frames in `dir/name`.

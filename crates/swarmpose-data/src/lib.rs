@@ -7,7 +7,9 @@
 //! - [`register_report`]: the JSON report of `swarmpose register`, read back to draw
 //!   its inliers;
 //! - [`truth`]: the ground-truth JSON written beside each scenario CSV by the scenario
-//!   generator (`gen_scenarios.py`).
+//!   generator (`gen_scenarios.py`);
+//! - [`output`]: how every output file is written (whole, and never over a device, a
+//!   FIFO or a folder).
 //!
 //! Every error names its input (a file path, or `<stdin>`) and, where one applies, the
 //! 1-based line number, so a command-line tool can print it as one line.
@@ -16,6 +18,7 @@
 #![warn(clippy::unwrap_used)]
 
 pub mod correspondence_csv;
+pub mod output;
 pub mod register_report;
 pub mod truth;
 

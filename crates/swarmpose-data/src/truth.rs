@@ -16,7 +16,7 @@
 
 use std::fmt;
 use std::fs::File;
-use std::io::{BufReader, BufWriter, Write};
+use std::io::BufReader;
 use std::path::{Path, PathBuf};
 
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
@@ -231,7 +231,8 @@ pub fn read(path: impl AsRef<Path>) -> Result<ScenarioTruth, TruthError> {
     Ok(truth)
 }
 
-/// Writes a truth file as compact JSON (the generator's layout), after validating it.
+/// Writes a truth file as compact JSON (the generator's layout), after validating it
+/// ([`crate::output::write_file`]: whole, never over a device, a FIFO or a folder).
 ///
 /// # Errors
 /// [`TruthError`] naming the file: inconsistent values, or the file cannot be written.
@@ -244,16 +245,8 @@ pub fn write(path: impl AsRef<Path>, truth: &ScenarioTruth) -> Result<(), TruthE
     truth
         .validate()
         .map_err(|e| err(TruthErrorKind::Inconsistent(e)))?;
-    let file = File::create(path).map_err(|e| err(TruthErrorKind::Write(e)))?;
-    let mut out = BufWriter::new(file);
-    serde_json::to_writer(&mut out, truth).map_err(|e| {
-        if e.is_io() {
-            err(TruthErrorKind::Write(e.into()))
-        } else {
-            err(TruthErrorKind::Json(e))
-        }
-    })?;
-    out.flush().map_err(|e| err(TruthErrorKind::Write(e)))
+    let bytes = serde_json::to_vec(truth).map_err(|e| err(TruthErrorKind::Json(e)))?;
+    crate::output::write_file(path, &bytes).map_err(|e| err(TruthErrorKind::Write(e)))
 }
 
 #[cfg(test)]

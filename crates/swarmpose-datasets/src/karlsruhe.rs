@@ -1,7 +1,7 @@
 //! Karlsruhe stereo sequences (Geiger et al.): rectified, cropped grayscale pairs
 //! `I1_NNNNNN.png` (left) and `I2_NNNNNN.png` (right), in the sequence directory or its
 //! `*_Images/` subdirectory, and `calib.txt` whose `P1_roi` / `P2_roi` rows are the
-//! projection matrices of the cropped images (baseline from `P2_roi[0][3] = -f b`).
+//! projection matrices of the cropped images (baseline from both rows' offsets, `P1_roi[0][3] - P2_roi[0][3] = f b`).
 //!
 //! `insdata.txt` holds rough GPS/INS poses of the vehicle, not of the camera, with no
 //! camera-to-INS extrinsic: it is not returned as camera ground truth.
@@ -12,9 +12,8 @@ use nalgebra::Isometry3;
 
 use crate::error::DatasetError;
 use crate::frames::{check_pairs, list_numbered};
-use crate::text::{
-    KeyLines, check_baseline, check_same_intrinsics, numbers, parse_error, read_text, strip_bom,
-};
+use crate::projection::{Row, rectified_pair};
+use crate::text::{KeyLines, check_plausible, numbers, parse_error, read_text, strip_bom};
 use crate::{RectifiedStereo, StereoPair, StereoSequence, first_image, load_listed_pair};
 
 fn is_left(name: &str) -> bool {
@@ -46,11 +45,13 @@ pub fn detect(dir: &Path) -> bool {
     image_dir(dir).is_some()
 }
 
-/// The rectified stereo model of a Karlsruhe `calib.txt` (`P1_roi`, `P2_roi` rows).
+/// The rectified stereo model of a Karlsruhe `calib.txt` (`P1_roi`, `P2_roi` rows, read
+/// in full: [`crate::projection`]), with a note when the baseline is slightly off the
+/// rows' axis.
 ///
 /// # Errors
 /// [`DatasetError::Parse`] naming the file and line.
-pub fn read_calibration(path: &Path) -> Result<RectifiedStereo, DatasetError> {
+pub fn read_calibration(path: &Path) -> Result<(RectifiedStereo, Option<String>), DatasetError> {
     let text = read_text(path, "Karlsruhe calibration calib.txt")?;
     parse_calibration(&text, path)
 }
@@ -59,7 +60,10 @@ pub fn read_calibration(path: &Path) -> Result<RectifiedStereo, DatasetError> {
 ///
 /// # Errors
 /// As [`read_calibration`].
-pub fn parse_calibration(text: &str, path: &Path) -> Result<RectifiedStereo, DatasetError> {
+pub fn parse_calibration(
+    text: &str,
+    path: &Path,
+) -> Result<(RectifiedStereo, Option<String>), DatasetError> {
     let (mut p1, mut p2) = (None, None);
     let mut keys = KeyLines::default();
     for (k, line) in strip_bom(text).lines().enumerate() {
@@ -88,36 +92,8 @@ pub fn parse_calibration(text: &str, path: &Path) -> Result<RectifiedStereo, Dat
     let (Some((p1, l1)), Some((p2, l2))) = (p1, p2) else {
         return Err(parse_error(path, 0, "needs the P1_roi: and P2_roi: rows"));
     };
-    if !(p1[0] > 0.0 && p1[5] > 0.0) {
-        return Err(parse_error(
-            path,
-            l1,
-            format!(
-                "P1_roi focal lengths must be positive (fx = {}, fy = {})",
-                p1[0], p1[5]
-            ),
-        ));
-    }
-    check_same_intrinsics(path, ("P1_roi", &p1), ("P2_roi", l2, &p2))?;
-    let baseline_m = -p2[3] / p2[0];
-    if baseline_m.is_nan() || baseline_m <= 0.0 {
-        return Err(parse_error(
-            path,
-            l2,
-            format!(
-                "P2_roi[0][3] = {} gives no positive baseline (expected -f * b)",
-                p2[3]
-            ),
-        ));
-    }
-    check_baseline(path, l2, baseline_m, &format!("P2_roi[0][3] = {:e}", p2[3]))?;
-    Ok(RectifiedStereo {
-        fx: p1[0],
-        fy: p1[5],
-        cx: p1[2],
-        cy: p1[6],
-        baseline_m,
-    })
+    let row = |name, line, p| Row { name, line, p };
+    rectified_pair(path, row("P1_roi", l1, &p1), row("P2_roi", l2, &p2))
 }
 
 /// Reads `insdata.txt`: per line, the timestamp (ns) and the local metric position
@@ -183,8 +159,10 @@ impl KarlsruheSequence {
             .chain(dir.parent().map(|p| p.join("calib.txt")))
             .find(|p| p.is_file())
             .unwrap_or_else(|| dir.join("calib.txt"));
-        let rig = read_calibration(&calib)?;
-        let (size, notes) = first_image(&left[0])?;
+        let (rig, note) = read_calibration(&calib)?;
+        let (size, mut notes) = first_image(&left[0])?;
+        check_plausible(&calib, &rig, size)?;
+        notes.extend(note);
         Ok(Self {
             images,
             root: dir.to_owned(),

@@ -1,6 +1,6 @@
 //! KITTI odometry layout: `image_0/` (left) and `image_1/` (right) rectified grayscale
 //! PNGs, `calib.txt` with `P0:` and `P1:` 3x4 projection rows (the baseline comes from
-//! `P1[0][3] = -fx b`), and ground truth as row-major 3x4 `[R | t]` lines (`poses.txt`
+//! the two rows' offsets, `P0[0][3] - P1[0][3] = fx b`), and ground truth as row-major 3x4 `[R | t]` lines (`poses.txt`
 //! in the sequence directory, or `poses/NN.txt` of the official tree).
 
 use std::path::{Path, PathBuf};
@@ -9,9 +9,8 @@ use nalgebra::Isometry3;
 
 use crate::error::DatasetError;
 use crate::frames::{check_pairs, list_numbered};
-use crate::text::{
-    KeyLines, check_baseline, check_same_intrinsics, numbers, parse_error, read_text, strip_bom,
-};
+use crate::projection::{Row, rectified_pair};
+use crate::text::{KeyLines, check_plausible, numbers, parse_error, read_text, strip_bom};
 use crate::{
     RectifiedStereo, StereoPair, StereoSequence, first_image, load_listed_pair, pose_from_3x4,
 };
@@ -35,11 +34,12 @@ pub struct KittiSequence {
 }
 
 /// The rectified stereo model of a KITTI `calib.txt` (`P0:`/`P1:` rows; two unprefixed
-/// rows are read as P0 and P1).
+/// rows are read as P0 and P1), read in full ([`crate::projection`]: both rows' offsets
+/// give the baseline), with a note when the baseline is slightly off the rows' axis.
 ///
 /// # Errors
 /// [`DatasetError::Parse`] naming the file and line of a malformed row or a missing one.
-pub fn read_calibration(path: &Path) -> Result<RectifiedStereo, DatasetError> {
+pub fn read_calibration(path: &Path) -> Result<(RectifiedStereo, Option<String>), DatasetError> {
     let text = read_text(path, "KITTI calibration calib.txt")?;
     parse_calibration(&text, path)
 }
@@ -48,7 +48,10 @@ pub fn read_calibration(path: &Path) -> Result<RectifiedStereo, DatasetError> {
 ///
 /// # Errors
 /// As [`read_calibration`].
-pub fn parse_calibration(text: &str, path: &Path) -> Result<RectifiedStereo, DatasetError> {
+pub fn parse_calibration(
+    text: &str,
+    path: &Path,
+) -> Result<(RectifiedStereo, Option<String>), DatasetError> {
     let (mut p0, mut p1) = (None, None);
     let mut unnamed = Vec::new();
     let mut keys = KeyLines::default();
@@ -108,36 +111,8 @@ pub fn parse_calibration(text: &str, path: &Path) -> Result<RectifiedStereo, Dat
             "needs the P0: and P1: projection rows",
         ));
     };
-    if !(p0[0] > 0.0 && p0[5] > 0.0) {
-        return Err(parse_error(
-            path,
-            l0,
-            format!(
-                "P0 focal lengths must be positive (fx = {}, fy = {})",
-                p0[0], p0[5]
-            ),
-        ));
-    }
-    check_same_intrinsics(path, ("P0", &p0), ("P1", l1, &p1))?;
-    let baseline_m = -p1[3] / p1[0];
-    if baseline_m.is_nan() || baseline_m <= 0.0 {
-        return Err(parse_error(
-            path,
-            l1,
-            format!(
-                "P1[0][3] = {} gives no positive baseline (expected -fx * b)",
-                p1[3]
-            ),
-        ));
-    }
-    check_baseline(path, l1, baseline_m, &format!("P1[0][3] = {:e}", p1[3]))?;
-    Ok(RectifiedStereo {
-        fx: p0[0],
-        fy: p0[5],
-        cx: p0[2],
-        cy: p0[6],
-        baseline_m,
-    })
+    let row = |name, line, p| Row { name, line, p };
+    rectified_pair(path, row("P0", l0, &p0), row("P1", l1, &p1))
 }
 
 /// Reads row-major 3x4 poses, one per line.
@@ -213,8 +188,10 @@ impl KittiSequence {
         check_pairs(dir, &left, &ld, &right, &rd)?;
         let left: Vec<PathBuf> = left.into_iter().map(|x| x.1).collect();
         let right: Vec<PathBuf> = right.into_iter().map(|x| x.1).collect();
-        let rig = read_calibration(&dir.join("calib.txt"))?;
-        let (size, notes) = first_image(&left[0])?;
+        let (rig, note) = read_calibration(&dir.join("calib.txt"))?;
+        let (size, mut notes) = first_image(&left[0])?;
+        check_plausible(&dir.join("calib.txt"), &rig, size)?;
+        notes.extend(note);
         let pose_file = official_poses(dir).unwrap_or_else(|| dir.join("poses.txt"));
         let poses = if pose_file.is_file() {
             let p = read_poses(&pose_file)?;

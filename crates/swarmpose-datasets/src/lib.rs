@@ -23,6 +23,7 @@ pub mod euroc;
 mod frames;
 pub mod karlsruhe;
 pub mod kitti;
+pub mod projection;
 mod text;
 
 use std::path::{Path, PathBuf};
@@ -33,11 +34,9 @@ pub use error::DatasetError;
 pub use swarmpose_vision::image::GrayImage;
 pub use swarmpose_vision::stereo::RectifiedStereo;
 
-/// The stereo baselines accepted from a calibration, metres: from 5 mm (the smallest
-/// stereo modules) to 10 m (wide rigs on vehicles). A value outside is a malformed or
-/// mis-scaled file (a `P1[0][3]` in another unit, a missing minus sign), refused rather
-/// than giving points a thousand times too near or too far.
-pub const BASELINE_RANGE_M: (f64, f64) = (0.005, 10.0);
+/// The stereo baselines accepted from a calibration, metres (the vision crate's, one
+/// list for the loaders and the engine).
+pub use swarmpose_vision::stereo::BASELINE_RANGE_M;
 
 /// One rectified stereo frame, 8-bit grayscale, both images the same size.
 #[derive(Debug, Clone, PartialEq, Eq)]

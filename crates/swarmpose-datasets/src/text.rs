@@ -119,3 +119,16 @@ pub(crate) fn check_baseline(
         ),
     ))
 }
+
+/// Checks that `rig` is a plausible camera for images of `size` (width, height)
+/// ([`RectifiedStereo::implausibility`]); the error names the calibration file `path`.
+pub(crate) fn check_plausible(
+    path: &Path,
+    rig: &crate::RectifiedStereo,
+    size: (usize, usize),
+) -> Result<(), DatasetError> {
+    match rig.implausibility(size.0, size.1) {
+        Some(why) => Err(parse_error(path, 0, why)),
+        None => Ok(()),
+    }
+}

@@ -38,10 +38,10 @@ pub fn calib_txt(data: &[u8]) {
         return;
     };
     let path = Path::new("calib.txt");
-    if let Ok(rig) = swarmpose_datasets::kitti::parse_calibration(text, path) {
+    if let Ok((rig, _)) = swarmpose_datasets::kitti::parse_calibration(text, path) {
         assert!(rig.baseline_m.is_finite() && rig.baseline_m > 0.0);
     }
-    if let Ok(rig) = swarmpose_datasets::karlsruhe::parse_calibration(text, path) {
+    if let Ok((rig, _)) = swarmpose_datasets::karlsruhe::parse_calibration(text, path) {
         assert!(rig.baseline_m.is_finite() && rig.baseline_m > 0.0);
     }
 }
@@ -67,7 +67,13 @@ pub fn euroc_data_csv(data: &[u8]) {
     };
     let path = Path::new("mav0/cam0/data.csv");
     let _ = swarmpose_datasets::euroc::parse_image_list(text, path, Path::new("mav0/cam0"));
-    let _ = swarmpose_datasets::euroc::parse_groundtruth(text, path);
+    if let Ok(states) = swarmpose_datasets::euroc::parse_groundtruth(text, path) {
+        // Every state is a rigid motion (a quaternion of norm 0 gave NaN poses).
+        for (_, pose) in states {
+            let q = pose.rotation.coords;
+            assert!(q.iter().all(|v| v.is_finite()) && (q.norm() - 1.0).abs() < 1e-9);
+        }
+    }
 }
 
 /// EuRoC camera `sensor.yaml`.

@@ -19,7 +19,9 @@ pub struct StereoCamera {
 
 impl StereoCamera {
     /// Checks that the numbers describe a camera: finite positive focal lengths and
-    /// baseline, a finite principal point, a non-empty image.
+    /// baseline, a finite principal point, a non-empty image, and a plausible camera for
+    /// that image ([`RectifiedStereo::implausibility`]: focal lengths, pixel aspect,
+    /// principal point; the baseline may be in any unit of length).
     ///
     /// # Errors
     /// [`OdometryError::Camera`] naming the value.
@@ -52,7 +54,10 @@ impl StereoCamera {
                 ),
             });
         }
-        Ok(())
+        match r.implausibility(self.width, self.height) {
+            Some(message) => Err(OdometryError::Camera { message }),
+            None => Ok(()),
+        }
     }
 
     /// The camera of its images halved (2x2 means, [`swarmpose_vision::image::halve`]):

@@ -1,8 +1,9 @@
 //! RGB-D input, as the paper also allows: the TUM RGB-D layout. A directory with
 //! `rgb.txt` and `depth.txt` (`timestamp filename` per line, `#` comments), the images
-//! they name (colour or gray PNGs; 16-bit depth PNGs, 5000 per metre, 0 = no depth),
+//! they name (colour or gray PNGs; 16-bit depth PNGs, 5000 per metre, 0 and 65535 = no
+//! depth; other images named as depth are refused),
 //! optionally `groundtruth.txt` (TUM trajectory of the colour camera) and
-//! `intrinsics.txt` (`fx fy cx cy`; default 525, 525, 319.5, 239.5, TUM's
+//! `intrinsics.txt` (the four numbers `fx fy cx cy` and nothing else; default 525, 525, 319.5, 239.5, TUM's
 //! recommendation for its sequences as published).
 //!
 //! Each colour image is paired with the depth image nearest in time within 20 ms (as
@@ -205,7 +206,8 @@ impl RgbdSequence {
     /// baseline is the RGB-D engine's virtual one).
     ///
     /// # Errors
-    /// [`RunError::Rgbd`] when the first image cannot be read.
+    /// [`RunError::Rgbd`] when the first image cannot be read, or naming
+    /// `intrinsics.txt` when its numbers are not a plausible camera for the images.
     pub fn camera(&self) -> Result<StereoCamera, RunError> {
         let Some((_, rgb, _)) = self.frames.first() else {
             return Err(rgbd_err(&self.root, 0, "no frame"));
@@ -213,7 +215,7 @@ impl RgbdSequence {
         let (w, h) = image::image_dimensions(rgb)
             .map_err(|e| rgbd_err(rgb, 0, format!("cannot read: {e}")))?;
         let k = self.intrinsics;
-        Ok(StereoCamera {
+        let camera = StereoCamera {
             rig: swarmpose_vision::stereo::RectifiedStereo {
                 fx: k.fx,
                 fy: k.fy,
@@ -223,7 +225,11 @@ impl RgbdSequence {
             },
             width: w as usize,
             height: h as usize,
-        })
+        };
+        match camera.rig.implausibility(camera.width, camera.height) {
+            Some(why) => Err(rgbd_err(&self.root.join("intrinsics.txt"), 0, why)),
+            None => Ok(camera),
+        }
     }
 
     /// Loads frame `i`: the gray image and the depth in metres (0 = none).
@@ -238,8 +244,21 @@ impl RgbdSequence {
         let d = image::ImageReader::open(depth)
             .map_err(|e| rgbd_err(depth, 0, format!("cannot read: {e}")))?
             .decode()
-            .map_err(|e| rgbd_err(depth, 0, format!("cannot decode: {e}")))?
-            .into_luma16();
+            .map_err(|e| rgbd_err(depth, 0, format!("cannot decode: {e}")))?;
+        // Only 16-bit one-channel images are depth: an 8-bit image (scaled by 257 it
+        // read as depths up to 13 m) or a colour one (a depth list naming colour images)
+        // is refused.
+        let image::DynamicImage::ImageLuma16(d) = d else {
+            return Err(rgbd_err(
+                depth,
+                0,
+                format!(
+                    "a {:?} image is not a depth image: TUM depth images are 16-bit gray \
+                     ({DEPTH_SCALE} per metre)",
+                    d.color()
+                ),
+            ));
+        };
         if (d.width() as usize, d.height() as usize) != (gray.width, gray.height) {
             return Err(rgbd_err(
                 depth,
@@ -256,7 +275,15 @@ impl RgbdSequence {
         let metres = d
             .into_raw()
             .into_iter()
-            .map(|v| (f64::from(v) / DEPTH_SCALE) as f32)
+            .map(|v| {
+                // 65535 is a sensor's saturated or "too far" value, not 13.107 m: no
+                // depth (a band of it skewed the motion 68 %).
+                if v == u16::MAX {
+                    0.0
+                } else {
+                    (f64::from(v) / DEPTH_SCALE) as f32
+                }
+            })
             .collect();
         Ok((gray, metres))
     }
@@ -268,10 +295,20 @@ fn read_intrinsics(path: &Path) -> Result<Intrinsics, RunError> {
     }
     let text = std::fs::read_to_string(path)
         .map_err(|e| rgbd_err(path, 0, format!("cannot read: {e}")))?;
+    // Numbers only, in the order fx fy cx cy: a labelled file ("cx 319.5 ...") had its
+    // labels dropped and its numbers taken in the order written.
     let v: Vec<f64> = text
         .split_whitespace()
-        .filter_map(|s| s.parse().ok())
-        .collect();
+        .map(|s| {
+            s.parse().map_err(|_| {
+                rgbd_err(
+                    path,
+                    1,
+                    format!("'{s}' is not a number: expected four numbers: fx fy cx cy"),
+                )
+            })
+        })
+        .collect::<Result<_, _>>()?;
     match v.as_slice() {
         [fx, fy, cx, cy] if *fx > 0.0 && *fy > 0.0 => Ok(Intrinsics {
             fx: *fx,

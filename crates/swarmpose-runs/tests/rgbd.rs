@@ -123,3 +123,43 @@ fn malformed_tum_rgbd_gives_clear_errors() {
     assert!(e.contains("1.png"), "{e}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Issue 29, cause 6: an 8-bit or colour image named as depth, a saturated depth, a
+/// labelled `intrinsics.txt`.
+#[test]
+fn depth_images_and_intrinsics_are_checked() {
+    let dir = tmp("checked");
+    SyntheticSequence::new(2, 0.3, 0.0)
+        .write_tum_rgbd(&dir)
+        .expect("write");
+    let list = std::fs::read_to_string(dir.join("depth.txt")).expect("depth.txt");
+    let first = list
+        .lines()
+        .find(|l| !l.starts_with('#'))
+        .and_then(|l| l.split_whitespace().nth(1))
+        .expect("a depth image");
+    let depth = dir.join(first);
+    let (w, h) = image::image_dimensions(&depth).expect("size");
+    // Every depth saturated (65535): no depth, not 13.107 m.
+    image::ImageBuffer::<image::Luma<u16>, _>::from_pixel(w, h, image::Luma([u16::MAX]))
+        .save(&depth)
+        .expect("save");
+    let seq = RgbdSequence::open(&dir).expect("open");
+    let (_, metres) = seq.frame(0).expect("frame");
+    assert!(metres.iter().all(|&z| z == 0.0));
+    // An 8-bit image named as depth.
+    image::GrayImage::from_pixel(w, h, image::Luma([200]))
+        .save(&depth)
+        .expect("save");
+    let e = seq.frame(0).expect_err("8-bit").to_string();
+    assert!(e.contains("is not a depth image"), "{e}");
+    // A labelled intrinsics.txt.
+    std::fs::write(
+        dir.join("intrinsics.txt"),
+        "cx 319.5 cy 239.5 fx 525 fy 525\n",
+    )
+    .expect("w");
+    let e = RgbdSequence::open(&dir).expect_err("labelled").to_string();
+    assert!(e.contains("'cx' is not a number"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -14,6 +14,11 @@ pub const DEFAULT_RUNS: usize = 50;
 pub const DEFAULT_SEED: u64 = 1000;
 /// `--quick` runs.
 pub const QUICK_RUNS: usize = 10;
+/// The most scenarios (noise levels x fractions x runs) an experiment may have: every
+/// row of every run is kept in memory until the tables are written (a million scenarios
+/// of four estimators is about 0.5 GB of rows and some hours of work). Before, a huge
+/// `--runs` aborted on an allocation or overflowed the count.
+pub const MAX_SCENARIOS: usize = 1_000_000;
 /// `--quick` outlier fractions.
 pub const QUICK_FRACTIONS: [f64; 5] = [0.0, 0.3, 0.5, 0.7, 0.9];
 
@@ -67,14 +72,18 @@ impl Experiment {
     /// Number of scenarios (noise x fraction x run).
     #[must_use]
     pub fn scenarios(&self) -> usize {
-        self.noise_levels.len() * self.fractions.len() * self.runs
+        self.noise_levels
+            .len()
+            .saturating_mul(self.fractions.len())
+            .saturating_mul(self.runs)
     }
 
     /// Checks every setting, before any work.
     ///
     /// # Errors
     /// [`SimError::InvalidConfig`] naming the bad value: no noise level or fraction, a
-    /// negative or non-finite noise, a fraction outside `[0, 1)`, zero runs, a bad scene.
+    /// negative or non-finite noise, a fraction outside `[0, 1)`, zero runs, more than
+    /// [`MAX_SCENARIOS`] scenarios, a bad scene.
     pub fn validate(&self) -> Result<(), SimError> {
         if self.noise_levels.is_empty() {
             return Err(SimError::InvalidConfig("no noise level given".into()));
@@ -84,6 +93,15 @@ impl Experiment {
         }
         if self.runs == 0 {
             return Err(SimError::InvalidConfig("runs must be at least 1".into()));
+        }
+        if self.scenarios() > MAX_SCENARIOS {
+            return Err(SimError::InvalidConfig(format!(
+                "{} runs x {} noise levels x {} fractions is over the {MAX_SCENARIOS} \
+                 scenarios an experiment may have (every row is kept in memory)",
+                self.runs,
+                self.noise_levels.len(),
+                self.fractions.len()
+            )));
         }
         for &noise in &self.noise_levels {
             check_levels(noise, 0.0)?;

@@ -45,10 +45,10 @@ pub mod runner;
 pub use estimators::{EstimatorEntry, default_estimators, oracle_threshold};
 pub use experiment::Experiment;
 pub use metrics::RunRecord;
-pub use runner::run_experiment;
+pub use runner::{run_experiment, run_experiment_until};
 pub mod report;
 pub mod runs_csv;
 pub mod simulate;
 pub mod stats;
 
-pub use simulate::{SimOptions, SimOutcome, simulate};
+pub use simulate::{SimOptions, SimOutcome, simulate, simulate_until};

@@ -24,23 +24,13 @@ pub fn ensure_writable_dir(dir: &Path) -> Result<(), SimError> {
     Ok(())
 }
 
-/// Writes `contents` to `path` whole: under a temporary name beside it first, renamed
-/// when complete, so that an error, a full disk or a kill never leaves a truncated file
-/// under the final name.
+/// Writes `contents` to `path` whole ([`swarmpose_data::output::write_file`]: under a
+/// temporary name beside it first, renamed when complete, so that an error, a full disk
+/// or a kill never leaves a truncated file under the final name; a FIFO or a character
+/// device is written through, never replaced; a folder or a block device is refused).
 ///
 /// # Errors
 /// [`SimError::Io`] naming the file (the temporary file is removed).
 pub fn write_file(path: &Path, contents: impl AsRef<[u8]>) -> Result<(), SimError> {
-    use std::io::Write;
-    let name = path
-        .file_name()
-        .map_or_else(|| "output".into(), |n| n.to_string_lossy().into_owned());
-    let tmp = path.with_file_name(format!(".{name}.partial-{}", std::process::id()));
-    let result = fs::File::create(&tmp)
-        .and_then(|mut f| f.write_all(contents.as_ref()).and_then(|()| f.sync_all()))
-        .and_then(|()| fs::rename(&tmp, path));
-    result.map_err(|e| {
-        let _ = fs::remove_file(&tmp);
-        SimError::io(path, e)
-    })
+    swarmpose_data::output::write_file(path, contents.as_ref()).map_err(|e| SimError::io(path, e))
 }

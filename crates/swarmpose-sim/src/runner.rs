@@ -35,6 +35,21 @@ pub fn run_experiment(
     estimators: &[EstimatorEntry],
     progress: &(dyn Fn() + Sync),
 ) -> Result<Vec<RunRecord>, SimError> {
+    run_experiment_until(experiment, estimators, progress, &|| false)
+}
+
+/// [`run_experiment`], stopping early when `stop` says so: a scenario not started by
+/// then is skipped (one being run finishes), so the rows are those of the scenarios
+/// done, in job order.
+///
+/// # Errors
+/// As [`run_experiment`].
+pub fn run_experiment_until(
+    experiment: &Experiment,
+    estimators: &[EstimatorEntry],
+    progress: &(dyn Fn() + Sync),
+    stop: &(dyn Fn() -> bool + Sync),
+) -> Result<Vec<RunRecord>, SimError> {
     experiment.validate()?;
     if estimators.is_empty() {
         return Err(SimError::InvalidConfig("no estimator to run".into()));
@@ -57,6 +72,9 @@ pub fn run_experiment(
     let per_job: Vec<Vec<RunRecord>> = jobs
         .par_iter()
         .map(|&(i, j, run)| {
+            if stop() {
+                return Ok(Vec::new());
+            }
             let noise = experiment.noise_levels[i];
             let fraction = experiment.fractions[j];
             let seed = experiment.run_seed(run);

@@ -16,12 +16,16 @@ use crate::metrics::RunRecord;
 use crate::output::{ensure_writable_dir, write_file};
 use crate::plots::write_figures;
 use crate::report::{console_summary, summary_markdown};
-use crate::runner::run_experiment;
+use crate::runner::run_experiment_until;
 use crate::runs_csv::runs_csv;
 use crate::stats::Summary;
 
 /// Default output folder.
 pub const DEFAULT_OUT: &str = "out/simulate";
+
+/// The most worker threads accepted (a thousand times this machine's cores is no use,
+/// and each thread reserves a stack).
+pub const MAX_THREADS: usize = 1024;
 
 /// Settings of a simulation job.
 #[derive(Debug, Clone, PartialEq)]
@@ -65,6 +69,9 @@ pub struct SimOutcome {
     pub wall: Duration,
     /// Threads used.
     pub threads: usize,
+    /// Scenarios run: all of the experiment's, or fewer when it was stopped
+    /// ([`simulate_until`]).
+    pub scenarios_done: usize,
 }
 
 impl SimOptions {
@@ -74,8 +81,12 @@ impl SimOptions {
     /// [`SimError::InvalidConfig`] or [`SimError::Io`].
     pub fn check(&self) -> Result<(), SimError> {
         self.experiment.validate()?;
-        if self.threads == Some(0) {
-            return Err(SimError::InvalidConfig("threads must be at least 1".into()));
+        if let Some(n) = self.threads
+            && !(1..=MAX_THREADS).contains(&n)
+        {
+            return Err(SimError::InvalidConfig(format!(
+                "threads must be 1 to {MAX_THREADS}, got {n}"
+            )));
         }
         ensure_writable_dir(&self.out_dir)?;
         if let Some(dir) = &self.export_dir {
@@ -101,8 +112,13 @@ fn bar(len: usize, show: bool, message: &str) -> ProgressBar {
     pb
 }
 
-/// Writes every scenario of the experiment into `dir`.
-fn export_all(exp: &Experiment, dir: &Path, show: bool) -> Result<(), SimError> {
+/// Writes every scenario of the experiment into `dir` (until `stop` says so).
+fn export_all(
+    exp: &Experiment,
+    dir: &Path,
+    show: bool,
+    stop: &(dyn Fn() -> bool + Sync),
+) -> Result<(), SimError> {
     let jobs: Vec<(f64, f64, usize)> = exp
         .noise_levels
         .iter()
@@ -114,6 +130,9 @@ fn export_all(exp: &Experiment, dir: &Path, show: bool) -> Result<(), SimError> 
         .collect();
     let pb = bar(jobs.len(), show, "export");
     jobs.par_iter().try_for_each(|&(noise, f, run)| {
+        if stop() {
+            return Ok(());
+        }
         let s = exp.scene.scenario(exp.run_seed(run), noise, f, exp.mode)?;
         write_scenario(dir, &scenario_name(exp.mode, noise, f, run), &s)?;
         pb.inc(1);
@@ -129,6 +148,21 @@ fn export_all(exp: &Experiment, dir: &Path, show: bool) -> Result<(), SimError> 
 /// Bad settings or unwritable folders before any work ([`SimOptions::check`]); write or
 /// plot failures after.
 pub fn simulate(opts: &SimOptions, estimators: &[EstimatorEntry]) -> Result<SimOutcome, SimError> {
+    simulate_until(opts, estimators, &|| false)
+}
+
+/// [`simulate`], stopping early when `stop` says so (a signal): the scenarios not
+/// started are skipped, and `runs.csv` holds the rows of those done, with a
+/// `summary.md` that says the run was stopped and where (no figures: their cells
+/// would be partly empty). [`SimOutcome::scenarios_done`] tells how far it got.
+///
+/// # Errors
+/// As [`simulate`].
+pub fn simulate_until(
+    opts: &SimOptions,
+    estimators: &[EstimatorEntry],
+    stop: &(dyn Fn() -> bool + Sync),
+) -> Result<SimOutcome, SimError> {
     opts.check()?;
     if estimators.is_empty() {
         return Err(SimError::InvalidConfig("no estimator to run".into()));
@@ -143,27 +177,39 @@ pub fn simulate(opts: &SimOptions, estimators: &[EstimatorEntry]) -> Result<SimO
     let exp = &opts.experiment;
     let (rows, wall) = pool.install(|| {
         if let Some(dir) = &opts.export_dir {
-            export_all(exp, dir, opts.progress)?;
+            export_all(exp, dir, opts.progress, stop)?;
         }
         let pb = bar(exp.scenarios(), opts.progress, "simulate");
         let start = Instant::now();
-        let rows = run_experiment(exp, estimators, &|| pb.inc(1))?;
+        let rows = run_experiment_until(exp, estimators, &|| pb.inc(1), stop)?;
         pb.finish_and_clear();
         Ok::<_, SimError>((rows, start.elapsed()))
     })?;
     let threads = pool.current_num_threads();
     let summary = Summary::new(exp, &rows);
+    let scenarios_done = rows.len() / estimators.len();
     let mut files = Vec::new();
     let csv = opts.out_dir.join("runs.csv");
     write_file(&csv, runs_csv(&rows))?;
     files.push(csv);
     let md = opts.out_dir.join("summary.md");
-    write_file(
-        &md,
-        summary_markdown(exp, &summary, wall.as_secs_f64(), threads),
-    )?;
-    files.push(md);
-    files.extend(write_figures(&summary, &opts.out_dir)?);
+    if scenarios_done < exp.scenarios() {
+        let note = format!(
+            "# Stopped\n\nThe simulation was stopped after {scenarios_done} of {} scenarios \
+             ({:.1} s): runs.csv holds their rows; no tables or figures were made.\n",
+            exp.scenarios(),
+            wall.as_secs_f64()
+        );
+        write_file(&md, note)?;
+        files.push(md);
+    } else {
+        write_file(
+            &md,
+            summary_markdown(exp, &summary, wall.as_secs_f64(), threads),
+        )?;
+        files.push(md);
+        files.extend(write_figures(&summary, &opts.out_dir)?);
+    }
     Ok(SimOutcome {
         console: console_summary(&summary),
         rows,
@@ -171,5 +217,6 @@ pub fn simulate(opts: &SimOptions, estimators: &[EstimatorEntry]) -> Result<SimO
         files,
         wall,
         threads,
+        scenarios_done,
     })
 }

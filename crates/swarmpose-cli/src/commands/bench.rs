@@ -192,6 +192,9 @@ pub fn run(args: &BenchArgs) -> Result<(), CliError> {
             )));
         }
     }
+    if let Some(path) = &args.runs_csv {
+        crate::output_file::check_target(path)?;
+    }
     // results[(mode, noise)][fraction in ppm][method] = outcomes
     let mut results: BTreeMap<CellKey, BTreeMap<u64, BTreeMap<String, Vec<Outcome>>>> =
         BTreeMap::new();
@@ -205,6 +208,11 @@ pub fn run(args: &BenchArgs) -> Result<(), CliError> {
             (dir.display().to_string(), files.len())
         }
         (None, Some(runs)) => {
+            if !(1..=MAX_STEREO_RUNS).contains(&runs) {
+                return Err(CliError::usage(format!(
+                    "--stereo {runs}: give 1 to {MAX_STEREO_RUNS} scenarios per outlier fraction"
+                )));
+            }
             let mut count = 0;
             for fraction in STEREO_FRACTIONS {
                 for run in 0..runs {
@@ -214,6 +222,13 @@ pub fn run(args: &BenchArgs) -> Result<(), CliError> {
                         count += 1;
                     }
                 }
+            }
+            if count == 0 {
+                return Err(CliError::usage(format!(
+                    "--filter \"{}\" matches none of the {} generated scenarios",
+                    args.filter,
+                    runs * STEREO_FRACTIONS.len() as u64
+                )));
             }
             ("the stereo-noise generator".to_owned(), count)
         }
@@ -229,6 +244,10 @@ pub fn run(args: &BenchArgs) -> Result<(), CliError> {
         started.elapsed().as_secs_f64()
     ))
 }
+
+/// The most `--stereo` scenarios per outlier fraction (each is generated and run by
+/// every method; a million would take days).
+const MAX_STEREO_RUNS: u64 = 100_000;
 
 /// Outlier fractions of `--stereo`.
 const STEREO_FRACTIONS: [f64; 3] = [0.9, 0.95, 0.97];

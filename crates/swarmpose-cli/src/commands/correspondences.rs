@@ -20,7 +20,7 @@ use swarmpose_vision::frontend::{Detector, DisparityCorrection, FrameMatches, Fr
 
 use super::stereo_options::StereoOptions;
 use crate::error::{CliError, EXIT_NOT_USABLE};
-use crate::output_file::{create_parent, write_bytes, write_with};
+use crate::output_file::{check_target, create_parent, write_bytes};
 use crate::streams::{err, warn};
 
 /// Arguments of `swarmpose correspondences`.
@@ -40,8 +40,9 @@ Exit status: 0 on success; 2 for bad options, an unreadable or malformed sequenc
 --inliers report made from another CSV (checked by its row count and points_checksum \
 before anything is written); 1 when an output cannot be written; 3 when no \
 correspondence was found (the CSV is written with its header only: not usable). Outputs \
-are written under a temporary name and renamed when complete; missing folders are \
-created.")]
+are written under a temporary name and renamed when complete (a FIFO or a device such \
+as /dev/stdout is written through, never replaced; a folder is refused); missing folders \
+are created.")]
 pub struct CorrespondencesArgs {
     /// Sequence directory.
     #[arg(value_name = "SEQUENCE_DIR")]
@@ -196,9 +197,9 @@ pub fn run(args: &CorrespondencesArgs) -> Result<(), CliError> {
         warn(note);
     }
     // The output folders exist (or are made) before any work.
-    create_parent(&args.out)?;
-    if let Some(png) = &args.draw {
-        create_parent(png)?;
+    for path in std::iter::once(&args.out).chain(&args.draw) {
+        create_parent(path)?;
+        check_target(path)?;
     }
     for f in [i, j] {
         if f >= seq.len() {
@@ -256,7 +257,10 @@ pub fn run(args: &CorrespondencesArgs) -> Result<(), CliError> {
             &m.src_pixels,
             flags.as_deref(),
         );
-        write_with(png, |tmp| canvas.save_png(tmp))?;
+        let bytes = canvas
+            .png()
+            .map_err(|e| crate::output_file::write_error(png, &e))?;
+        write_bytes(png, &bytes)?;
     }
     err(&format!(
         "swarmpose: {} ({}), frames {i} -> {j}: {} correspondences written to {}",

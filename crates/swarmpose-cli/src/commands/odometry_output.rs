@@ -1,48 +1,156 @@
-//! The output folder of a run: created and checked writable before any work, files
-//! streamed line by line (each line flushed, so a run stopped at any point leaves whole
-//! lines) or written whole under a temporary name and renamed when complete, and a
-//! manifest of what the run wrote, so that files an earlier run left there are removed.
+//! The output folder of a run: one run at a time (a lock held while it writes),
+//! created and checked writable before any work, files streamed line by line (each
+//! line flushed, so a run stopped at any point leaves whole lines) or written whole
+//! under a temporary name and renamed when complete, and a manifest of what the run
+//! wrote, so that files an earlier run left there are removed.
 
-use std::fs::{File, OpenOptions};
-use std::io::Write;
+use std::fs::{File, OpenOptions, TryLockError};
+use std::io::{Read, Seek, Write};
 use std::path::{Path, PathBuf};
 
 use crate::error::CliError;
+use crate::output_file::write_error;
+use crate::streams::warn;
 
 /// Name of the manifest in an output folder.
 pub const MANIFEST: &str = ".swarmpose-manifest";
 
-use crate::output_file::write_error;
+/// Name of the lock file of an output folder: locked (an advisory lock of the whole
+/// file) by the run writing the folder, and released when that run ends however it
+/// ends, a SIGKILL included. It holds the process id of the run.
+pub const LOCK: &str = ".swarmpose-lock";
 
-/// An output folder being written by one run.
+/// Every file a run may write in its folder: what [`OutputDir::prepare`] removes from a
+/// folder an earlier version wrote without a manifest, and the only names a run records.
+pub const OUTPUT_NAMES: [&str; 13] = [
+    "trajectory.kitti.txt",
+    "trajectory.tum.txt",
+    "frames.csv",
+    "motion_covariance.csv",
+    "calibration.json",
+    "trajectory.smoothed.kitti.txt",
+    "trajectory.smoothed.tum.txt",
+    "groundtruth.kitti.txt",
+    "groundtruth.tum.txt",
+    "evaluation.json",
+    "trajectory.png",
+    "trajectory.svg",
+    "errors.png",
+];
+
+/// An output folder being written by one run (the folder stays locked while this lives).
 #[derive(Debug)]
 pub struct OutputDir {
     path: PathBuf,
+    /// The locked [`LOCK`] file.
+    _lock: File,
+}
+
+/// Locks `dir`'s [`LOCK`] file and writes this process's id in it.
+fn lock(dir: &Path) -> Result<File, CliError> {
+    let path = dir.join(LOCK);
+    let mut file = OpenOptions::new()
+        .read(true)
+        .write(true)
+        .create(true)
+        .truncate(false)
+        .open(&path)
+        .map_err(|e| write_error(dir, &e))?;
+    match file.try_lock() {
+        Ok(()) => {}
+        Err(TryLockError::WouldBlock) => {
+            let mut holder = String::new();
+            let _ = file.read_to_string(&mut holder);
+            let holder = holder.trim();
+            let by = if holder.is_empty() {
+                String::new()
+            } else {
+                format!(" (process {holder})")
+            };
+            return Err(CliError::failure(format!(
+                "{}: in use by another run{by}: one run at a time per output folder (give \
+                 another --out)",
+                dir.display()
+            )));
+        }
+        Err(TryLockError::Error(e)) => return Err(write_error(&path, &e)),
+    }
+    file.set_len(0)
+        .and_then(|()| file.rewind())
+        .and_then(|()| write!(file, "{}", std::process::id()))
+        .map_err(|e| write_error(&path, &e))?;
+    Ok(file)
+}
+
+/// Removes `dir/name` when it is a regular file (a FIFO, a device or a link put in its
+/// place stays); returns whether it did.
+fn remove_regular(dir: &Path, name: &str) -> bool {
+    let path = dir.join(name);
+    let plain = !name.contains('/') && !name.contains('\\') && name != "..";
+    plain
+        && std::fs::symlink_metadata(&path).is_ok_and(|m| m.is_file())
+        && std::fs::remove_file(path).is_ok()
+}
+
+/// Removes what an earlier run left in `dir`: the temporaries of a run that was killed
+/// (none can be another's: the folder is locked), and the files of the earlier run's
+/// manifest, or, in a folder an earlier version wrote without one, the files a run
+/// writes ([`OUTPUT_NAMES`], with a warning naming them).
+fn clean(dir: &Path) -> Result<(), CliError> {
+    let entries = std::fs::read_dir(dir).map_err(|e| write_error(dir, &e))?;
+    let names: Vec<String> = entries
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .collect();
+    for name in &names {
+        if swarmpose_data::output::temporary_of(name).is_some() {
+            remove_regular(dir, name);
+        }
+    }
+    match std::fs::read_to_string(dir.join(MANIFEST)) {
+        Ok(text) => {
+            for name in text.lines().map(str::trim).filter(|n| !n.is_empty()) {
+                remove_regular(dir, name);
+            }
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            let removed: Vec<&str> = OUTPUT_NAMES
+                .into_iter()
+                .filter(|n| names.iter().any(|m| m == n) && remove_regular(dir, n))
+                .collect();
+            if !removed.is_empty() {
+                warn(&format!(
+                    "{}: no {MANIFEST} (a folder of an earlier version): \
+                     removed its {} before this run writes its own",
+                    dir.display(),
+                    removed.join(", ")
+                ));
+            }
+        }
+        Err(e) => return Err(write_error(&dir.join(MANIFEST), &e)),
+    }
+    Ok(())
 }
 
 impl OutputDir {
-    /// Creates `path` (and its parents) if needed, checks that files can be written in
-    /// it, and removes the files an earlier run's manifest lists.
+    /// Creates `path` (and its parents) if needed, locks it for this run, checks that
+    /// files can be written in it, and removes what an earlier run left there (see
+    /// [`clean`]).
     ///
     /// # Errors
-    /// Exit status 1, naming the folder, when it cannot be created or written.
+    /// Exit status 1, naming the folder, when it cannot be created or written, or when
+    /// another run holds it.
     pub fn prepare(path: &Path) -> Result<Self, CliError> {
         std::fs::create_dir_all(path).map_err(|e| write_error(path, &e))?;
+        let lock = lock(path)?;
         let probe = path.join(".swarmpose-write-check");
         std::fs::write(&probe, b"").map_err(|e| write_error(path, &e))?;
         let _ = std::fs::remove_file(&probe);
+        clean(path)?;
         let manifest = path.join(MANIFEST);
-        if let Ok(text) = std::fs::read_to_string(&manifest) {
-            for name in text.lines().map(str::trim).filter(|n| !n.is_empty()) {
-                // Only plain names inside the folder.
-                if !name.contains('/') && !name.contains('\\') && name != ".." {
-                    let _ = std::fs::remove_file(path.join(name));
-                }
-            }
-        }
         std::fs::write(&manifest, b"").map_err(|e| write_error(&manifest, &e))?;
         Ok(Self {
             path: path.to_owned(),
+            _lock: lock,
         })
     }
 
@@ -53,6 +161,12 @@ impl OutputDir {
     }
 
     fn record(&self, name: &str) -> Result<(), CliError> {
+        if !OUTPUT_NAMES.contains(&name) {
+            // A file not in the list would escape the cleaning of older folders.
+            return Err(CliError::failure(format!(
+                "internal error (a bug): {name} is not among the output names"
+            )));
+        }
         let manifest = self.path.join(MANIFEST);
         let mut f = OpenOptions::new()
             .append(true)
@@ -84,14 +198,16 @@ pub struct StreamFile {
 }
 
 impl StreamFile {
-    /// Creates `name` in `dir`, with a first line `header` if given.
+    /// Creates `name` in `dir`, with a first line `header` if given (a FIFO or a
+    /// character device there is written through; a folder there is refused).
     ///
     /// # Errors
     /// Exit status 1 naming the file.
     pub fn create(dir: &OutputDir, name: &str, header: Option<&str>) -> Result<Self, CliError> {
         dir.record(name)?;
         let path = dir.path.join(name);
-        let file = File::create(&path).map_err(|e| write_error(&path, &e))?;
+        let file =
+            swarmpose_data::output::create_stream(&path).map_err(|e| write_error(&path, &e))?;
         let mut s = Self { path, file, len: 0 };
         if let Some(h) = header {
             s.line(h)?;

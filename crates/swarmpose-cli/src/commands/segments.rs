@@ -12,7 +12,7 @@ use plotters::prelude::*;
 use swarmpose_eval::KittiSegments;
 
 use crate::error::CliError;
-use crate::output_file::write_with;
+use crate::output_file::write_bytes;
 
 /// DejaVu Sans, the copy `swarmpose-sim` ships (Bitstream Vera license, see
 /// `crates/swarmpose-sim/assets/DejaVuSans-LICENSE.txt`).
@@ -155,7 +155,5 @@ pub fn write_segment_plot(k: &KittiSegments, estimate: &Path, path: &Path) -> Re
     };
     let title = format!("KITTI segment errors of {}{scaled}", estimate.display());
     let svg = segment_svg(k, &title).map_err(|e| CliError::failure(format!("plot: {e}")))?;
-    write_with(path, |tmp| {
-        std::fs::write(tmp, svg).map_err(|e| e.to_string())
-    })
+    write_bytes(path, svg.as_bytes())
 }

@@ -7,9 +7,12 @@ use clap::{Args, ValueEnum};
 use swarmpose_sim::experiment::{
     DEFAULT_FRACTIONS, DEFAULT_NOISE, DEFAULT_RUNS, DEFAULT_SEED, QUICK_FRACTIONS, QUICK_RUNS,
 };
-use swarmpose_sim::{Experiment, OutlierMode, SimError, SimOptions, default_estimators, simulate};
+use swarmpose_sim::{
+    Experiment, OutlierMode, SimError, SimOptions, default_estimators, simulate_until,
+};
 
 use crate::error::CliError;
+use crate::signals::StopRequest;
 
 /// How outliers are made.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -27,7 +30,9 @@ Every noise level x outlier fraction x run x estimator (pso, pso-paper, svd, msa
 the oracle threshold max(3.368 sigma, 0.01) m). Writes runs.csv, summary.md and the figures \
 position_error, processing_time, rotation_error and success_rate as PNG and SVG into --out, \
 and prints the summary table. The numbers are the same for a seed whatever the thread count \
-(times excepted).")]
+(times excepted). At most 1 000 000 scenarios (noise levels x fractions x runs) and 1024 \
+threads. SIGINT/SIGTERM stop it after the scenarios being run: runs.csv keeps the rows \
+done, summary.md says where it stopped, and the status is 130/143.")]
 pub struct SimulateArgs {
     /// Output folder (created).
     #[arg(long, value_name = "DIR", default_value = swarmpose_sim::simulate::DEFAULT_OUT)]
@@ -81,9 +86,10 @@ const _: () = assert!(DEFAULT_FRACTIONS.len() == 10 && QUICK_FRACTIONS.len() == 
 /// Runs `simulate`.
 ///
 /// # Errors
-/// Bad settings or an unwritable folder (exit status 2, before any work), or a failure
-/// while writing the results (exit status 1).
+/// Bad settings (exit status 2, before any work), an unwritable folder (exit status 1,
+/// before any work), or a failure while writing the results (exit status 1).
 pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
+    let stop = StopRequest::install();
     // --quick sets the defaults; --runs and --fractions given explicitly still win.
     let base = if args.quick {
         Experiment::quick()
@@ -113,14 +119,35 @@ pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
         progress: true,
     };
     // Settings and folders first: nothing runs when one is bad.
-    opts.check().map_err(|e| CliError::usage(e.to_string()))?;
-    let outcome = simulate(&opts, &default_estimators()).map_err(|e| match e {
+    // Bad settings are bad usage (2); a folder that cannot be written is an output that
+    // cannot be written (1), as for every command.
+    let sim_error = |e: SimError| match e {
         SimError::InvalidConfig(_) => CliError::usage(e.to_string()),
         other => CliError::failure(other.to_string()),
-    })?;
-    let mut text = outcome.console.clone();
+    };
+    opts.check().map_err(sim_error)?;
+    let stopped = || stop.exit_status().is_some();
+    let outcome = simulate_until(&opts, &default_estimators(), &stopped).map_err(sim_error)?;
+    let total = opts.experiment.scenarios();
+    let mut text = if outcome.scenarios_done < total {
+        String::new()
+    } else {
+        outcome.console.clone()
+    };
     for f in &outcome.files {
         text.push_str(&format!("wrote {}\n", f.display()));
     }
-    crate::streams::out_text(&text)
+    crate::streams::out_text(&text)?;
+    match stop.exit_status() {
+        Some(code) if outcome.scenarios_done < total => Err(CliError {
+            code,
+            message: format!(
+                "stopped by {} after {} of {total} scenarios: their rows are in {}",
+                stop.name().unwrap_or("a request"),
+                outcome.scenarios_done,
+                opts.out_dir.join("runs.csv").display()
+            ),
+        }),
+        _ => Ok(()),
+    }
 }

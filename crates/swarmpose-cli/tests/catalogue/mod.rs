@@ -29,6 +29,36 @@ pub fn expect(out: &Output, code: i32, start: &str) -> String {
     stderr
 }
 
+/// `correspondences` on frames 0 and 1 of `seq`, writing into `tmp`.
+pub fn corr(
+    tmp: &crate::common::TempDir,
+    seq: &std::path::Path,
+    extra: &[&str],
+) -> std::process::Output {
+    let out = tmp.0.join("c.csv");
+    let mut args = vec![
+        "correspondences",
+        s(seq),
+        "--frames",
+        "0",
+        "1",
+        "--out",
+        s(&out),
+    ];
+    args.extend_from_slice(extra);
+    crate::common::swarmpose(&args, None)
+}
+
+/// Checks exit status 0, showing standard error otherwise.
+pub fn succeeded(out: &Output) {
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 fn copy(from: &Path, to: &Path) {
     if let Some(d) = to.parent() {
         std::fs::create_dir_all(d).expect("mkdir");

@@ -26,7 +26,7 @@
 
 use std::fmt;
 use std::fs::File;
-use std::io::{BufRead, BufReader, BufWriter, Read, Write};
+use std::io::{BufRead, BufReader, Read, Write};
 use std::path::Path;
 
 use nalgebra::{Matrix3, Point3};
@@ -326,8 +326,9 @@ fn parse_row(text: &str, with_covariance: bool) -> Result<[f64; 18], CsvErrorKin
     Ok(row)
 }
 
-/// Writes `data` as a correspondence CSV file (created or truncated at `path`), with the
-/// covariance columns when `data` carries covariances.
+/// Writes `data` as a correspondence CSV file at `path` ([`crate::output::write_file`]:
+/// whole, never over a device, a FIFO or a folder), with the covariance columns when
+/// `data` carries covariances.
 ///
 /// Values are written in the shortest form that reads back to the same `f64`, so a
 /// write followed by a read gives the same correspondences bit for bit.
@@ -337,9 +338,10 @@ fn parse_row(text: &str, with_covariance: bool) -> Result<[f64; 18], CsvErrorKin
 pub fn write_path(path: impl AsRef<Path>, data: &Correspondences) -> Result<(), CsvError> {
     let path = path.as_ref();
     let name = path.display().to_string();
-    let file =
-        File::create(path).map_err(|e| CsvError::new(&name, None, CsvErrorKind::Write(e)))?;
-    write_to(BufWriter::new(file), data, &name)
+    let mut bytes = Vec::new();
+    write_to(&mut bytes, data, &name)?;
+    crate::output::write_file(path, &bytes)
+        .map_err(|e| CsvError::new(&name, None, CsvErrorKind::Write(e)))
 }
 
 /// Writes `data` as a correspondence CSV to any writer (flushed at the end); messages

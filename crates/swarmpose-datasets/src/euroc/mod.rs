@@ -18,7 +18,7 @@ use swarmpose_vision::rectify::{
 
 use crate::error::DatasetError;
 use crate::frames::check_pairs;
-use crate::text::{check_baseline, numbers, parse_error, read_text};
+use crate::text::{check_baseline, check_plausible, numbers, parse_error, read_text};
 use crate::{RectifiedStereo, StereoPair, StereoSequence, load_indexed_pair};
 
 pub use yaml::{SensorYaml, parse_sensor_yaml, read_sensor_yaml};
@@ -81,6 +81,51 @@ fn read_groundtruth(path: &Path) -> Result<Vec<(i64, Isometry3<f64>)>, DatasetEr
     parse_groundtruth(&text, path)
 }
 
+/// The ground-truth poses of the rectified left camera at each frame (`timestamps_ns`),
+/// in the first frame's, from the body poses of `path` (the nearest within
+/// [`GT_TOLERANCE_NS`] of each frame), `T_WB T_BS0 R_rect⁻¹` with `camera` the last two. When a frame has no pose
+/// that near (a ground truth that starts late, ends early or has a gap), none is used,
+/// and a note says so (before, the run went on without evaluation and without a word).
+///
+/// # Errors
+/// As [`parse_groundtruth`].
+fn camera_ground_truth(
+    path: &Path,
+    timestamps_ns: &[i64],
+    camera: (&Isometry3<f64>, &Isometry3<f64>),
+    notes: &mut Vec<String>,
+) -> Result<Option<Vec<Isometry3<f64>>>, DatasetError> {
+    let gt = read_groundtruth(path)?;
+    let nearest = |t: i64| {
+        gt.iter()
+            .min_by_key(|g| (g.0 - t).abs())
+            .filter(|g| (g.0 - t).abs() <= GT_TOLERANCE_NS)
+    };
+    let found: Vec<Option<&(i64, Isometry3<f64>)>> =
+        timestamps_ns.iter().map(|&t| nearest(t)).collect();
+    let missing = found.iter().filter(|f| f.is_none()).count();
+    if let Some(first) = found.iter().position(Option::is_none) {
+        notes.push(format!(
+            "{}: no pose within {} ms of {missing} of the {} frames (the first: frame {first}, \
+             timestamp {} ns): the ground truth is not used",
+            path.display(),
+            GT_TOLERANCE_NS / 1_000_000,
+            timestamps_ns.len(),
+            timestamps_ns[first]
+        ));
+        return Ok(None);
+    }
+    let world: Vec<Isometry3<f64>> = found
+        .iter()
+        .flatten()
+        .map(|g| g.1 * camera.0 * camera.1)
+        .collect();
+    let Some(first_inv) = world.first().map(Isometry3::inverse) else {
+        return Ok(None);
+    };
+    Ok(Some(world.iter().map(|p| first_inv * p).collect()))
+}
+
 /// Body poses `(timestamp ns, world_from_body)` of the text of a EuRoC ground-truth
 /// `data.csv` (`timestamp, p_x, p_y, p_z [m], q_w, q_x, q_y, q_z, ...` per line).
 ///
@@ -107,7 +152,25 @@ pub fn parse_groundtruth(
                 ),
             ));
         }
-        let q = UnitQuaternion::from_quaternion(Quaternion::new(v[4], v[5], v[6], v[7]));
+        let q = Quaternion::new(v[4], v[5], v[6], v[7]);
+        // A quaternion of norm 0 (or far from 1) is no rotation: normalising it gave NaN
+        // poses and NaN metrics.
+        if !((1.0 - 1e-2)..=(1.0 + 1e-2)).contains(&q.norm()) {
+            return Err(parse_error(
+                path,
+                k + 1,
+                format!(
+                    "the quaternion (q_w, q_x, q_y, q_z) = ({}, {}, {}, {}) has norm {:.3e}: \
+                     a rotation's has norm 1",
+                    v[4],
+                    v[5],
+                    v[6],
+                    v[7],
+                    q.norm()
+                ),
+            ));
+        }
+        let q = UnitQuaternion::from_quaternion(q);
         let ts = line
             .split(',')
             .next()
@@ -200,7 +263,7 @@ impl EurocSequence {
         check_timestamps(&r, &list1)?;
         let left: Vec<PathBuf> = l.iter().map(|x| x.1.clone()).collect();
         let right: Vec<PathBuf> = r.iter().map(|x| x.1.clone()).collect();
-        let notes = match left.first() {
+        let mut notes = match left.first() {
             Some(first) => crate::first_image(first)?.1,
             None => Vec::new(),
         };
@@ -229,6 +292,23 @@ impl EurocSequence {
             rectification.rig.baseline_m,
             "T_BS of cam0 and cam1",
         )?;
+        // Each camera's own intrinsics for its raw images, then the common rectified one.
+        for (cam, s) in [(&c0, &s0), (&c1, &s1)] {
+            let c = &s.camera;
+            let raw = RectifiedStereo {
+                fx: c.fx,
+                fy: c.fy,
+                cx: c.cx,
+                cy: c.cy,
+                ..rectification.rig
+            };
+            check_plausible(&cam.join("sensor.yaml"), &raw, (c.width, c.height))?;
+        }
+        check_plausible(
+            &c1.join("sensor.yaml"),
+            &rectification.rig,
+            (rectification.width, rectification.height),
+        )?;
         let (w, h) = (rectification.width, rectification.height);
         let left_map = rectify_map(
             &s0.camera,
@@ -247,24 +327,13 @@ impl EurocSequence {
         let gt_path = m.join("state_groundtruth_estimate0").join("data.csv");
         let timestamps_ns: Vec<i64> = l.iter().map(|x| x.0).collect();
         let poses = if gt_path.is_file() {
-            let gt = read_groundtruth(&gt_path)?;
             // The rectified left camera in the world: T_WB T_BS0 R_rect⁻¹.
             let cam_from_rect = Isometry3::from_parts(
                 Translation3::identity(),
                 crate::nearest_rotation(&rectification.rect_from_left.transpose()),
             );
-            let world: Option<Vec<Isometry3<f64>>> = timestamps_ns
-                .iter()
-                .map(|&t| {
-                    let best = gt.iter().min_by_key(|g| (g.0 - t).abs())?;
-                    ((best.0 - t).abs() <= GT_TOLERANCE_NS)
-                        .then(|| best.1 * s0.body_from_camera * cam_from_rect)
-                })
-                .collect();
-            world.map(|w| {
-                let first_inv = w[0].inverse();
-                w.iter().map(|p| first_inv * p).collect()
-            })
+            let camera = (&s0.body_from_camera, &cam_from_rect);
+            camera_ground_truth(&gt_path, &timestamps_ns, camera, &mut notes)?
         } else {
             None
         };

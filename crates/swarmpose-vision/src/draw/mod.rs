@@ -67,19 +67,23 @@ impl Canvas {
     }
 
     #[cfg(feature = "png")]
-    /// Saves as an RGB PNG.
+    /// The canvas as the bytes of an RGB PNG file (the caller writes them where it
+    /// chooses).
     ///
     /// # Errors
-    /// The encoder's or the file system's message, naming `path`.
-    pub fn save_png(&self, path: &std::path::Path) -> Result<(), String> {
-        image::save_buffer(
-            path,
-            &self.rgb,
-            self.width as u32,
-            self.height as u32,
-            image::ExtendedColorType::Rgb8,
-        )
-        .map_err(|e| format!("{}: cannot write PNG: {e}", path.display()))
+    /// The encoder's message.
+    pub fn png(&self) -> Result<Vec<u8>, String> {
+        use image::ImageEncoder;
+        let mut out = Vec::new();
+        image::codecs::png::PngEncoder::new(&mut out)
+            .write_image(
+                &self.rgb,
+                self.width as u32,
+                self.height as u32,
+                image::ExtendedColorType::Rgb8,
+            )
+            .map_err(|e| format!("cannot encode PNG: {e}"))?;
+        Ok(out)
     }
 }
 

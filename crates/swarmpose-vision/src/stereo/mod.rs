@@ -7,7 +7,9 @@ pub mod subpixel;
 
 use nalgebra::Point3;
 
-pub use rig::RectifiedStereo;
+pub use rig::{
+    BASELINE_RANGE_M, FOCAL_RANGE, MAX_PIXEL_ASPECT, PRINCIPAL_POINT_MARGIN, RectifiedStereo,
+};
 
 use crate::features::{Descriptor, Features, GrayView, Keypoint};
 use subpixel::{refine_disparity, refine_disparity_lk, row_offset};
