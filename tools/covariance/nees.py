@@ -200,6 +200,25 @@ def covariance_figures(out, truth):
     }
 
 
+def motion_correlation(out):
+    """Per axis (nu x, y, z, omega x, y, z), the correlation of the measured motions with
+    the ground truth's over the rows of motion_covariance.csv, or None without ground
+    truth: near 1 when the camera really moves by more than the estimate's error."""
+    path = os.path.join(out, "groundtruth.kitti.txt")
+    if not os.path.exists(path):
+        return None
+    gt = read_kitti(path)
+    identity = ((1.0, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+    measured, truth = [], []
+    for frame, ref, motion, _ in read_covariance(os.path.join(out, "motion_covariance.csv")):
+        measured.append(motion_error(identity, motion))
+        truth.append(motion_error(identity, pose_compose(pose_inverse(gt[ref]), gt[frame])))
+    if len(measured) < 3:
+        return None
+    return [statistics.correlation([m[k] for m in measured], [t[k] for t in truth])
+            for k in range(6)]
+
+
 def split_figures(out):
     path = os.path.join(out, "split_check.csv")
     if not os.path.exists(path):
@@ -281,10 +300,15 @@ def main():
     unknown = set(a.sequences) - {s for s, _ in SEQUENCES}
     if unknown:
         sys.exit(f"nees.py: unknown sequence(s) {', '.join(sorted(unknown))}")
-    print(f"Commit {commit()}; {machine()}; `python3 tools/covariance/nees.py`.\n")
+    if a.reuse:
+        print(f"Runs read from {a.out} (made earlier: their binary's commit is not recorded; "
+              f"this tree: {commit()}); {machine()}.\n")
+    else:
+        print(f"Commit {commit()}; {machine()}; `python3 tools/covariance/nees.py`.\n")
     print("| sequence | mode | truth | motions | mean NEES | median NEES | claimed sd, mm "
           "| claimed sd, mdeg | split frames | split mean NEES | split median NEES |")
     print("|---|---|---|---:|---:|---:|---|---|---:|---:|---:|")
+    notes = []
     for name, truths in chosen:
         seq_dir = None if name == "synthetic" else os.path.join(a.data, name)
         if seq_dir and not os.path.isdir(seq_dir):
@@ -297,6 +321,14 @@ def main():
             s = split_figures(out)
             for truth in truths:
                 row(name, label, truth, covariance_figures(out, truth) if truth else None, s)
+            if "zero" in truths:
+                corr = motion_correlation(out)
+                if corr:
+                    notes.append(f"{name}, {label}: correlation of the measured motions with the "
+                                 "ground truth's, nu x y z, omega x y z: "
+                                 + ", ".join(f"{c:.2f}" for c in corr))
+    for n in notes:
+        print(f"\n{n}")
 
 
 if __name__ == "__main__":
