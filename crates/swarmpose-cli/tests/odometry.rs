@@ -244,16 +244,9 @@ fn the_cli_gives_the_engine_s_trajectory() {
 
 #[test]
 fn kitti_run_writes_its_outputs() {
-    let dir = swarmpose_datasets::data_root().join("kitti_vo_seq2");
-    if !dir.is_dir() {
-        assert!(
-            std::env::var("CI").map_or(true, |v| v != "true"),
-            "CI=true: {} not found",
-            dir.display()
-        );
-        eprintln!("SKIPPED: {} not found", dir.display());
+    let Some(dir) = common::shared_dataset("kitti_vo_seq2") else {
         return;
-    }
+    };
     let tmp = TempDir::new("odo-kitti");
     let out_dir = tmp.0.join("out");
     let out = swarmpose(

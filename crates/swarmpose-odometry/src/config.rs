@@ -139,6 +139,10 @@ pub struct OdometryConfig {
     /// self-calibration finds a right camera's yaw 16 % short (4 % at its own size)
     /// and the still EuRoC clip (752x480, with 375 000) wanders 0.61 mm instead of 0.26 mm.
     pub min_working_pixels: usize,
+    /// Run the split-feature check of each pair's covariance (default false: it costs two
+    /// more refinements a frame): [`FrameResult::split`](crate::FrameResult::split),
+    /// [`crate::refine::split`].
+    pub split_check: bool,
 }
 
 impl OdometryConfig {
@@ -191,6 +195,7 @@ impl Default for OdometryConfig {
             window: WindowConfig::default(),
             max_working_pixels: 1_500_000,
             min_working_pixels: 0,
+            split_check: false,
         }
     }
 }

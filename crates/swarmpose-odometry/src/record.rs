@@ -3,6 +3,7 @@
 use nalgebra::{Isometry3, Matrix6};
 use swarmpose_vision::frontend::DisparityCorrection;
 
+use crate::refine::split::SplitCheck;
 use crate::selfcal::CorrectionModel;
 
 /// What happened to the motion into one frame.
@@ -166,4 +167,9 @@ pub struct FrameResult {
     /// smoother, at most the window's span late; [`FrameResult::pose`] stays the online
     /// estimate. Empty without the window or for a frame that was not tracked.
     pub window_poses: Vec<(usize, Isometry3<f64>)>,
+    /// With [`crate::OdometryConfig::split_check`], the split-feature check of the pair's
+    /// covariance ([`crate::refine::split`]): the motion refined on each half of the
+    /// inliers, and the normalised difference. `None` otherwise, or when a half had too
+    /// few inliers.
+    pub split: Option<SplitCheck>,
 }

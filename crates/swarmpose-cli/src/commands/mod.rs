@@ -9,6 +9,7 @@ pub mod evaluate;
 pub mod odometry;
 pub mod odometry_ins;
 pub mod odometry_output;
+pub mod odometry_split;
 pub mod register;
 pub mod segments;
 pub mod simulate;

@@ -28,6 +28,7 @@ use swarmpose_runs::rgbd::RgbdSequence;
 use swarmpose_runs::synthetic::SyntheticSequence;
 
 use super::odometry_output::{OutputDir, StreamFile};
+use super::odometry_split::SplitLog;
 use super::stereo_options::StereoOptions;
 use crate::error::{CliError, EXIT_NOT_USABLE};
 use crate::methods::{EstimatorOptions, Method, build};
@@ -137,6 +138,11 @@ pub struct OdometryArgs {
           value_parser = clap::value_parser!(u8).range(1..=2))]
     pub threads: u8,
 
+    /// Check each pair's covariance on two spatially disjoint halves of its matches
+    /// (split_check.csv; two more refinements a frame).
+    #[arg(long)]
+    pub split_check: bool,
+
     #[command(flatten)]
     pub stereo: StereoOptions,
 
@@ -213,6 +219,7 @@ fn config(args: &OdometryArgs) -> Result<OdometryConfig, CliError> {
         selfcal,
         max_working_pixels: args.max_working_pixels,
         min_working_pixels: args.min_working_pixels,
+        split_check: args.split_check,
         ..OdometryConfig::default()
     }
     .with_window(args.window)
@@ -284,6 +291,10 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
     let mut tum = StreamFile::create(&dir, "trajectory.tum.txt", None)?;
     let mut frames = StreamFile::create(&dir, "frames.csv", Some(FRAMES_HEADER))?;
     let mut cov = StreamFile::create(&dir, "motion_covariance.csv", Some(COVARIANCE_HEADER))?;
+    let mut split = args
+        .split_check
+        .then(|| SplitLog::create(&dir))
+        .transpose()?;
     let stop = StopRequest::install();
     let mut track = Track {
         poses: Vec::with_capacity(n),
@@ -301,7 +312,8 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
             .line(&kitti_line(&r.pose))
             .and_then(|()| tum.line(&tum_line(r.timestamp_s, &r.pose)))
             .and_then(|()| frames.line(&frames_row(r)))
-            .and_then(|()| covariance_row(r).map_or(Ok(()), |row| cov.line(&row)));
+            .and_then(|()| covariance_row(r).map_or(Ok(()), |row| cov.line(&row)))
+            .and_then(|()| split.as_mut().map_or(Ok(()), |s| s.add(r)));
         if let Err(e) = written {
             write_error = Some(e);
             return ControlFlow::Break(());
@@ -378,6 +390,9 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
         if let Some(line) = super::odometry_ins::ins_summary(seq_dir, track.smoothed.poses()) {
             out(&format!("smoothed: {line}"))?;
         }
+    }
+    if let Some(s) = &split {
+        out(&s.summary())?;
     }
     out(&format!(
         "written: {} ({})",

@@ -67,6 +67,32 @@ pub fn swarmpose(args: &[&str], stdin: Option<&str>) -> Output {
     child.wait_with_output().expect("wait for swarmpose")
 }
 
+/// The directory of the shared data set `name`, or `None` (printed as skipped) when it
+/// is absent; under `CI=true` an absent data set fails the test.
+pub fn shared_dataset(name: &str) -> Option<std::path::PathBuf> {
+    let dir = swarmpose_datasets::data_root().join(name);
+    if dir.is_dir() {
+        return Some(dir);
+    }
+    assert!(
+        std::env::var("CI").map_or(true, |v| v != "true"),
+        "CI=true: {} not found",
+        dir.display()
+    );
+    eprintln!("SKIPPED: {} not found", dir.display());
+    None
+}
+
+/// Asserts that a run exited with status 0, showing its standard error otherwise.
+pub fn assert_success(out: &Output) {
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 /// A correspondence CSV; values written in Rust's shortest round-trip form.
 pub fn csv(src: &[Point3<f64>], dst: &[Point3<f64>]) -> String {
     let mut text = format!("{HEADER}\n");

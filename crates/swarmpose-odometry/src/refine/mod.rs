@@ -10,15 +10,19 @@
 //! its 3 degrees of freedom exceeds [`RefineConfig::gate_chi2`] is dropped) and refit
 //! follow until the inliers settle.
 //!
-//! The covariance of the motion is `s² S⁻¹`, where `S` is the pose block of the
-//! information matrix after the points are eliminated and `s²` the residuals' variance
-//! factor `Σ w |e|² / (3 N − 6)` (1 when the pixel noise is as modelled). It is the
+//! The covariance of the motion is `k S⁻¹`, where `S` is the pose block of the
+//! information matrix after the points are eliminated and `k` the larger of the
+//! residuals' variance factor `s² = Σ w |e|² / (3 N − 6)` (1 when the pixel noise is as
+//! modelled) and the regions' factor of [`noise`] (errors shared by the features of a
+//! region of the image, which `s²` counts as independent; docs/covariance.md). It is the
 //! covariance of `ξ = (ν, ω)` (metres, radians) in `T_true = T_est ∘ E(ξ)`, where `E(ξ)`
 //! maps `P ↦ Exp(ω) P + ν`: `R_true = R_est Exp(ω)`, `t_true = t_est + R_est ν`, both
 //! vectors in the frame of the current camera B.
 
 pub mod evidence;
 pub mod model;
+pub mod noise;
+pub mod split;
 
 use nalgebra::{
     Isometry3, Matrix3, Matrix6, Rotation3, Translation3, UnitQuaternion, Vector3, Vector6,
@@ -97,6 +101,10 @@ pub struct Refined {
     pub points: Vec<Vector3<f64>>,
     /// Residuals' variance factor `s²` (1 when the pixel noise is as modelled).
     pub scale2: f64,
+    /// The regions' variance factor ([`noise::cluster_factor`]: errors shared by the
+    /// features of a region of the image counted), `None` with too few inliers. The
+    /// covariance is `max(s², this) S⁻¹`.
+    pub cluster_factor: Option<f64>,
     /// Levenberg-Marquardt iterations over all rounds.
     pub iterations: usize,
     /// The normal equations of (pose, correction) with the points eliminated, at the
@@ -461,25 +469,40 @@ pub fn refine(
     let info = both.pose_pose;
     let inv = info.try_inverse().ok_or(RefineError::Singular)?;
     let n = problem.active.len();
-    let chi2: f64 = problem
-        .active
-        .iter()
-        .zip(&points)
-        .filter_map(|(&i, p)| {
-            let (la, lb) = linearize(model, &pose, p, &reference[i], &current[i], Parts::Point)?;
-            let k = config.huber_k;
-            let (sa, sb) = (la.residual.norm_squared(), lb.residual.norm_squared());
-            Some(huber_weight(sa, k) * sa + huber_weight(sb, k) * sb)
-        })
-        .sum();
+    let k = config.huber_k;
+    let mut chi2 = 0.0;
+    let mut scores = Vec::with_capacity(n);
+    for ((&i, p), b) in problem.active.iter().zip(&points).zip(&blocks) {
+        let Some((la, lb)) = linearize(
+            model,
+            &pose,
+            p,
+            &reference[i],
+            &current[i],
+            Parts::PointPose,
+        ) else {
+            continue;
+        };
+        let (sa, sb) = (la.residual.norm_squared(), lb.residual.norm_squared());
+        let wb = huber_weight(sb, k);
+        chi2 += huber_weight(sa, k) * sa + wb * sb;
+        scores.push(noise::Score {
+            u: current[i].u,
+            v: current[i].v,
+            r: lb.d_pose.transpose() * lb.residual * wb
+                - b.pose.transpose() * (b.pp_inv * b.gradient),
+        });
+    }
     let dof = (3 * n).saturating_sub(6).max(1) as f64;
     let scale2 = chi2 / dof;
+    let cluster_factor = noise::cluster_factor(&mut scores, &inv);
     Ok(Refined {
         motion: pose.motion(),
-        covariance: inv * scale2,
+        covariance: inv * noise::variance_factor(scale2, cluster_factor),
         inliers: problem.active,
         points,
         scale2,
+        cluster_factor,
         iterations,
         reduced,
     })

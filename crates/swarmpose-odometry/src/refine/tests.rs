@@ -176,3 +176,119 @@ fn too_few_points_is_an_error_not_a_pose() {
     let r = refine(&m, &RefineConfig::default(), &a[..5], &b[..4], None, &t, 12);
     assert!(matches!(r, Err(RefineError::LengthMismatch { .. })));
 }
+
+/// The split-feature check: with independent pixel noise of the modelled size the mean
+/// normalised difference of the two halves' motions is near 6; with an error shared by
+/// the features of one region (the left half's columns shifted by 0.3 px in B, the same
+/// for all of them) it is far above.
+#[test]
+fn split_check_is_six_for_independent_noise_and_sees_a_local_bias() {
+    let t = truth();
+    let m = model(DisparityCorrection::default());
+    let none = super::evidence::MatrixK::zeros();
+    let mut honest = Vec::new();
+    let mut biased = Vec::new();
+    for seed in 0..40 {
+        let (a, mut b) = scene(&t, &DisparityCorrection::default(), 0, 300 + seed);
+        let r = refine(&m, &RefineConfig::default(), &a, &b, None, &t, 12).expect("refined");
+        let check = |a: &[StereoObservation], b: &[StereoObservation], r: &Refined| {
+            split::split_check(
+                (&m, &none),
+                &RefineConfig::default(),
+                (a, b),
+                &r.inliers,
+                &r.motion,
+                12,
+            )
+            .expect("both halves refined")
+        };
+        let c = check(&a, &b, &r);
+        assert!(c.inliers.iter().all(|&n| n > 150), "{:?}", c.inliers);
+        honest.push(c.nees);
+        let mid = {
+            let mut u: Vec<f64> = b.iter().map(|z| z.u).collect();
+            u.sort_by(f64::total_cmp);
+            u[u.len() / 2]
+        };
+        for z in b.iter_mut().filter(|z| z.u < mid) {
+            z.u += 0.3;
+        }
+        let r = refine(&m, &RefineConfig::default(), &a, &b, None, &t, 12).expect("refined");
+        biased.push(check(&a, &b, &r).nees);
+    }
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    let (h, b) = (mean(&honest), mean(&biased));
+    eprintln!("split-feature check: mean NEES {h:.2} independent noise, {b:.1} with a local bias");
+    assert!((4.5..7.5).contains(&h), "independent noise: mean NEES {h}");
+    assert!(b > 12.0, "local bias: mean NEES {b}");
+}
+
+/// Bad input to the split-feature check is an error, not a panic.
+#[test]
+fn split_check_refuses_bad_input() {
+    let t = truth();
+    let (a, b) = scene(&t, &DisparityCorrection::default(), 0, 5);
+    let m = model(DisparityCorrection::default());
+    let none = super::evidence::MatrixK::zeros();
+    let cfg = RefineConfig::default();
+    let all: Vec<usize> = (0..a.len()).collect();
+    let r = split::split_check((&m, &none), &cfg, (&a, &b[..10]), &all, &t, 12);
+    assert!(matches!(r, Err(RefineError::LengthMismatch { .. })));
+    let r = split::split_check((&m, &none), &cfg, (&a, &b), &[0, a.len()], &t, 12);
+    assert!(matches!(r, Err(RefineError::LengthMismatch { .. })));
+    let r = split::split_check((&m, &none), &cfg, (&a, &b), &all[..20], &t, 12);
+    assert!(matches!(r, Err(RefineError::TooFewInliers { .. })));
+}
+
+/// The regions' variance factor: about 1 for independent noise of the modelled size
+/// (as the residuals' `s²`); with an error shared by the features of each region (the
+/// features of each cell of a 4x4 grid of B shifted together by a random 0.4 px, on top
+/// of the independent 0.5 px), the covariance with the residuals' factor alone is
+/// overconfident (mean NEES 70), and the regions' factor takes away about half of that
+/// (34: what the motion absorbs of the regions' shifts leaves no residual to see, so a
+/// residual-based factor cannot find all of it; docs/covariance.md).
+#[test]
+fn cluster_factor_sees_errors_shared_within_regions() {
+    let t = truth();
+    let m = model(DisparityCorrection::default());
+    let mut independent = Vec::new();
+    let (mut classic, mut regions) = (Vec::new(), Vec::new());
+    let mut rng = ChaCha8Rng::seed_from_u64(77);
+    let shift = Normal::new(0.0, 0.4).expect("normal");
+    let nees = |r: &Refined, cov: &nalgebra::Matrix6<f64>| {
+        let e = error(&r.motion, &t);
+        (e.transpose() * cov.try_inverse().expect("positive definite") * e)[0]
+    };
+    for seed in 0..40 {
+        let (a, mut b) = scene(&t, &DisparityCorrection::default(), 0, 500 + seed);
+        let r = refine(&m, &RefineConfig::default(), &a, &b, None, &t, 12).expect("refined");
+        independent.push(r.cluster_factor.expect("enough points"));
+        let cells: Vec<(f64, f64)> = (0..16)
+            .map(|_| (shift.sample(&mut rng), shift.sample(&mut rng)))
+            .collect();
+        for z in &mut b {
+            let (i, j) = (
+                ((z.u / 310.0) as usize).min(3),
+                ((z.v / 92.5) as usize).min(3),
+            );
+            z.u += cells[4 * i + j].0;
+            z.v += cells[4 * i + j].1;
+        }
+        let r = refine(&m, &RefineConfig::default(), &a, &b, None, &t, 12).expect("refined");
+        let factor = r.cluster_factor.expect("enough points").max(r.scale2);
+        regions.push(nees(&r, &r.covariance));
+        classic.push(nees(&r, &(r.covariance * (r.scale2 / factor))));
+    }
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    let (i, c, g) = (mean(&independent), mean(&classic), mean(&regions));
+    eprintln!(
+        "regions' factor {i:.2} for independent noise; shared by regions: mean NEES {c:.1} \
+         with s² alone, {g:.1} with the regions' factor"
+    );
+    assert!((0.7..1.3).contains(&i), "independent noise: {i}");
+    assert!(c > 12.0, "shared by regions, s² alone: {c}");
+    assert!(
+        g < 0.6 * c,
+        "shared by regions, with the regions: {g} (s² alone {c})"
+    );
+}

@@ -32,6 +32,7 @@ use crate::intake::{StereoCamera, check_timestamp};
 use crate::record::{Counts, FrameResult, StageTimes, Status};
 use crate::refine::evidence::MatrixK;
 use crate::refine::model::{PixelNoise, StereoModel, StereoObservation};
+use crate::refine::split::{SplitCheck, split_check};
 use crate::refine::{Refined, refine};
 use crate::selfcal::{CorrectionModel, Decision, SelfCalibration};
 use crate::window::{Images, Window, WindowMotion};
@@ -73,6 +74,8 @@ struct Measured {
     keyframe: bool,
     /// The estimator found two distinct motions ([`crate::estimate::Initial`]).
     ambiguous: bool,
+    /// The split-feature check ([`OdometryConfig::split_check`]).
+    split: Option<SplitCheck>,
     inliers: usize,
     correction: DisparityCorrection,
     focal_px: f64,
@@ -265,6 +268,7 @@ impl<D: Descriptor> Tracker<D> {
             window: None,
             keyframe: true,
             ambiguous: initial.ambiguous,
+            split: None,
             inliers: initial.inliers,
             correction,
             focal_px,
@@ -371,6 +375,17 @@ impl<D: Descriptor> Tracker<D> {
             measured.motion = refined.motion;
             measured.covariance =
                 Some(refined.covariance_with_calibration(&calibration_covariance));
+            if self.config.split_check {
+                measured.split = split_check(
+                    (&self.model(correction, focal_px), &calibration_covariance),
+                    &self.config.refinement,
+                    (&obs.reference, &obs.current),
+                    &refined.inliers,
+                    &refined.motion,
+                    min,
+                )
+                .ok();
+            }
             measured.inliers = refined.inliers.len();
             measured.correction = correction;
             measured.focal_px = focal_px;
@@ -461,6 +476,7 @@ impl<D: Descriptor> Tracker<D> {
             keyframe: false,
             ambiguous: false,
             window_poses: Vec::new(),
+            split: None,
         };
         let Some(last) = self.last else {
             // The first frame: the origin.
@@ -509,6 +525,7 @@ impl<D: Descriptor> Tracker<D> {
                 result.status = Status::Tracked;
                 result.keyframe = m.keyframe;
                 result.ambiguous = m.ambiguous;
+                result.split = m.split;
                 self.last_ambiguous = m.ambiguous;
                 if self.window.enabled() {
                     result.window_poses = self.window.poses().collect();

@@ -28,6 +28,7 @@ use super::tracks::{Tracks, tracks_of};
 use super::{Keyframe, WindowConfig, WindowReport};
 use crate::refine::evidence::{Matrix6xK, MatrixK};
 use crate::refine::model::{CALIBRATION_TERMS, Matrix3x6, StereoModel};
+use crate::refine::noise::{Score, cluster_factor, variance_factor};
 
 /// Robust cost `Σ ρ` of every track at the relative poses `rel` of `n` keyframes, or
 /// infinity when a point leaves a view.
@@ -75,6 +76,9 @@ pub(super) struct Scratch {
     elim: Vec<Eliminated>,
     /// `H_pξ` per track and pose variable (index of the variable, 3x6 block).
     hpx: Vec<(usize, Matrix3x6)>,
+    /// The track's direct part of the score of the same pose variable as `hpx` (its
+    /// measurements' `J_ξᵀ W e`), for the clustered noise scale ([`newest_covariance`]).
+    hgx: Vec<Vector6<f64>>,
     /// The reduced system's 6x6 blocks, row-major over the pose variables.
     blocks: Vec<Matrix6<f64>>,
     gradient: Vec<Vector6<f64>>,
@@ -90,11 +94,23 @@ pub(super) struct Scratch {
     g: DVector<f64>,
 }
 
-/// Adds `block` to the `H_pξ` of variable `v` among `hpx[start..]`.
-fn add_hpx(hpx: &mut Vec<(usize, Matrix3x6)>, start: usize, v: usize, block: &Matrix3x6) {
-    match hpx[start..].iter_mut().find(|(i, _)| *i == v) {
-        Some((_, b)) => *b += block,
-        None => hpx.push((v, *block)),
+/// Adds `block` to the `H_pξ` of variable `v` among `hpx[start..]`, and `score` to its
+/// entry of `hgx` (kept beside `hpx`).
+fn add_hpx(
+    (hpx, hgx): (&mut Vec<(usize, Matrix3x6)>, &mut Vec<Vector6<f64>>),
+    start: usize,
+    v: usize,
+    (block, score): (&Matrix3x6, &Vector6<f64>),
+) {
+    match hpx[start..].iter().position(|(i, _)| *i == v) {
+        Some(k) => {
+            hpx[start + k].1 += block;
+            hgx[start + k] += score;
+        }
+        None => {
+            hpx.push((v, *block));
+            hgx.push(*score);
+        }
     }
 }
 
@@ -114,6 +130,7 @@ fn build(
     relative_poses(poses, &mut sc.rel);
     sc.elim.clear();
     sc.hpx.clear();
+    sc.hgx.clear();
     sc.blocks.clear();
     sc.blocks.resize(m * m, Matrix6::zeros());
     sc.gradient.clear();
@@ -146,9 +163,10 @@ fn build(
             let pair = [(var(*slot), dj), (var(anchor), da)];
             for (v1, b1) in &pair {
                 let Some(v1) = *v1 else { continue };
-                add_hpx(&mut sc.hpx, start, v1, &(dpw * b1));
                 let b1w = b1.transpose() * w;
-                sc.gradient[v1] += b1w * j.residual;
+                let score = b1w * j.residual;
+                add_hpx((&mut sc.hpx, &mut sc.hgx), start, v1, (&(dpw * b1), &score));
+                sc.gradient[v1] += score;
                 sc.pose_calibration[v1] += b1w * j.d_correction;
                 for (v2, b2) in &pair {
                     let Some(v2) = *v2 else { continue };
@@ -246,6 +264,7 @@ impl Workspace {
         sc.rel.capacity() * size_of::<Relative>()
             + sc.elim.capacity() * size_of::<Eliminated>()
             + sc.hpx.capacity() * size_of::<(usize, Matrix3x6)>()
+            + sc.hgx.capacity() * size_of::<Vector6<f64>>()
             + sc.blocks.capacity() * size_of::<Matrix6<f64>>()
             + sc.gradient.capacity() * size_of::<Vector6<f64>>()
             + sc.pose_calibration.capacity() * size_of::<Matrix6xK>()
@@ -327,9 +346,8 @@ pub(crate) fn refine_window(
         }
         if iterations == 1 {
             covariance = newest_covariance(
-                &sc.s,
-                (sc.chi2, observations, tracks.len()),
-                &sc.pose_calibration,
+                sc,
+                (observations, tracks),
                 calibration_covariance,
                 (damped, columns),
             );
@@ -397,24 +415,29 @@ pub(crate) fn refine_window(
 
 /// The covariance of the newest keyframe's pose perturbation `ξ` (the oldest held fixed)
 /// at the start of the refinement. The measurements' part is the newest pose's block of
-/// `S⁻¹`, `S` the reduced information (points eliminated), scaled by the residuals'
-/// variance factor `χ² / dof` with `dof = 3 (observations − tracks) − rows of S` (1 when
-/// the pixel noise is as modelled), as the pair refinement's. The calibration's part:
+/// `S⁻¹`, `S` the reduced information (points eliminated), scaled by the larger of the
+/// residuals' variance factor `χ² / dof` with `dof = 3 (observations − tracks) − rows of
+/// S` (1 when the pixel noise is as modelled) and the regions' factor
+/// ([`cluster_factor`]) of the tracks' pulls on the newest pose, each track's
+/// measurements in every keyframe summed before they are squared: a track seen again in
+/// more frames with the same error (the same pixels, the same texture) adds nothing to
+/// the confidence, where the residuals' factor would count every sighting as new
+/// evidence. The calibration's part:
 /// the solution moves with the calibration terms `c` as `∂ξ/∂c = −S⁻¹ S_ξc`, so their
 /// covariance `Σ_c` adds `G Σ_c Gᵀ` with `G` the newest pose's rows of `S⁻¹ S_ξc`.
 /// `None` when `S` is not positive definite. `factor` and `columns` are buffers.
 fn newest_covariance(
-    s: &DMatrix<f64>,
-    (chi2, observations, tracks): (f64, usize, usize),
-    pose_calibration: &[Matrix6xK],
+    sc: &Scratch,
+    (observations, tracks): (usize, &Tracks),
     calibration_covariance: &MatrixK,
     (factor, columns): (&mut DMatrix<f64>, &mut DMatrix<f64>),
 ) -> Option<Matrix6<f64>> {
+    let (s, pose_calibration) = (&sc.s, &sc.pose_calibration);
     let n = s.nrows();
     if n < 6 || pose_calibration.len() * 6 != n {
         return None;
     }
-    let dof = (3 * observations).checked_sub(3 * tracks + n)?.max(1) as f64;
+    let dof = (3 * observations).checked_sub(3 * tracks.len() + n)?.max(1) as f64;
     assign(factor, s);
     let chol = std::mem::take(factor).cholesky()?;
     if columns.shape() == (n, 6) {
@@ -429,7 +452,12 @@ fn newest_covariance(
     chol.solve_mut(columns);
     *factor = chol.unpack_dirty();
     let block: Matrix6<f64> = columns.fixed_view::<6, 6>(n - 6, 0).into_owned();
-    let mut cov = (block + block.transpose()) * (0.5 * chi2 / dof);
+    let block = (block + block.transpose()) * 0.5;
+    let classic = sc.chi2 / dof;
+    let cluster = block
+        .try_inverse()
+        .and_then(|info| cluster_factor(&mut track_scores(sc, tracks, columns), &info));
+    let mut cov = block * variance_factor(classic, cluster);
     let mut g = Matrix6xK::zeros();
     for (v, sxc) in pose_calibration.iter().enumerate() {
         g += columns.fixed_view::<6, 6>(6 * v, 0).transpose() * sxc;
@@ -437,6 +465,31 @@ fn newest_covariance(
     let from_calibration = g * calibration_covariance * g.transpose();
     cov += (from_calibration + from_calibration.transpose()) * 0.5;
     cov.iter().all(|v| v.is_finite()).then_some(cov)
+}
+
+/// Each track's pull on the newest pose, `(S⁻¹ r_t)` of the newest pose (`columns`, its
+/// columns of `S⁻¹`), `r_t` the track's score over every free pose with its point
+/// eliminated, all its measurements in the window together: at the track's position in
+/// its anchor keyframe.
+fn track_scores(sc: &Scratch, tracks: &Tracks, columns: &DMatrix<f64>) -> Vec<Score> {
+    tracks
+        .iter()
+        .zip(&sc.elim)
+        .map(|((_, obs), e)| {
+            let mut g = Vector6::zeros();
+            for i in e.start..e.end {
+                let (v, hpx) = &sc.hpx[i];
+                let r = sc.hgx[i] - hpx.transpose() * (e.hpp_inv * e.gp);
+                g += columns.fixed_view::<6, 6>(6 * v, 0).transpose() * r;
+            }
+            let z = obs[0].1;
+            Score {
+                u: z.u,
+                v: z.v,
+                r: g,
+            }
+        })
+        .collect()
 }
 
 #[cfg(test)]
