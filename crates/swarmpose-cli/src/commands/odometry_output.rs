@@ -62,6 +62,17 @@ impl OutputDir {
         writeln!(f, "{name}").map_err(|e| write_error(&manifest, &e))
     }
 
+    /// Creates `name` (listed in the manifest) for a writer that streams into it.
+    ///
+    /// # Errors
+    /// Exit status 1 naming the file.
+    pub fn create(&self, name: &str) -> Result<(File, PathBuf), CliError> {
+        self.record(name)?;
+        let path = self.path.join(name);
+        let file = File::create(&path).map_err(|e| write_error(&path, &e))?;
+        Ok((file, path))
+    }
+
     /// Writes `name` whole: to a temporary name first, renamed when complete, so that no
     /// file under its final name is ever truncated.
     ///
@@ -89,9 +100,7 @@ impl StreamFile {
     /// # Errors
     /// Exit status 1 naming the file.
     pub fn create(dir: &OutputDir, name: &str, header: Option<&str>) -> Result<Self, CliError> {
-        dir.record(name)?;
-        let path = dir.path.join(name);
-        let file = File::create(&path).map_err(|e| write_error(&path, &e))?;
+        let (file, path) = dir.create(name)?;
         let mut s = Self { path, file, len: 0 };
         if let Some(h) = header {
             s.line(h)?;
