@@ -1,19 +1,6 @@
 //! KITTI and Karlsruhe `calib.txt`: any text gives a calibration or a typed error.
 #![no_main]
 
-use std::path::Path;
-
 use libfuzzer_sys::fuzz_target;
 
-fuzz_target!(|data: &[u8]| {
-    let Ok(text) = std::str::from_utf8(data) else {
-        return;
-    };
-    let path = Path::new("calib.txt");
-    if let Ok(rig) = swarmpose_datasets::kitti::parse_calibration(text, path) {
-        assert!(rig.baseline_m.is_finite() && rig.baseline_m > 0.0);
-    }
-    if let Ok(rig) = swarmpose_datasets::karlsruhe::parse_calibration(text, path) {
-        assert!(rig.baseline_m.is_finite() && rig.baseline_m > 0.0);
-    }
-});
+fuzz_target!(|data: &[u8]| swarmpose_fuzz_checks::calib_txt(data));

@@ -1,15 +1,6 @@
 //! EuRoC `data.csv`: a camera's image list and the ground-truth states.
 #![no_main]
 
-use std::path::Path;
-
 use libfuzzer_sys::fuzz_target;
 
-fuzz_target!(|data: &[u8]| {
-    let Ok(text) = std::str::from_utf8(data) else {
-        return;
-    };
-    let path = Path::new("mav0/cam0/data.csv");
-    let _ = swarmpose_datasets::euroc::parse_image_list(text, path, Path::new("mav0/cam0"));
-    let _ = swarmpose_datasets::euroc::parse_groundtruth(text, path);
-});
+fuzz_target!(|data: &[u8]| swarmpose_fuzz_checks::euroc_data_csv(data));

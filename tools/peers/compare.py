@@ -42,14 +42,19 @@ def umeyama_se3(x, y):
     return r, my - r @ mx
 
 
-def ins_metrics(traj, seq_dir):
+def ins_errors(traj, seq_dir):
+    """Per-frame position errors (metres) of TRAJ's cameras after an SE(3) alignment onto
+    the Karlsruhe INS positions, and the INS path length (metres)."""
     ins_file = [os.path.join(seq_dir, d, "insdata.txt") for d in os.listdir(seq_dir)
                 if d.endswith("_Images")][0]
     y = np.loadtxt(ins_file)[:, 4:7]
     x = kitti_positions(traj)
     r, t = umeyama_se3(x, y)
-    err = np.linalg.norm(y - (x @ r.T + t), axis=1)
-    length = np.linalg.norm(np.diff(y, axis=0), axis=1).sum()
+    return np.linalg.norm(y - (x @ r.T + t), axis=1), np.linalg.norm(np.diff(y, axis=0), axis=1).sum()
+
+
+def ins_metrics(traj, seq_dir):
+    err, length = ins_errors(traj, seq_dir)
     return 100 * np.sqrt((err ** 2).mean()) / length, 100 * err[-1] / length, np.sqrt((err ** 2).mean())
 
 

@@ -1,14 +1,15 @@
 #!/usr/bin/env python3
 """A plain OpenCV stereo visual odometry: the peer swarmpose's odometry is compared with.
 
-One configuration for every sequence, one thread: ORB features (bucketed on a grid
-relative to the image size), row stereo matching (Hamming distance, candidates within a
-row tolerance and a disparity range, ratio test and left-right check), triangulation with
-the calibration as given (no disparity correction; ORB's keypoint positions, no
-sub-pixel refinement: a parabola fit on SSD made the drift worse here), frame-to-frame
-matching of the left
-descriptors, cv2.solvePnPRansac on the previous frame's 3D points and the current left
-keypoints, then cv2.solvePnPRefineLM on the inliers; constant velocity when a pair fails.
+One configuration for every sequence, one thread: 3000 ORB features per image, the
+strongest of each cell of a 4 x 12 grid, row stereo matching (Hamming distance,
+candidates within 1.5 rows and 250 px of disparity, ratio test and left-right check),
+triangulation with the calibration as given (no disparity correction; ORB's keypoint
+positions, no sub-pixel refinement: a parabola fit on SSD made the drift worse here),
+frame-to-frame matching of the previous frame's 3D points nearer than 30 m with every
+current left keypoint (ratio test, one to one), cv2.solvePnPRansac (EPnP, 2 px) then
+cv2.solvePnPRefineLM on the inliers; constant velocity when a pair fails. These are the
+settings of ../shared/peers/opencv_pnp_vo.py (its "pnp" pipeline), written independently.
 
 Reads the three shared layouts (KITTI odometry, Karlsruhe, EuRoC MAV: raw images
 undistorted and rectified with cv2.stereoRectify). Writes the trajectory (the pose of the
@@ -32,17 +33,20 @@ cv2.setNumThreads(1)
 # run gives the same trajectory.
 cv2.setRNGSeed(0)
 
-# The one configuration.
-N_FEATURES = 3000          # ORB features detected in the left image before bucketing
-GRID = (16, 5)             # bucketing cells across and down the image
-PER_CELL = 20              # strongest features kept per cell
-ROW_TOLERANCE_PX = 1.0     # stereo candidates within this many rows
-MAX_DISPARITY_FRACTION = 0.13  # largest disparity, as a fraction of the image width
+# The one configuration: that of a competent OpenCV stereo PnP pipeline (the settings of
+# ../shared/peers/opencv_pnp_vo.py, written here independently): 3000 ORB features per
+# image spread over a 4 x 12 grid, PnP only on points nearer than 30 m (depth noise grows
+# as Z^2, far points bias the scale), a 2 px RANSAC threshold, then Levenberg-Marquardt.
+N_FEATURES = 3000          # ORB features kept per image after bucketing
+GRID = (4, 12)             # bucketing cells down and across the image
+ROW_TOLERANCE_PX = 1.5     # stereo candidates within this many rows
+MAX_DISPARITY_PX = 250.0   # largest disparity
 RATIO = 0.8                # Lowe's ratio test (stereo and temporal)
 MAX_HAMMING = 64           # largest descriptor distance of a match
-PNP_REPROJECTION_PX = 1.5  # RANSAC inlier threshold
+MAX_DEPTH_M = 30.0         # PnP uses the previous frame's points nearer than this
+PNP_REPROJECTION_PX = 2.0  # RANSAC inlier threshold
 PNP_ITERATIONS = 300
-MIN_INLIERS = 12
+MIN_INLIERS = 6
 
 
 def read_kitti(seq):
@@ -127,35 +131,41 @@ class Frontend:
     def __init__(self, size):
         w, h = size
         self.size = size
-        self.orb = cv2.ORB_create(nfeatures=N_FEATURES, fastThreshold=12)
-        self.orb_right = cv2.ORB_create(nfeatures=2 * N_FEATURES, fastThreshold=10)
+        # Detect twice the features, keep the strongest per grid cell.
+        self.orb = cv2.ORB_create(nfeatures=2 * N_FEATURES, scaleFactor=1.2, nlevels=8,
+                                  edgeThreshold=31, fastThreshold=12)
+        self.per_cell = int(np.ceil(N_FEATURES / (GRID[0] * GRID[1])))
         self.matcher = cv2.BFMatcher(cv2.NORM_HAMMING)
-        self.max_disparity = MAX_DISPARITY_FRACTION * w
 
-    def bucket(self, kps):
+    def features(self, img):
+        """Bucketed ORB keypoints (pixels) and descriptors of one image."""
         w, h = self.size
+        kps = self.orb.detect(img, None)
         cells = {}
         for i, k in enumerate(kps):
-            c = (int(k.pt[0] * GRID[0] / w), int(k.pt[1] * GRID[1] / h))
+            c = (min(int(k.pt[1] * GRID[0] / h), GRID[0] - 1), min(int(k.pt[0] * GRID[1] / w), GRID[1] - 1))
             cells.setdefault(c, []).append(i)
         keep = []
         for idx in cells.values():
             idx.sort(key=lambda i: -kps[i].response)
-            keep.extend(idx[:PER_CELL])
-        return sorted(keep)
+            keep.extend(idx[:self.per_cell])
+        kps, des = self.orb.compute(img, [kps[i] for i in sorted(keep)])
+        if des is None or not kps:
+            return np.zeros((0, 2)), np.zeros((0, 32), np.uint8)
+        return np.array([k.pt for k in kps]), des
 
     def stereo(self, left, right):
-        kl = self.orb.detect(left, None)
-        kl = [kl[i] for i in self.bucket(kl)]
-        kl, dl = self.orb.compute(left, kl)
-        kr, dr = self.orb_right.detectAndCompute(right, None)
-        if dl is None or dr is None or len(kl) == 0 or len(kr) == 0:
-            return np.zeros((0, 2)), np.zeros((0, 3)), np.zeros((0, 32), np.uint8), np.zeros((0, 2))
-        pl = np.array([k.pt for k in kl])
-        pr = np.array([k.pt for k in kr])
+        """Every left keypoint (pixels) and descriptor, and the stereo matches among them
+        (left index, disparity in pixels): the best row candidate by Hamming distance,
+        ratio test, left-right check, so one to one."""
+        pl, dl = self.features(left)
+        pr, dr = self.features(right)
+        empty = (pl, dl, np.zeros(0, int), np.zeros(0))
+        if len(pl) == 0 or len(pr) == 0:
+            return empty
         dy = np.abs(pl[:, 1][:, None] - pr[:, 1][None, :])
         disp = pl[:, 0][:, None] - pr[:, 0][None, :]
-        mask = ((dy <= ROW_TOLERANCE_PX) & (disp >= 1.0) & (disp <= self.max_disparity)).astype(np.uint8)
+        mask = ((dy <= ROW_TOLERANCE_PX) & (disp > 0.0) & (disp <= MAX_DISPARITY_PX)).astype(np.uint8)
         fwd = self.matcher.knnMatch(dl, dr, k=2, mask=mask)
         back = self.matcher.knnMatch(dr, dl, k=1, mask=mask.T.copy())
         back_best = {m[0].queryIdx: m[0].trainIdx for m in back if m}
@@ -172,10 +182,10 @@ class Frontend:
                 continue
             keep.append((best.queryIdx, best.trainIdx))
         if not keep:
-            return np.zeros((0, 2)), np.zeros((0, 3)), np.zeros((0, 32), np.uint8), np.zeros((0, 2))
+            return empty
         li = np.array([a for a, _ in keep])
         ri = np.array([b for _, b in keep])
-        return pl[li], pr[ri], dl[li], pl  # left pixels, right pixels, descriptors
+        return pl, dl, li, pl[li, 0] - pr[ri, 0]
 
 
 def triangulate(K, baseline, pl, disparity):
@@ -202,15 +212,24 @@ def run(seq, out):
         t1 = time.perf_counter()
         if frontend is None:
             frontend = Frontend((left.shape[1], left.shape[0]))
-        pl, pr, desc, _ = frontend.stereo(left, right)
-        points = triangulate(K, baseline, pl, pl[:, 0] - pr[:, 0]) if len(pl) else np.zeros((0, 3))
+        pl, desc, li, disparity = frontend.stereo(left, right)
+        points = triangulate(K, baseline, pl[li], disparity) if len(li) else np.zeros((0, 3))
+        near = points[:, 2] < MAX_DEPTH_M
         if prev is not None:
             ok = False
             p_points, p_desc = prev
             if len(p_desc) >= MIN_INLIERS and len(desc) >= MIN_INLIERS:
+                # The previous frame's near 3D points against every current left keypoint:
+                # ratio test, then one to one (the closest previous point per keypoint).
                 m = matcher.knnMatch(p_desc, desc, k=2)
                 good = [a for a in (x for x in m if len(x) == 2)
                         if a[0].distance <= MAX_HAMMING and a[0].distance < RATIO * a[1].distance]
+                best = {}
+                for g in good:
+                    j = g[0].trainIdx
+                    if j not in best or g[0].distance < best[j][0].distance:
+                        best[j] = g
+                good = sorted(best.values(), key=lambda g: g[0].queryIdx)
                 if len(good) >= MIN_INLIERS:
                     obj = np.array([p_points[g[0].queryIdx] for g in good], dtype=np.float64)
                     img = np.array([pl[g[0].trainIdx] for g in good], dtype=np.float64)
@@ -229,13 +248,13 @@ def run(seq, out):
             if not ok:
                 fallbacks += 1
             poses.append(poses[-1] @ velocity)
-        prev = (points, desc)
+        prev = (points[near], desc[li][near] if len(li) else desc[:0])
         t2 = time.perf_counter()
         times.append((t1 - t0, t2 - t1))
     wall = time.perf_counter() - t_all
     with open(os.path.join(out, "trajectory.kitti.txt"), "w") as f:
         for P in poses:
-            f.write(" ".join(f"{v:e}" for v in P[:3, :].reshape(-1)) + "\n")
+            f.write(" ".join(f"{v:.12e}" for v in P[:3, :].reshape(-1)) + "\n")
     n = len(times)
     load = sum(t[0] for t in times)
     work = sum(t[1] for t in times)

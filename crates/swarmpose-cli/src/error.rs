@@ -41,14 +41,6 @@ impl CliError {
             message: message.into(),
         }
     }
-
-    /// Prints `swarmpose: error: MESSAGE` as exactly one line on standard error (nothing
-    /// for an empty message: a quiet stop); never panics.
-    pub fn print(&self) {
-        if !self.message.is_empty() {
-            crate::streams::err(&format!("swarmpose: error: {}", one_line(&self.message)));
-        }
-    }
 }
 
 impl fmt::Display for CliError {

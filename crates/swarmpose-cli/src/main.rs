@@ -83,7 +83,9 @@ fn install_panic_hook() {
             .location()
             .map(|l| format!(" at {}:{}", l.file(), l.line()))
             .unwrap_or_default();
-        CliError::failure(format!("internal error (a bug){at}: {what}")).print();
+        streams::print_error(&CliError::failure(format!(
+            "internal error (a bug){at}: {what}"
+        )));
     }));
 }
 
@@ -111,19 +113,19 @@ fn main() -> ExitCode {
                 "no subcommand given: use one of {} (try 'swarmpose --help')",
                 names.join(", ")
             ));
-            err.print();
+            streams::print_error(&err);
             return ExitCode::from(err.code);
         }
         Err(e) => {
             let err = error::from_clap(&e);
-            err.print();
+            streams::print_error(&err);
             return ExitCode::from(err.code);
         }
     };
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) => {
-            err.print();
+            streams::print_error(&err);
             ExitCode::from(err.code)
         }
     }

@@ -4,7 +4,7 @@
 
 use std::io::{ErrorKind, Write};
 
-use crate::error::{CliError, EXIT_FAILURE};
+use crate::error::{CliError, EXIT_FAILURE, one_line};
 
 /// Exit status when standard output was closed by its reader (128 + SIGPIPE).
 pub const EXIT_PIPE_CLOSED: u8 = 141;
@@ -52,8 +52,13 @@ pub fn err(text: &str) {
 
 /// Writes `swarmpose: warning: TEXT` to standard error (see [`err`]).
 pub fn warn(text: &str) {
-    err(&format!(
-        "swarmpose: warning: {}",
-        crate::error::one_line(text)
-    ));
+    err(&format!("swarmpose: warning: {}", one_line(text)));
+}
+
+/// Prints `swarmpose: error: MESSAGE` of `e` as exactly one line on standard error
+/// (nothing for an empty message: a quiet stop); never panics.
+pub fn print_error(e: &CliError) {
+    if !e.message.is_empty() {
+        err(&format!("swarmpose: error: {}", one_line(&e.message)));
+    }
 }

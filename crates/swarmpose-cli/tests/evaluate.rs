@@ -312,3 +312,97 @@ fn evo_agrees_on_the_files_odometry_writes() {
         &dir.0,
     );
 }
+
+#[test]
+fn kitti_segments_table_scale_and_plot() {
+    // 300 frames of 1 m along z; the estimate 1 % too long: every 100 m segment ends at
+    // 101 m (1.01 %), every 200 m one at 201 m (1.005 %).
+    let dir = TempDir::new("evalseg");
+    let line = |n: usize, step: f64| -> Vec<Isometry3<f64>> {
+        (0..n)
+            .map(|i| Isometry3::translation(0.0, 0.0, step * i as f64))
+            .collect()
+    };
+    let e = dir.file("est.txt", &kitti_text(&line(300, 1.01)));
+    let g = dir.file("gt.txt", &kitti_text(&line(300, 1.0)));
+    let (e, g) = (e.to_str().expect("p"), g.to_str().expect("p"));
+    let out = swarmpose(&["evaluate", e, g, "--kitti-segments"], None);
+    assert_eq!(out.status.code(), Some(0));
+    let text = String::from_utf8(out.stdout).expect("utf-8");
+    assert!(text.contains("30 segments of 100-800 m"), "{text}");
+    assert!(
+        text.contains("100.0        20           1.010000"),
+        "{text}"
+    );
+    assert!(!text.contains("NOTE"), "{text}");
+    let v = json_of(&swarmpose(
+        &["evaluate", e, g, "--kitti-segments", "--json"],
+        None,
+    ));
+    assert_eq!(v["segments"].as_array().map(Vec::len), Some(30));
+    let t200 = v["per_length"][1]["translation_percent"].as_f64();
+    assert!(t200.is_some_and(|t| (t - 1.005).abs() < 1e-9), "{v}");
+    assert_eq!(number(&v, &["rotation_deg_per_100m"]), 0.0);
+
+    // Scaled lengths say so, and the plot is written.
+    let plot = dir.0.join("plots").join("segments.svg");
+    let out = swarmpose(
+        &[
+            "evaluate",
+            e,
+            g,
+            "--kitti-segments",
+            "--segment-scale",
+            "0.1",
+            "--segment-plot",
+            plot.to_str().expect("p"),
+        ],
+        None,
+    );
+    assert_eq!(out.status.code(), Some(0));
+    let text = String::from_utf8(out.stdout).expect("utf-8");
+    assert!(text.contains("10-80 m") && text.contains("NOTE"), "{text}");
+    let svg = std::fs::read_to_string(&plot).expect("plot");
+    assert!(svg.starts_with("<svg") && svg.contains("rotation error (deg/100 m)"));
+
+    // Too short a path names the scale that would do; bad options are refused.
+    let short = dir.file("short.txt", &kitti_text(&line(53, 1.0)));
+    let short = short.to_str().expect("p");
+    let out = swarmpose(&["evaluate", short, short, "--kitti-segments"], None);
+    check_error(&out, &["52.0 m long", "--segment-scale 0.51 or less"]);
+    for (args, needle) in [
+        (vec!["--kitti-segments", "--segment-scale", "0"], "(0, 1]"),
+        (vec!["--kitti-segments", "--segment-scale", "2"], "(0, 1]"),
+        (vec!["--segment-scale", "0.5"], "--kitti-segments"),
+        (
+            vec!["--kitti-segments", "--segment-plot", "x.png"],
+            "must end in .svg",
+        ),
+        (
+            vec![
+                "--kitti-segments",
+                "--segment-plot",
+                dir.0.to_str().expect("p"),
+            ],
+            "must end in .svg",
+        ),
+    ] {
+        let mut all = vec!["evaluate", e, g];
+        all.extend(args);
+        check_error(&swarmpose(&all, None), &[needle]);
+    }
+    let as_dir = dir.0.join("dir.svg");
+    std::fs::create_dir_all(&as_dir).expect("mkdir");
+    let out = swarmpose(
+        &[
+            "evaluate",
+            e,
+            g,
+            "--kitti-segments",
+            "--segment-plot",
+            as_dir.to_str().expect("p"),
+        ],
+        None,
+    );
+    check_error(&out, &["not a regular file"]);
+}

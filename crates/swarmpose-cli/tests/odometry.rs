@@ -150,7 +150,7 @@ fn blank_frames_are_not_usable_but_written() {
 /// standing still), with the calibration of the synthetic rig.
 fn still_sequence(tmp: &TempDir, n: usize) -> PathBuf {
     use swarmpose_datasets::StereoSequence;
-    use swarmpose_odometry::synthetic::{RIG, SyntheticSequence};
+    use swarmpose_runs::synthetic::{RIG, SyntheticSequence};
     let dir = tmp.0.join("still");
     let pair = SyntheticSequence::new(1, 0.0, 0.0)
         .frame(0)
@@ -218,10 +218,10 @@ fn a_corrupt_frame_stops_the_run_and_keeps_what_came_before() {
 /// line, as the engine driven directly.
 #[test]
 fn the_cli_gives_the_engine_s_trajectory() {
-    use swarmpose_odometry::batch::{camera_of, collect};
-    use swarmpose_odometry::output::kitti_line;
-    use swarmpose_odometry::synthetic::SyntheticSequence;
     use swarmpose_odometry::{Odometry, OdometryConfig};
+    use swarmpose_runs::batch::{camera_of, collect};
+    use swarmpose_runs::output::kitti_line;
+    use swarmpose_runs::synthetic::SyntheticSequence;
     let tmp = TempDir::new("odo-same");
     let out_dir = tmp.0.join("out");
     let out = swarmpose(&["odometry", "--out", s(&out_dir), "--quiet"], None);
@@ -382,7 +382,7 @@ fn no_sequence_runs_the_built_in_synthetic_one() {
 fn tum_rgbd_directory() {
     let tmp = TempDir::new("odo-rgbd");
     let dir = tmp.0.join("rgbd");
-    swarmpose_odometry::synthetic::SyntheticSequence::new(6, 0.3, 0.02)
+    swarmpose_runs::synthetic::SyntheticSequence::new(6, 0.3, 0.02)
         .write_tum_rgbd(&dir)
         .expect("write");
     let out_dir = tmp.0.join("out");

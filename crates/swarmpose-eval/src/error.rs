@@ -57,6 +57,14 @@ pub enum EvalError {
         /// Poses needed.
         needed: usize,
     },
+    /// A factor for the KITTI segment lengths outside (0, 1].
+    #[error(
+        "segment length scale {scale}: a factor in (0, 1] of the KITTI lengths (100-800 m) expected"
+    )]
+    SegmentScale {
+        /// The factor given.
+        scale: f64,
+    },
     /// Trajectories given to a writer disagree in length.
     #[error("{stamps} timestamps for {poses} poses")]
     StampCount {

@@ -4,7 +4,7 @@
 //! ([`trajectory`]), association of estimated and true poses by index or timestamp
 //! ([`associate`]), and the metrics ([`metrics`]): the paper's rotation error eq. (20)
 //! per frame and its RMS (Table I), ATE raw and after Umeyama SE(3) alignment, RPE,
-//! final drift and the KITTI devkit segment errors. ATE and RPE follow evo's
+//! final drift, and the KITTI devkit segment errors ([`segments`]). ATE and RPE follow evo's
 //! definitions (`evo_ape`, `evo_rpe --delta 1 --delta_unit f`).
 //!
 //! ```
@@ -25,8 +25,10 @@
 pub mod associate;
 pub mod error;
 pub mod metrics;
+pub mod segments;
 pub mod trajectory;
 
 pub use error::EvalError;
-pub use metrics::{Evaluation, Stats, evaluate};
+pub use metrics::{Evaluation, Stats, evaluate, evaluate_with};
+pub use segments::{KittiSegments, kitti_segments};
 pub use trajectory::{Format, Trajectory};

@@ -17,9 +17,10 @@
 //! * **Final drift**: the distance between the last estimated and true positions once
 //!   the estimate is re-based on the ground truth's first pose, as a percentage of the
 //!   ground-truth path length.
-//! * **KITTI segment errors** (the KITTI odometry devkit): for segments of 100, 200, ...,
-//!   800 m starting every 10 frames, the relative pose error over the segment divided by
-//!   its length; only available when the path is at least 100 m long.
+//! * **KITTI segment errors** (the KITTI odometry devkit, [`crate::segments`]): for
+//!   segments of 100, 200, ..., 800 m starting every 10 frames, the relative pose error
+//!   over the segment divided by its length; only available when the path is at least
+//!   100 m long (or the lengths are scaled down).
 //!
 //! Statistics follow evo: RMSE, mean, median, population standard deviation, min, max,
 //! sum of squares.
@@ -30,6 +31,7 @@ use swarmpose_core::geometry::{frobenius_rotation_error, quaternion_wxyz};
 
 use crate::associate::Associated;
 use crate::error::EvalError;
+use crate::segments::{KittiSegments, kitti_segments};
 
 /// Summary statistics of per-frame errors, as evo prints them.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -141,37 +143,6 @@ pub fn umeyama(x: &[Point3<f64>], y: &[Point3<f64>]) -> Result<Isometry3<f64>, E
     Ok(Isometry3::from_parts(Translation3::from(t), rot))
 }
 
-/// The KITTI devkit's segment errors.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct KittiSegments {
-    /// Why there are none, or how they were computed.
-    pub note: String,
-    /// Mean translation error over all segments, percent of segment length.
-    pub translation_percent: Option<f64>,
-    /// Mean rotation error over all segments, degrees per metre.
-    pub rotation_deg_per_m: Option<f64>,
-    /// Per segment length with at least one segment.
-    pub per_length: Vec<SegmentLength>,
-}
-
-/// Segment errors of one length.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct SegmentLength {
-    /// Segment length, metres.
-    pub length_m: f64,
-    /// Number of segments.
-    pub n: usize,
-    /// Mean translation error, percent.
-    pub translation_percent: f64,
-    /// Mean rotation error, degrees per metre.
-    pub rotation_deg_per_m: f64,
-}
-
-/// The KITTI devkit's segment lengths, metres.
-pub const KITTI_LENGTHS_M: [f64; 8] = [100.0, 200.0, 300.0, 400.0, 500.0, 600.0, 700.0, 800.0];
-/// The devkit's step between segment starts, frames.
-pub const KITTI_STEP_FRAMES: usize = 10;
-
 /// Everything `swarmpose evaluate` reports.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Evaluation {
@@ -264,73 +235,20 @@ pub fn rpe(estimate: &[Isometry3<f64>], ground_truth: &[Isometry3<f64>]) -> (Vec
         .unzip()
 }
 
-/// The KITTI devkit's segment errors of `estimate` against `ground_truth`.
-#[must_use]
-pub fn kitti_segments(
-    estimate: &[Isometry3<f64>],
-    ground_truth: &[Isometry3<f64>],
-) -> KittiSegments {
-    let mut dist = vec![0.0; ground_truth.len()];
-    for i in 1..ground_truth.len() {
-        dist[i] = dist[i - 1]
-            + (ground_truth[i].translation.vector - ground_truth[i - 1].translation.vector).norm();
-    }
-    let total = dist.last().copied().unwrap_or(0.0);
-    let mut per_length = Vec::new();
-    let (mut t_all, mut r_all, mut n_all) = (0.0, 0.0, 0usize);
-    for &len in &KITTI_LENGTHS_M {
-        let (mut t_sum, mut r_sum, mut n) = (0.0, 0.0, 0usize);
-        for first in (0..ground_truth.len()).step_by(KITTI_STEP_FRAMES) {
-            let Some(last) = (first..dist.len()).find(|&i| dist[i] > dist[first] + len) else {
-                continue;
-            };
-            let dg = ground_truth[first].inverse() * ground_truth[last];
-            let de = estimate[first].inverse() * estimate[last];
-            let err = de.inverse() * dg;
-            // The devkit: acos(max(min((trace - 1) / 2, 1), -1)).
-            let r = err.rotation.to_rotation_matrix().into_inner();
-            let angle = ((r.trace() - 1.0) / 2.0).clamp(-1.0, 1.0).acos();
-            t_sum += err.translation.vector.norm() / len;
-            r_sum += angle / len;
-            n += 1;
-        }
-        if n > 0 {
-            per_length.push(SegmentLength {
-                length_m: len,
-                n,
-                translation_percent: 100.0 * t_sum / n as f64,
-                rotation_deg_per_m: (r_sum / n as f64).to_degrees(),
-            });
-            t_all += t_sum;
-            r_all += r_sum;
-            n_all += n;
-        }
-    }
-    if n_all == 0 {
-        return KittiSegments {
-            note: format!(
-                "not available: the path is {total:.1} m long, the shortest KITTI segment is 100 m"
-            ),
-            translation_percent: None,
-            rotation_deg_per_m: None,
-            per_length,
-        };
-    }
-    KittiSegments {
-        note: format!(
-            "KITTI devkit: {n_all} segments of 100-800 m starting every {KITTI_STEP_FRAMES} frames"
-        ),
-        translation_percent: Some(100.0 * t_all / n_all as f64),
-        rotation_deg_per_m: Some((r_all / n_all as f64).to_degrees()),
-        per_length,
-    }
-}
-
-/// Every metric of `pairs`.
+/// Every metric of `pairs` (the KITTI segments at the devkit's lengths).
 ///
 /// # Errors
 /// [`EvalError::TooFew`] for fewer than 2 pairs.
 pub fn evaluate(pairs: &Associated) -> Result<Evaluation, EvalError> {
+    evaluate_with(pairs, 1.0)
+}
+
+/// Every metric of `pairs`, the KITTI segment lengths multiplied by `segment_scale`.
+///
+/// # Errors
+/// [`EvalError::TooFew`] for fewer than 2 pairs; [`EvalError::SegmentScale`] unless
+/// `segment_scale` is in (0, 1].
+pub fn evaluate_with(pairs: &Associated, segment_scale: f64) -> Result<Evaluation, EvalError> {
     let n = pairs.len();
     if n < 2 {
         return Err(EvalError::TooFew {
@@ -388,7 +306,7 @@ pub fn evaluate(pairs: &Associated) -> Result<Evaluation, EvalError> {
         rpe_rotation_deg_per_frame: rpe_r,
         final_drift_m: drift,
         final_drift_percent: (length >= 0.1).then(|| 100.0 * drift / length),
-        kitti: kitti_segments(est, gt),
+        kitti: kitti_segments(est, gt, segment_scale)?,
     })
 }
 
@@ -513,24 +431,6 @@ mod tests {
         assert!((e.rpe_rotation_deg.mean - 0.01f64.to_degrees()).abs() < 1e-9);
         // The absolute error grows to 0.05 rad at the last frame.
         assert!(e.eq20_absolute_rms > want);
-    }
-
-    #[test]
-    fn kitti_segments_on_a_long_line() {
-        // 300 frames, 1 m each; the estimate 1 % too long: every segment 1 % off, no
-        // rotation error.
-        let gt = line(300);
-        let est: Vec<_> = (0..300)
-            .map(|i| Isometry3::translation(0.0, 0.0, 1.01 * i as f64))
-            .collect();
-        let k = kitti_segments(&est, &gt);
-        let t = k.translation_percent.expect("long enough");
-        // A segment "longer than L" ends at L+1 frames: error 0.01 (L+1)/L.
-        assert!(t > 1.0 && t < 1.011, "{t}");
-        assert_eq!(k.rotation_deg_per_m, Some(0.0));
-        assert_eq!(k.per_length[0].length_m, 100.0);
-        assert_eq!(k.per_length[0].n, 20); // starts 0, 10, ..., 190 (end <= 299)
-        assert_eq!(k.per_length.len(), 2);
     }
 
     #[test]

@@ -27,9 +27,8 @@ use swarmpose_vision::image::GrayImage;
 use swarmpose_vision::orb::OrbExtractor;
 use swarmpose_vision::surf::Surf;
 
-use crate::batch::RunEnd;
 use crate::config::{Calibration, OdometryConfig};
-use crate::error::OdometryError;
+use crate::error::{OdometryError, RunFailure};
 use crate::frontend::{RgbdNoise, rgbd_frame, stereo_frame};
 use crate::intake::{RgbdInput, StereoCamera, StereoInput, check_rgbd, check_stereo};
 use crate::record::{FrameResult, StageTimes};
@@ -63,8 +62,8 @@ enum Sensor {
 
 /// A streaming visual odometry: created for one camera, it takes one frame at a time
 /// and returns that frame's pose at once ([`FrameResult`]). Its memory does not grow
-/// with the number of frames. Frames from any source: a directory
-/// ([`crate::batch`]), a camera driver, a Python array.
+/// with the number of frames. Frames from any source: a directory or a bag (the
+/// `swarmpose-runs` crate), a camera driver, a Python array.
 pub struct Odometry {
     /// The camera the frames come from.
     camera: StereoCamera,
@@ -386,6 +385,15 @@ pub struct OwnedStereoFrame {
     pub load_ms: f64,
 }
 
+/// How a run over a stream of frames ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RunEnd {
+    /// Every frame was processed.
+    Finished,
+    /// `on_frame` asked to stop after this many frames.
+    Stopped(usize),
+}
+
 impl Odometry {
     /// Runs the stereo frames of `frames` through the engine on two threads: while the
     /// back end (matching, estimate, refinement, self-calibration) works on frame `k`,
@@ -396,21 +404,24 @@ impl Odometry {
     /// run by returning [`ControlFlow::Break`]. Returns how the run ended.
     ///
     /// # Errors
-    /// [`OdometryError::AtFrame`] with the 0-based position in `frames` of the first
-    /// frame that the iterator could not give or the engine could not take; the frames
-    /// before it were given to `on_frame`. [`OdometryError::Camera`] for an RGB-D engine.
-    pub fn run_two_threads<I>(
+    /// The error of the first frame that the iterator could not give or the engine could
+    /// not take, at its 0-based position in `frames` ([`RunFailure::at_frame`]); the
+    /// frames before it were given to `on_frame`. [`OdometryError::Camera`] for an RGB-D
+    /// engine.
+    pub fn run_two_threads<I, E>(
         &mut self,
         frames: I,
         on_frame: &mut dyn FnMut(&FrameResult) -> ControlFlow<()>,
-    ) -> Result<RunEnd, OdometryError>
+    ) -> Result<RunEnd, E>
     where
-        I: Iterator<Item = Result<OwnedStereoFrame, OdometryError>> + Send,
+        I: Iterator<Item = Result<OwnedStereoFrame, E>> + Send,
+        E: RunFailure,
     {
         if self.sensor != Sensor::Stereo {
             return Err(OdometryError::Camera {
                 message: "this engine takes RGB-D frames (track_rgbd), not stereo pairs".into(),
-            });
+            }
+            .into());
         }
         let camera = self.camera;
         let scale = self.scale;
@@ -430,7 +441,7 @@ impl Odometry {
                                 timestamp_s: frame.timestamp_s,
                             };
                             // The timestamp's order is checked by the back end.
-                            check_stereo(&camera, &input, None)?;
+                            check_stereo(&camera, &input, None).map_err(E::from)?;
                             let mut times = StageTimes {
                                 load_ms: frame.load_ms,
                                 ..StageTimes::default()
@@ -447,7 +458,8 @@ impl Odometry {
                                 let r = hr.apply(frame.right.view(), levels);
                                 times.load_ms += crate::frontend::ms(t0);
                                 let features =
-                                    stereo_frame(frontend, frame.left.view(), r, &mut times)?;
+                                    stereo_frame(frontend, frame.left.view(), r, &mut times)
+                                        .map_err(E::from)?;
                                 return Ok((features, frame, times));
                             }
                             let features = stereo_frame(
@@ -455,11 +467,12 @@ impl Odometry {
                                 frame.left.view(),
                                 frame.right.view(),
                                 &mut times,
-                            )?;
+                            )
+                            .map_err(E::from)?;
                             Ok((features, frame, times))
                         });
                         let failed = front.is_err();
-                        let message = front.map_err(|e| at_frame(index, e));
+                        let message = front.map_err(|e| e.at_frame(index));
                         // A closed channel: the back end stopped.
                         if tx.send(message).is_err() || failed {
                             break;
@@ -472,7 +485,7 @@ impl Odometry {
                     let r = t
                         .track(features, Some(frame.left.view()), frame.timestamp_s, times)
                         .map(|r| scale.result_in_camera_pixels(r))
-                        .map_err(|e| at_frame(taken, e))?;
+                        .map_err(|e| E::from(e).at_frame(taken))?;
                     taken += 1;
                     if on_frame(&r).is_break() {
                         return Ok(RunEnd::Stopped(taken));
@@ -481,16 +494,5 @@ impl Odometry {
                 Ok(RunEnd::Finished)
             })
         })
-    }
-}
-
-/// `e` at the frame of 0-based index `index`.
-fn at_frame(index: usize, e: OdometryError) -> OdometryError {
-    match e {
-        e @ OdometryError::AtFrame { .. } => e,
-        e => OdometryError::AtFrame {
-            index,
-            source: Box::new(e),
-        },
     }
 }

@@ -1,21 +1,9 @@
-//! Errors of the odometry engine and of the runs over sequences.
+//! Errors of the odometry engine.
 
-use std::path::PathBuf;
-
-/// Why a frame or a run could not be processed, or its outputs not written.
+/// Why a frame or a run could not be processed: always bad input (the camera, a setting,
+/// a frame); the engine reads and writes no file.
 #[derive(Debug, thiserror::Error)]
 pub enum OdometryError {
-    /// The sequence could not be read (bad input).
-    #[error(transparent)]
-    Dataset(#[from] swarmpose_datasets::DatasetError),
-    /// Too few frames to estimate any motion (bad input).
-    #[error("{dir}: {n} frame(s): odometry needs at least 2")]
-    TooFewFrames {
-        /// The sequence directory.
-        dir: PathBuf,
-        /// Its number of frames.
-        n: usize,
-    },
     /// A camera (or RGB-D noise model) that is not valid, or a frame of the wrong kind
     /// for the engine (bad input).
     #[error("camera: {message}")]
@@ -36,24 +24,6 @@ pub enum OdometryError {
         /// What is wrong.
         message: String,
     },
-    /// A malformed or missing file of a TUM RGB-D sequence (bad input).
-    #[error("{}{}: {message}", path.display(), if *line > 0 { format!(":{line}") } else { String::new() })]
-    Rgbd {
-        /// The file.
-        path: PathBuf,
-        /// 1-based line, 0 for the whole file.
-        line: usize,
-        /// What is wrong.
-        message: String,
-    },
-    /// An output file could not be written.
-    #[error("{path}: cannot write: {message}")]
-    Write {
-        /// The file.
-        path: PathBuf,
-        /// The reason.
-        message: String,
-    },
     /// A frame of a run failed (the frame's 0-based index and why); the frames before it
     /// were processed.
     #[error("frame {index}: {source}")]
@@ -63,27 +33,26 @@ pub enum OdometryError {
         /// Why.
         source: Box<OdometryError>,
     },
-    /// A trajectory or evaluation error.
-    #[error(transparent)]
-    Eval(#[from] swarmpose_eval::EvalError),
 }
 
-impl OdometryError {
-    /// True for bad input (the sequence, a frame, the camera), false for a failure to
-    /// write outputs.
+/// An error type of a run over a stream of frames ([`crate::Odometry::run_two_threads`]):
+/// it carries the engine's errors, those of the frames' source, and the frame at which
+/// the run stopped.
+pub trait RunFailure: From<OdometryError> + Send {
+    /// `self` at the frame of 0-based index `index` (an error that already names its
+    /// frame keeps it).
     #[must_use]
-    pub fn is_input(&self) -> bool {
-        if let Self::AtFrame { source, .. } = self {
-            return source.is_input();
+    fn at_frame(self, index: usize) -> Self;
+}
+
+impl RunFailure for OdometryError {
+    fn at_frame(self, index: usize) -> Self {
+        match self {
+            e @ Self::AtFrame { .. } => e,
+            e => Self::AtFrame {
+                index,
+                source: Box::new(e),
+            },
         }
-        matches!(
-            self,
-            Self::Dataset(_)
-                | Self::TooFewFrames { .. }
-                | Self::Rgbd { .. }
-                | Self::Camera { .. }
-                | Self::Config { .. }
-                | Self::Frame { .. }
-        )
     }
 }

@@ -14,40 +14,34 @@
 //! | self-calibration of the disparity correction | [`selfcal`] |
 //! | the state machine from frames to poses | [`tracker`] |
 //! | the engine | [`engine`] |
-//! | output (trajectory, per-frame log, covariances) | [`output`] |
 //!
 //! The engine runs on the caller's thread ([`Odometry::track`]), or on two
 //! ([`Odometry::run_two_threads`]: the front end of the next frame beside the back end
 //! of this one, with the same results).
 //!
-//! Around it: runs over recorded sequences ([`batch`]), TUM RGB-D input ([`rgbd`]), the
-//! plots of figure 17 ([`plots`]) and synthetic sequences ([`synthetic`]). Measured
-//! results: `RESULTS.md` beside this crate's manifest.
+//! The engine reads and writes no file: runs over recorded sequences, output files, plots
+//! and synthetic sequences are in the `swarmpose-runs` crate above it. Measured results:
+//! `RESULTS.md` beside this crate's manifest.
 #![deny(missing_docs)]
 #![forbid(unsafe_code)]
 #![warn(clippy::unwrap_used)]
 
-pub mod batch;
 pub mod config;
 pub mod engine;
 pub mod error;
 mod estimate;
 pub mod frontend;
 pub mod intake;
-pub mod output;
-pub mod plots;
 pub mod record;
 pub mod refine;
-pub mod rgbd;
 pub mod selfcal;
-pub mod synthetic;
 pub mod tracker;
 pub mod window;
 pub mod working;
 
 pub use config::{Calibration, MIN_INLIERS, OdometryConfig};
-pub use engine::{Odometry, OdometryBuilder, OwnedStereoFrame};
-pub use error::OdometryError;
+pub use engine::{Odometry, OdometryBuilder, OwnedStereoFrame, RunEnd};
+pub use error::{OdometryError, RunFailure};
 pub use intake::{DepthView, RgbdInput, StereoCamera, StereoInput};
 pub use record::{Counts, FrameResult, StageTimes, Status};
 pub use selfcal::{CorrectionModel, Decision, SelfCalConfig};

@@ -9,6 +9,7 @@ use swarmpose_core::PoseError;
 use swarmpose_datasets::DatasetError;
 use swarmpose_eval::EvalError;
 use swarmpose_odometry::OdometryError;
+use swarmpose_runs::RunError;
 use swarmpose_vision::image::ImageError;
 
 create_exception!(
@@ -78,22 +79,22 @@ pub(crate) fn eval_error(e: &EvalError) -> PyErr {
     Kind::of_eval(e).err(e.to_string())
 }
 
-/// The odometry engine's error: the type of its cause, the whole message (which names
-/// the frame of a run).
+/// The odometry engine's error (always bad input: `ValueError`).
 pub(crate) fn odometry_error(e: &OdometryError) -> PyErr {
-    odometry_error_then(e, "")
+    PyValueError::new_err(e.to_string())
 }
 
-/// [`odometry_error`] with `more` after the message (what a run kept).
-pub(crate) fn odometry_error_then(e: &OdometryError, more: &str) -> PyErr {
+/// The error of a run over a sequence: the type of its cause, the whole message (which
+/// names the frame of a run), then `more` (what the run kept).
+pub(crate) fn run_error_then(e: &RunError, more: &str) -> PyErr {
     let mut root = e;
-    while let OdometryError::AtFrame { source, .. } = root {
+    while let RunError::AtFrame { source, .. } = root {
         root = source;
     }
     let kind = match root {
-        OdometryError::Dataset(d) => Kind::of_dataset(d),
-        OdometryError::Eval(ev) => Kind::of_eval(ev),
-        OdometryError::Write { .. } => Kind::Os,
+        RunError::Dataset(d) => Kind::of_dataset(d),
+        RunError::Eval(ev) => Kind::of_eval(ev),
+        RunError::Write { .. } => Kind::Os,
         _ => Kind::Value,
     };
     kind.err(format!("{e}{more}"))

@@ -1,12 +1,13 @@
 //! `swarmpose.evaluate`: the metrics of an estimated trajectory against the ground
-//! truth, as `swarmpose evaluate --json` prints them.
+//! truth, as `swarmpose evaluate --json` prints them (its `"kitti"` entry as
+//! `--kitti-segments --json`).
 
 use std::path::PathBuf;
 
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use swarmpose_eval::associate::{DEFAULT_MAX_DIFF_S, by_index, by_timestamp};
-use swarmpose_eval::{Format, Trajectory, evaluate as eval_metrics};
+use swarmpose_eval::{Format, Trajectory, evaluate_with};
 
 use crate::arrays::poses;
 use crate::errors::eval_error;
@@ -41,16 +42,28 @@ fn trajectory(
 /// Each argument is an (N, 4, 4) array of camera-to-world poses (paired by index) or
 /// a path to a trajectory file; ``format`` is ``"kitti"`` (paired by line) or
 /// ``"tum"`` (paired by timestamp within ``max_diff`` seconds), guessed from the file
-/// name when ``None``. Raises ``ValueError`` for malformed or mismatched input,
+/// name when ``None``.
+///
+/// ``result["kitti"]`` holds the KITTI devkit's segment errors, as ``swarmpose evaluate
+/// --kitti-segments --json`` prints them: for segments of 100, 200, ..., 800 m of
+/// ground-truth path starting every 10 frames, the translation error in percent and the
+/// rotation error in degrees per 100 m, per length (``per_length``), over all segments
+/// (``translation_percent``, ``rotation_deg_per_100m``; ``None`` without a segment) and
+/// per segment (``segments``). ``segment_scale`` in (0, 1] multiplies the lengths, for
+/// clips shorter than 100 m; its ``note`` then says they are not the KITTI benchmark's
+/// figures.
+///
+/// Raises ``ValueError`` for malformed or mismatched input or a bad ``segment_scale``,
 /// ``FileNotFoundError``/``OSError`` for paths.
 #[pyfunction]
-#[pyo3(signature = (estimate, ground_truth, *, format = None, max_diff = DEFAULT_MAX_DIFF_S))]
+#[pyo3(signature = (estimate, ground_truth, *, format = None, max_diff = DEFAULT_MAX_DIFF_S, segment_scale = 1.0))]
 pub(crate) fn evaluate<'py>(
     py: Python<'py>,
     estimate: &Bound<'py, PyAny>,
     ground_truth: &Bound<'py, PyAny>,
     format: Option<&str>,
     max_diff: f64,
+    segment_scale: f64,
 ) -> PyResult<Bound<'py, PyAny>> {
     let format = match format {
         None => None,
@@ -75,7 +88,7 @@ pub(crate) fn evaluate<'py>(
     }
     .map_err(|e| eval_error(&e))?;
     let metrics = py
-        .detach(|| eval_metrics(&pairs))
+        .detach(|| evaluate_with(&pairs, segment_scale))
         .map_err(|e| eval_error(&e))?;
     let value = serde_json::to_value(&metrics)
         .map_err(|e| PyTypeError::new_err(format!("cannot encode the metrics: {e}")))?;

@@ -11,7 +11,7 @@
 //! | `OdometryConfig` | [`swarmpose_odometry::OdometryConfig`] |
 //! | `Odometry`, `Odometry.track` | [`swarmpose_odometry::Odometry`], [`swarmpose_odometry::Odometry::track`] |
 //! | `Odometry.rgbd`, `Odometry.track_rgbd` | [`swarmpose_odometry::Odometry::track_rgbd`] |
-//! | `odometry` | [`swarmpose_odometry::batch::run_sequence`] |
+//! | `odometry` | [`swarmpose_runs::batch::run_sequence`] |
 //! | `Sequence` | [`swarmpose_datasets::open`] |
 //! | `evaluate` | [`swarmpose_eval::evaluate`] |
 //!

@@ -5,10 +5,10 @@ use std::path::PathBuf;
 
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use swarmpose_odometry::batch::camera_of;
 use swarmpose_odometry::frontend::RgbdNoise;
-use swarmpose_odometry::output::calibration_json;
 use swarmpose_odometry::{DepthView, RgbdInput, StereoCamera, StereoInput};
+use swarmpose_runs::batch::camera_of;
+use swarmpose_runs::output::calibration_json;
 use swarmpose_vision::features::GrayView;
 use swarmpose_vision::stereo::RectifiedStereo;
 

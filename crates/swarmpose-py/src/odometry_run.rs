@@ -9,11 +9,11 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use swarmpose_odometry::FrameResult;
-use swarmpose_odometry::batch::{camera_of, run_sequence};
-use swarmpose_odometry::output::calibration_json;
+use swarmpose_runs::batch::{camera_of, run_sequence};
+use swarmpose_runs::output::calibration_json;
 
 use crate::arrays::{transforms, vector};
-use crate::errors::odometry_error_then;
+use crate::errors::run_error_then;
 use crate::evaluate::json_value;
 use crate::frame::Frame;
 use crate::options::OdometryConfig;
@@ -60,7 +60,7 @@ pub(crate) fn odometry<'py>(
     });
     let error = match (interrupted, ended) {
         (Some(e), _) => Some(e),
-        (None, Err(e)) => Some(odometry_error_then(
+        (None, Err(e)) => Some(run_error_then(
             &e,
             &format!(
                 "; stopped after {} frame(s): the exception's `run` holds them",
@@ -106,7 +106,7 @@ impl OdometryRun {
     /// had when it left the window), (N, 4, 4) (metres); ``poses`` without the window.
     #[getter]
     fn smoothed_poses<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray3<f64>> {
-        let mut s = swarmpose_odometry::output::Smoothed::default();
+        let mut s = swarmpose_runs::output::Smoothed::default();
         for f in &self.frames {
             s.add(f);
         }

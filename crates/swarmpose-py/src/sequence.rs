@@ -9,7 +9,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use swarmpose_datasets::StereoSequence;
 use swarmpose_odometry::StereoCamera;
-use swarmpose_odometry::batch::camera_of;
+use swarmpose_runs::batch::camera_of;
 
 use crate::arrays::{gray_image, transforms};
 use crate::errors::dataset_error;

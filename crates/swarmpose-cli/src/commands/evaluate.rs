@@ -1,15 +1,17 @@
 //! `swarmpose evaluate ESTIMATE GROUND_TRUTH [--format kitti|tum] [--json]`: how far an
 //! estimated trajectory is from the ground truth: the paper's eq. (20) per frame and its
 //! RMS (Table I), ATE raw and after SE(3) Umeyama alignment, RPE per frame, final drift,
-//! and the KITTI devkit segment errors when the path is long enough.
+//! and the KITTI devkit segment errors when the path is long enough; with
+//! `--kitti-segments`, those in detail (per length, `--segment-scale`, `--segment-plot`).
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 use swarmpose_eval::associate::{DEFAULT_MAX_DIFF_S, by_index, by_timestamp};
-use swarmpose_eval::{EvalError, Evaluation, Format, Stats, Trajectory, evaluate};
+use swarmpose_eval::{EvalError, Evaluation, Format, Stats, Trajectory, evaluate_with};
 
+use super::segments;
 use crate::error::{CliError, EXIT_NOT_USABLE};
 use crate::streams::{out, out_text};
 
@@ -43,6 +45,13 @@ error after re-basing the estimate on the first true pose) in metres and percent
 the ground-truth path length; KITTI devkit segment errors (100-800 m) when the path is \
 at least 100 m long.
 
+--kitti-segments prints only the KITTI devkit's figures (evaluate_odometry.cpp): for \
+segments of 100, 200, ..., 800 m of ground-truth path starting every 10 frames, the \
+translation error of the segment's relative pose in percent of its length and its \
+rotation error in degrees per 100 m, per length and over all segments (with --json: that \
+object, every segment included). A clip shorter than 100 m has none: --segment-scale 0.1 \
+uses 10-80 m segments instead, and the output says they are not the KITTI figures.
+
 Exit status: 0 on success; 2 for bad options or input (unreadable or malformed file, \
 the ground truth has fewer poses than the estimate, too few poses); 3 when a metric is \
 not a finite number (for example from translations near 1e308: the result is printed \
@@ -67,6 +76,23 @@ pub struct EvaluateArgs {
     /// Print one JSON object (every metric and per-frame value) instead of the table.
     #[arg(long)]
     pub json: bool,
+
+    /// Print only the KITTI devkit's segment errors, per segment length and averaged.
+    #[arg(long)]
+    pub kitti_segments: bool,
+
+    /// Multiply the KITTI segment lengths (100-800 m) by F in (0, 1], for short clips.
+    #[arg(
+        long,
+        value_name = "F",
+        default_value_t = 1.0,
+        requires = "kitti_segments"
+    )]
+    pub segment_scale: f64,
+
+    /// Write the devkit's plots of the segment errors against the length to FILE.svg.
+    #[arg(long, value_name = "FILE.svg", requires = "kitti_segments")]
+    pub segment_plot: Option<PathBuf>,
 }
 
 fn usage(e: EvalError) -> CliError {
@@ -104,7 +130,7 @@ pub fn evaluate_files(args: &EvaluateArgs) -> Result<Evaluation, CliError> {
         }
         Format::Tum => by_timestamp(&est, &gt, args.max_diff).map_err(usage)?,
     };
-    evaluate(&pairs).map_err(usage)
+    evaluate_with(&pairs, args.segment_scale).map_err(usage)
 }
 
 fn stats_row(out: &mut String, name: &str, unit: &str, s: &Stats) {
@@ -164,11 +190,11 @@ pub fn table(e: &Evaluation, args: &EvaluateArgs) -> String {
             );
         }
     }
-    match (e.kitti.translation_percent, e.kitti.rotation_deg_per_m) {
+    match (e.kitti.translation_percent, e.kitti.rotation_deg_per_100m) {
         (Some(t), Some(r)) => {
             let _ = writeln!(
                 s,
-                "KITTI segments: translation {t:.3} %, rotation {r:.5} deg/m ({})",
+                "KITTI segments: translation {t:.3} %, rotation {r:.4} deg/100 m ({})",
                 e.kitti.note
             );
         }
@@ -185,6 +211,9 @@ pub fn table(e: &Evaluation, args: &EvaluateArgs) -> String {
 /// Bad input (exit 2).
 pub fn run(args: &EvaluateArgs) -> Result<(), CliError> {
     let e = evaluate_files(args)?;
+    if args.kitti_segments {
+        return run_segments(&e, args);
+    }
     if args.json {
         let text = serde_json::to_string(&e)
             .map_err(|err| CliError::failure(format!("cannot encode JSON: {err}")))?;
@@ -199,6 +228,39 @@ pub fn run(args: &EvaluateArgs) -> Result<(), CliError> {
                 "not usable: {name} is not a finite number (the poses are too large for \
                  double precision?); the metrics above cannot be trusted"
             ),
+        });
+    }
+    Ok(())
+}
+
+/// `--kitti-segments`: the segment table (or its JSON) and the plot.
+fn run_segments(e: &Evaluation, args: &EvaluateArgs) -> Result<(), CliError> {
+    let k = &e.kitti;
+    if k.segments.is_empty() {
+        // A segment needs more path than its length: the largest scale in hundredths.
+        let largest = ((e.path_length_m - 1e-6).floor() / 100.0).min(1.0);
+        let hint = if largest >= 0.01 {
+            format!("; --segment-scale {largest:.2} or less gives segments")
+        } else {
+            String::new()
+        };
+        return Err(CliError::usage(format!("KITTI segments {}{hint}", k.note)));
+    }
+    // The plot first: a plot that cannot be written fails before anything is printed.
+    if let Some(path) = &args.segment_plot {
+        segments::write_segment_plot(k, &args.estimate, path)?;
+    }
+    if args.json {
+        let text = serde_json::to_string(k)
+            .map_err(|err| CliError::failure(format!("cannot encode JSON: {err}")))?;
+        out(&text)?;
+    } else {
+        out_text(&segments::segment_table(k, &args.estimate))?;
+    }
+    if let Some(name) = first_non_finite(e) {
+        return Err(CliError {
+            code: EXIT_NOT_USABLE,
+            message: format!("not usable: {name} is not a finite number"),
         });
     }
     Ok(())
@@ -243,7 +305,7 @@ pub fn first_non_finite(e: &Evaluation) -> Option<&'static str> {
         (
             "the KITTI segment errors",
             e.kitti.translation_percent.is_none_or(f64::is_finite)
-                && e.kitti.rotation_deg_per_m.is_none_or(f64::is_finite),
+                && e.kitti.rotation_deg_per_100m.is_none_or(f64::is_finite),
         ),
     ];
     checks.iter().find(|c| !c.1).map(|c| c.0)

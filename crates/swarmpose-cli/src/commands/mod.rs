@@ -11,5 +11,6 @@ pub mod odometry_ins;
 pub mod odometry_mcap;
 pub mod odometry_output;
 pub mod register;
+pub mod segments;
 pub mod simulate;
 pub mod stereo_options;

@@ -12,23 +12,22 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use nalgebra::Isometry3;
 use swarmpose_datasets::StereoSequence;
-use swarmpose_odometry::batch::{
-    RunEnd, camera_of, run_rgbd_sequence, run_sequence, run_sequence_two_threads,
-};
 use swarmpose_odometry::frontend::RgbdNoise;
-use swarmpose_odometry::output::{
-    COVARIANCE_HEADER, FRAMES_HEADER, Smoothed, Summary, calibration_json, covariance_row,
-    frames_row, kitti_line, tum_line,
-};
-use swarmpose_odometry::plots::{PlotTrack, render_plots};
-use swarmpose_odometry::rgbd::RgbdSequence;
-use swarmpose_odometry::synthetic::SyntheticSequence;
 use swarmpose_odometry::window::Marginalisation;
 use swarmpose_odometry::{
-    CorrectionModel, Decision, FrameResult, Odometry, OdometryConfig, OdometryError,
+    CorrectionModel, Decision, FrameResult, Odometry, OdometryConfig, RunEnd,
 };
 use swarmpose_ros::convert::FrameNames;
 use swarmpose_ros::{BagInfo, StereoOptions as BagOptions, open_stereo};
+use swarmpose_runs::RunError;
+use swarmpose_runs::batch::{camera_of, run_rgbd_sequence, run_sequence, run_sequence_two_threads};
+use swarmpose_runs::output::{
+    COVARIANCE_HEADER, FRAMES_HEADER, Smoothed, Summary, calibration_json, covariance_row,
+    frames_row, kitti_line, tum_line,
+};
+use swarmpose_runs::plots::{PlotTrack, render_plots};
+use swarmpose_runs::rgbd::RgbdSequence;
+use swarmpose_runs::synthetic::SyntheticSequence;
 
 use super::odometry_mcap::McapOutput;
 use super::odometry_output::{OutputDir, StreamFile};
@@ -187,7 +186,8 @@ fn min_inliers(s: &str) -> Result<usize, String> {
     }
 }
 
-fn odometry_error(e: OdometryError) -> CliError {
+fn odometry_error(e: impl Into<RunError>) -> CliError {
+    let e: RunError = e.into();
     if e.is_input() {
         CliError::usage(e.to_string())
     } else {
@@ -274,7 +274,7 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
             let gt = seq.ground_truth().map(<[_]>::to_vec);
             Source::Stereo(Box::new(seq), "built-in synthetic sequence".into(), gt)
         }
-        Some(dir) if swarmpose_odometry::rgbd::detect(dir) => {
+        Some(dir) if swarmpose_runs::rgbd::detect(dir) => {
             if args.threads != 1 {
                 return Err(CliError::usage(
                     "--threads 2 is for stereo sequences; a TUM RGB-D directory runs on one thread",
@@ -608,6 +608,17 @@ fn finish(
                 String::new()
             }
         ))?;
+        if decision.one_plane_pairs > 0 {
+            out(&format!(
+                "calibration {}: {} pair(s) saw one plane, where a disparity offset cannot be                  told from the scene's scale; they corrected nothing",
+                if decision.rigidity_unobservable() {
+                    "unobservable by rigidity"
+                } else {
+                    "partly unobservable"
+                },
+                decision.one_plane_pairs
+            ))?;
+        }
     }
     out(&format!(
         "time per frame: {total:.1} ms ({:.1} frames/s): load {:.1}, features {:.1}, stereo {:.1}, \

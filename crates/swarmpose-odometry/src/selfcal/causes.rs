@@ -20,19 +20,27 @@ impl CorrectionModel {
     /// The focal length of the rectified rig, both cameras (rigidity, when the camera
     /// turns: see [`crate::refine::model::FOCAL_TERM`]).
     pub const FOCAL_LENGTH: Self = Self(1 << 5);
-    /// The causes the default configuration may choose: principal point, yaw and the
-    /// right camera's focal length (a constant, a constant plus a quadratic term, and a
-    /// term linear in `x`).
+    /// A disparity error growing as `x²` towards the image's left and right edges, fitted
+    /// by rigidity alone: what rigidity chooses in place of the rows' yaw when its own
+    /// `x²` term explains the scene better (a yaw would also add `−f ψ` to every
+    /// disparity and bend the rows as `x y`; residual lens distortion of the
+    /// rectification is one cause that does neither). Considered whenever
+    /// [`CorrectionModel::YAW`] is a candidate.
+    pub const QUADRATIC: Self = Self(1 << 6);
+    /// The causes the default configuration may choose: principal point, yaw (with its
+    /// alternative [`CorrectionModel::QUADRATIC`]) and the right camera's focal length (a
+    /// constant, a constant plus a quadratic term, and a term linear in `x`).
     pub const DEFAULT_CANDIDATES: Self =
         Self(Self::PRINCIPAL_POINT.0 | Self::YAW.0 | Self::FOCAL.0);
     /// Every cause.
-    pub const ALL: Self = Self(0b11_1111);
+    pub const ALL: Self = Self(0b111_1111);
     /// A correction given by the user, not chosen by evidence.
     pub const GIVEN: Self = Self(1 << 7);
     /// The causes, in order, with their names.
-    pub const CAUSES: [(Self, &'static str); 6] = [
+    pub const CAUSES: [(Self, &'static str); 7] = [
         (Self::PRINCIPAL_POINT, "principal-point"),
         (Self::YAW, "yaw"),
+        (Self::QUADRATIC, "quadratic"),
         (Self::ROLL, "roll"),
         (Self::PITCH, "pitch"),
         (Self::FOCAL, "focal"),

@@ -50,11 +50,14 @@
 //! of past pairs fades with a time constant of [`SelfCalConfig::memory_s`] seconds.
 
 mod causes;
+mod fit;
 pub mod rows;
+pub mod scene;
 
 pub use causes::CorrectionModel;
+pub use fit::applied_fraction;
+use fit::{covariance_on, fit_on_base, rows_covariance};
 
-use nalgebra::SMatrix;
 use swarmpose_vision::frontend::{CORRECTION_TERMS, DisparityCorrection};
 use swarmpose_vision::stereo::RectifiedStereo;
 
@@ -62,7 +65,7 @@ use crate::refine::evidence::{MatrixK, QuadraticCost, Reduced, VectorK};
 use crate::refine::model::FOCAL_TERM;
 use rows::{RowDecision, RowEvidence};
 
-const K: usize = crate::refine::model::CALIBRATION_TERMS;
+pub(crate) const K: usize = crate::refine::model::CALIBRATION_TERMS;
 
 /// Settings of the self-calibration.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -97,6 +100,11 @@ pub struct SelfCalConfig {
     /// that the memory does not depend on the frame rate. RESULTS.md gives the effect
     /// of other values on every sequence.
     pub memory_s: f64,
+    /// How many disparity standard deviations a pair's matches must spread about their
+    /// best plane in `(u, v, d)` for the pair to add rigidity evidence (default
+    /// [`scene::MIN_OFF_PLANE_SIGMAS`], 2; 0 turns the check off): on one plane a
+    /// disparity offset cannot be told from the scene's scale ([`scene`]).
+    pub min_off_plane_sigmas: f64,
 }
 
 impl Default for SelfCalConfig {
@@ -108,108 +116,40 @@ impl Default for SelfCalConfig {
             max_sigma_px: 0.5,
             max_focal_sigma: 0.005,
             memory_s: 1.0,
+            min_off_plane_sigmas: scene::MIN_OFF_PLANE_SIGMAS,
         }
     }
 }
+
+/// Index of the linear term (cause [`CorrectionModel::FOCAL`]) among the coefficients.
+const FOCAL_INDEX: usize = 2;
 
 /// The horizontal causes, seen by rigidity, and their coefficient index.
 const RIGID_CAUSES: [(CorrectionModel, usize); 3] = [
     (CorrectionModel::PRINCIPAL_POINT, 0),
-    (CorrectionModel::FOCAL, 2),
+    (CorrectionModel::FOCAL, FOCAL_INDEX),
     (CorrectionModel::FOCAL_LENGTH, FOCAL_TERM),
 ];
 
-/// The horizontal causes with the `x²` term fitted by rigidity alone (a yaw that the
-/// rows do not show, or something else that bends disparities towards the edges).
-const RIGID_CAUSES_WITH_YAW: [(CorrectionModel, usize); 4] = [
+/// The horizontal causes with the `x²` term fitted by rigidity alone (cause
+/// [`CorrectionModel::QUADRATIC`]: a disparity error growing towards the image's left and
+/// right edges that the rows do not explain as a yaw).
+const RIGID_CAUSES_WITH_QUADRATIC: [(CorrectionModel, usize); 4] = [
     (CorrectionModel::PRINCIPAL_POINT, 0),
-    (CorrectionModel::YAW, 1),
-    (CorrectionModel::FOCAL, 2),
+    (CorrectionModel::QUADRATIC, 1),
+    (CorrectionModel::FOCAL, FOCAL_INDEX),
     (CorrectionModel::FOCAL_LENGTH, FOCAL_TERM),
 ];
 
-/// The minimiser of `q` over `base + Σ z_k e_k` for the coefficients `free`.
-fn fit_on_base(q: &QuadraticCost, base: &VectorK, free: &[usize]) -> VectorK {
-    let n = free.len();
-    let mut out = *base;
-    if n == 0 {
-        return out;
-    }
-    let rhs = q.b - q.a * base;
-    let mut a = SMatrix::<f64, K, K>::identity();
-    let mut b = VectorK::zeros();
-    for (i, &ki) in free.iter().enumerate() {
-        b[i] = rhs[ki];
-        for (j, &kj) in free.iter().enumerate() {
-            a[(i, j)] = q.a[(ki, kj)];
-        }
-    }
-    let scale = (0..n).map(|i| a[(i, i)].abs()).fold(0.0, f64::max);
-    if scale <= 0.0 {
-        return out;
-    }
-    for i in 0..n {
-        a[(i, i)] += 1e-12 * scale;
-    }
-    if let Some(chol) = a.cholesky() {
-        let z = chol.solve(&b);
-        for (i, &ki) in free.iter().enumerate() {
-            out[ki] += z[i];
-        }
-    }
-    out
-}
-
-/// The covariance of the coefficients `free` fitted on `q` (`A⁻¹` over them, χ² units so
-/// pixels²), zero elsewhere; zero when `A` is singular there.
-fn covariance_on(q: &QuadraticCost, free: &[usize]) -> MatrixK {
-    let n = free.len();
-    let mut out = MatrixK::zeros();
-    if n == 0 {
-        return out;
-    }
-    let mut a = SMatrix::<f64, K, K>::identity();
-    for (i, &ki) in free.iter().enumerate() {
-        for (j, &kj) in free.iter().enumerate() {
-            a[(i, j)] = q.a[(ki, kj)];
-        }
-    }
-    let Some(chol) = a.cholesky() else {
-        return out;
-    };
-    let inv = chol.inverse();
-    for (i, &ki) in free.iter().enumerate() {
-        for (j, &kj) in free.iter().enumerate() {
-            out[(ki, kj)] = inv[(i, j)];
-        }
-    }
-    if out.iter().all(|v| v.is_finite()) {
-        out
-    } else {
-        MatrixK::zeros()
-    }
-}
-
-/// The covariance of the calibration terms set by the rotation terms the rows support:
-/// a yaw `f ψ` sets the offset and the quadratic coefficient to `−f ψ`, a roll `f θ` the
-/// `y` coefficient, a pitch `f φ` the `x y` coefficient ([`RowDecision::correction`]).
-fn rows_covariance(rows: &RowDecision) -> MatrixK {
-    // Column r: how each calibration term moves with rotation term r.
-    let mut j = SMatrix::<f64, K, 3>::zeros();
-    if rows.yaw {
-        j[(0, 0)] = -1.0;
-        j[(1, 0)] = -1.0;
-    }
-    if rows.roll {
-        j[(3, 1)] = 1.0;
-    }
-    if rows.pitch {
-        j[(4, 2)] = 1.0;
-    }
-    // Not scaled by the weight the terms are applied with (`rows.weight`): like the
-    // rigidity terms', the uncertainty stays that of the fitted terms.
-    let c = nalgebra::Matrix3::from_fn(|r, s| rows.rotation_covariance[r][s]);
-    j * c * j.transpose()
+/// Why a tracked pair adds no rigidity evidence.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NoEvidence {
+    /// Its features moved by less than a pixel: the front end's own sub-pixel errors are
+    /// as large as the motion.
+    TooLittleMotion,
+    /// Its matches lie on one plane ([`scene`]): a disparity offset or a term linear in
+    /// `x` is then indistinguishable from the scene's scale.
+    OnePlane,
 }
 
 /// The current decision and its evidence.
@@ -241,8 +181,22 @@ pub struct Decision {
     pub covariance: MatrixK,
     /// Pairs that contributed rigidity evidence.
     pub pairs: usize,
+    /// Pairs that moved enough but added no rigidity evidence because their matches lay
+    /// on one plane ([`scene`]): there a disparity offset cannot be told from the
+    /// scene's scale.
+    pub one_plane_pairs: usize,
     /// Frames whose confirmed matches gave row evidence.
     pub frames: usize,
+}
+
+impl Decision {
+    /// True when the rigidity evidence could not observe the calibration: every pair
+    /// that moved enough saw one plane ([`Decision::one_plane_pairs`]), so no
+    /// horizontal term (offset, linear term) is estimated and none is applied.
+    #[must_use]
+    pub fn rigidity_unobservable(&self) -> bool {
+        self.pairs == 0 && self.one_plane_pairs > 0
+    }
 }
 
 fn correction_of(c: &VectorK) -> DisparityCorrection {
@@ -349,10 +303,13 @@ impl SelfCalibration {
         &self.decision
     }
 
-    /// A pair that adds no rigidity evidence (it moved too little to say anything about
-    /// the calibration), `dt_s` seconds after its reference: the evidence so far fades
-    /// over that time, and the decision is taken again (the rows may have changed).
-    pub fn add_pair_without_evidence(&mut self, dt_s: f64) -> &Decision {
+    /// A pair that adds no rigidity evidence (for the reason `why`), `dt_s` seconds after
+    /// its reference: the evidence so far fades over that time, and the decision is
+    /// taken again (the rows may have changed).
+    pub fn add_pair_without_evidence(&mut self, dt_s: f64, why: NoEvidence) -> &Decision {
+        if why == NoEvidence::OnePlane {
+            self.decision.one_plane_pairs += 1;
+        }
         self.fade(dt_s);
         self.decide();
         &self.decision
@@ -376,15 +333,26 @@ impl SelfCalibration {
         rows.roll &= c.candidates.has(CorrectionModel::ROLL);
         rows.pitch &= c.candidates.has(CorrectionModel::PITCH);
         // With the rows' rotation terms as they are, the horizontal terms by rigidity.
-        let mut chosen = self.select(&rows, &RIGID_CAUSES);
+        let quadratic_alone = !rows.yaw && c.candidates.has(CorrectionModel::QUADRATIC);
+        let mut chosen = self.select(
+            &rows,
+            if quadratic_alone {
+                &RIGID_CAUSES_WITH_QUADRATIC
+            } else {
+                &RIGID_CAUSES
+            },
+        );
         if rows.yaw {
             // The rows' x y term need not be a yaw (a rectification left with some
             // distortion bends the rows too): their yaw is kept only if rigidity does
-            // not prefer its own x² term by the margin.
+            // not prefer its own x² term by the margin; that term is then named after
+            // what rigidity sees, `quadratic`, not a yaw.
             let mut no_yaw = rows;
             no_yaw.yaw = false;
-            let own = self.select(&no_yaw, &RIGID_CAUSES_WITH_YAW);
-            if own.model.has(CorrectionModel::YAW) && own.absolute < chosen.absolute - c.margin {
+            let own = self.select(&no_yaw, &RIGID_CAUSES_WITH_QUADRATIC);
+            if own.model.has(CorrectionModel::QUADRATIC)
+                && own.absolute < chosen.absolute - c.margin
+            {
                 chosen = own;
                 rows.yaw = false;
             }
@@ -402,6 +370,7 @@ impl SelfCalibration {
             rigidity_next_score: chosen.next,
             rigidity_weight: weight,
             pairs: self.decision.pairs,
+            one_plane_pairs: self.decision.one_plane_pairs,
             frames: self.decision.frames,
         };
     }
@@ -447,7 +416,11 @@ impl SelfCalibration {
             let candidate = causes
                 .iter()
                 .filter(|(cause, k)| {
-                    c.candidates.has(*cause) && !free.contains(k) && determined(*k)
+                    // Rigidity's own x² term is the alternative to the rows' yaw.
+                    let allowed = c.candidates.has(*cause)
+                        || (*cause == CorrectionModel::QUADRATIC
+                            && c.candidates.has(CorrectionModel::YAW));
+                    allowed && !free.contains(k) && determined(*k)
                 })
                 .map(|&(cause, k)| {
                     let mut f = free.clone();
@@ -474,35 +447,6 @@ impl SelfCalibration {
             next,
         }
     }
-}
-
-/// The fraction of the fitted horizontal terms that is applied, from their held-out score
-/// `relative` (χ² units, negative when they help) over `terms` terms, each chosen for
-/// lowering it by more than `margin`: `w = clamp((−relative − terms · margin) / margin, 0, 1)`,
-/// 0 when the score has just passed the margins and 1 from one margin beyond them; 0 when no
-/// term is chosen or the score is not a number (nothing is applied).
-///
-/// A term chosen by a hair is a near tie with not choosing it. Applied in full, the
-/// correction jumps between 0 and its fitted value as the evidence crosses the margin
-/// from frame to frame, and the window rescales its keyframes by as much: on a straight
-/// synthetic drive with an exact rig, a 0.09 px offset chosen for three frames moved the
-/// newest pose 50 mm along a 10 m window. Weighted, the correction grows from 0 as its
-/// evidence grows; evidence far beyond the margin (every real sequence here: hundreds
-/// to thousands of χ² units) gets the full fit. A `margin` of 0 or less applies the fit
-/// in full.
-#[must_use]
-pub fn applied_fraction(relative: f64, terms: usize, margin: f64) -> f64 {
-    if terms == 0 {
-        return 0.0;
-    }
-    if margin.is_nan() || margin <= 0.0 {
-        return 1.0;
-    }
-    let excess = -relative - margin * terms as f64;
-    if excess.is_nan() {
-        return 0.0;
-    }
-    (excess / margin).clamp(0.0, 1.0)
 }
 
 /// The outcome of one forward selection ([`SelfCalibration::select`]).
@@ -549,28 +493,8 @@ mod tests {
         assert_eq!(CorrectionModel::parse(&m.name()), Ok(m));
         assert_eq!(CorrectionModel::parse("none"), Ok(CorrectionModel::NONE));
         assert!(CorrectionModel::parse("tilt").is_err());
-    }
-
-    #[test]
-    fn the_applied_fraction_grows_with_the_evidence() {
-        // One term: 0 at the margin, half at 1.5 margins, all from 2 margins.
-        assert_eq!(applied_fraction(-10.0, 1, 10.0), 0.0);
-        assert!((applied_fraction(-15.0, 1, 10.0) - 0.5).abs() < 1e-12);
-        assert_eq!(applied_fraction(-20.0, 1, 10.0), 1.0);
-        assert_eq!(applied_fraction(-5000.0, 1, 10.0), 1.0);
-        // Two terms: each had to pass a margin.
-        assert!((applied_fraction(-25.0, 2, 10.0) - 0.5).abs() < 1e-12);
-        // Nothing chosen: nothing applied; no margin: the fit in full.
-        assert_eq!(applied_fraction(0.0, 0, 10.0), 0.0);
-        assert_eq!(applied_fraction(-1.0, 1, 0.0), 1.0);
-        // A score that is not a number applies nothing.
-        assert_eq!(applied_fraction(f64::NAN, 1, 10.0), 0.0);
-        // Continuous and never decreasing as the score falls.
-        let mut last = 0.0;
-        for i in 0..400 {
-            let w = applied_fraction(-f64::from(i) * 0.1, 1, 10.0);
-            assert!((0.0..=1.0).contains(&w) && w >= last && w - last < 0.011);
-            last = w;
-        }
+        let q = CorrectionModel::PRINCIPAL_POINT.with(CorrectionModel::QUADRATIC);
+        assert_eq!(q.name(), "principal-point+quadratic");
+        assert_eq!(CorrectionModel::parse(&q.name()), Ok(q));
     }
 }

@@ -38,6 +38,9 @@ pub(crate) const YAW: usize = 3;
 pub(crate) const ROLL: usize = 1;
 /// Pitch: the `y²` term.
 pub(crate) const PITCH: usize = 4;
+/// The `y` term: a right camera whose focal length is `Δf` pixels long scales its rows
+/// by `Δf y` (and its columns by `Δf x`, the disparity's linear term).
+pub(crate) const VERTICAL_SCALE: usize = 2;
 /// Nuisance terms, always fitted: constant, `y` (a vertical focal length mismatch), and
 /// `x²`, `x² y`, `y³` (lens distortion left by the rectification).
 const NUISANCE: [usize; 5] = [0, 2, 5, 6, 7];
@@ -155,6 +158,16 @@ pub struct RowDecision {
     /// ([`super::applied_fraction`]): 0 for terms chosen by a hair, 1 from one margin
     /// beyond; 0 when none is supported.
     pub weight: f64,
+    /// The rows' `y` term, pixels (`Δf` of a right camera whose focal length is `Δf`
+    /// pixels long; also a vertical focal length mismatch of the rectification), fitted
+    /// with the terms supported.
+    pub vertical_scale_px: f64,
+    /// Whether the held-out folds support the `y` term: leaving it out raises the
+    /// held-out score by more than the margin. Reported, not used: a right camera's
+    /// focal length would show here as well as in the disparity's linear term, but
+    /// requiring it removed the linear term on Karlsruhe where the INS favours it
+    /// (docs/self-calibration.md).
+    pub vertical_scale: bool,
     /// Row offsets used, over all frames.
     pub measurements: usize,
     /// Covariance of the supported terms of `rotation_px` (pixels², zero for the others):
@@ -267,6 +280,13 @@ impl RowEvidence {
         decision.weight = super::applied_fraction(best, terms.len() - NUISANCE.len(), margin);
         // The supported terms refitted without the unsupported ones.
         let c = all.fit(&terms);
+        let without: Vec<usize> = terms
+            .iter()
+            .copied()
+            .filter(|&k| k != VERTICAL_SCALE)
+            .collect();
+        decision.vertical_scale = score(&without) - score(&terms) > margin;
+        decision.vertical_scale_px = c[VERTICAL_SCALE];
         decision.rotation_covariance = all.rotation_covariance(&terms, &c);
         decision.rotation_px = [
             if decision.yaw { -c[YAW] } else { -c_full[YAW] },

@@ -8,7 +8,7 @@ use swarmpose_vision::frontend::{DisparityCorrection, FrameMatches, StereoFrame}
 use super::Tracker;
 use crate::estimate::{Observations, median_flow_px};
 use crate::refine::{Refined, refine};
-use crate::selfcal::{CorrectionModel, SelfCalibration};
+use crate::selfcal::{CorrectionModel, NoEvidence, SelfCalibration, scene};
 
 /// A new correction that moves no disparity by more than this, pixels, does not call
 /// for a second refinement of the pair.
@@ -57,6 +57,21 @@ impl<D: Descriptor> Tracker<D> {
         disparity.max(focal)
     }
 
+    /// True when the reference measurements of the pair's `inliers` lie on more than one
+    /// plane in `(u, v, d)` ([`scene::more_than_one_plane`], against the disparity noise).
+    fn scene_shows_depth(&self, obs: &Observations, inliers: &[usize]) -> bool {
+        let points: Vec<(f64, f64, f64)> = inliers
+            .iter()
+            .filter_map(|&k| obs.reference.get(k))
+            .map(|z| (z.u, z.v, z.d))
+            .collect();
+        scene::more_than_one_plane(
+            &points,
+            self.noise.disparity_px,
+            self.config.selfcal.min_off_plane_sigmas,
+        )
+    }
+
     /// Adds the evidence of the pair `m` (the current frame `frame`, its measurements
     /// `obs`, `dt_s` seconds after its reference) to `selfcal` (the tracker's, taken out
     /// of it while the reference frame is borrowed), and returns the pair's refinement
@@ -89,12 +104,21 @@ impl<D: Descriptor> Tracker<D> {
         // inliers are gated and weighted under it), so it is computed again under
         // the correction it leads to, until the two agree (a fixed point per pair). A
         // pair that moved too little adds none (the rows may still move the decision).
-        let evidence = median_flow_px(obs, &best.0.inliers) >= MIN_EVIDENCE_FLOW_PX;
-        let add = |cal: &mut SelfCalibration, best: &Best| {
-            if evidence {
+        // A pair whose scene is one plane cannot tell a disparity offset from the scene's
+        // scale ([`scene`]): it adds none either.
+        let evidence = if median_flow_px(obs, &best.0.inliers) < MIN_EVIDENCE_FLOW_PX {
+            Err(NoEvidence::TooLittleMotion)
+        } else if !self.scene_shows_depth(obs, &best.0.inliers) {
+            Err(NoEvidence::OnePlane)
+        } else {
+            Ok(())
+        };
+        let add = |cal: &mut SelfCalibration, best: &Best| match evidence {
+            Ok(()) => {
                 cal.add_pair(&best.0.reduced, &best.1, best.2, best.0.scale2, dt_s);
-            } else {
-                cal.add_pair_without_evidence(dt_s);
+            }
+            Err(why) => {
+                cal.add_pair_without_evidence(dt_s, why);
             }
         };
         let before = selfcal.clone();

@@ -41,6 +41,8 @@
 //! track identities and patches of the newest frame's features.
 
 pub mod marginal;
+mod prior;
+mod residual;
 pub mod solve;
 mod tracks;
 
@@ -187,7 +189,7 @@ pub struct Window {
     templates: HashMap<u32, PatchTemplate>,
     next_track: u32,
     /// The prior left by the keyframes marginalised so far ([`WindowConfig::marginalise`]).
-    prior: Option<marginal::Prior>,
+    prior: Option<prior::Prior>,
     /// Buffers reused from frame to frame: the refinement's, the next
     /// [`Window::newest_tracks`], the tracks of the newest frame, the measurement buffers
     /// of keyframes that left, and the keyframe rule's.
@@ -286,7 +288,7 @@ impl Window {
                 * (size_of::<usize>() + size_of::<u32>())
             + self.used.capacity() * size_of::<u32>()
             + self.templates.capacity() * (size_of::<u32>() + size_of::<PatchTemplate>())
-            + self.prior.as_ref().map_or(0, marginal::Prior::heap_bytes)
+            + self.prior.as_ref().map_or(0, prior::Prior::heap_bytes)
             + self.workspace.heap_bytes()
             + self.rule.heap_bytes()
     }

@@ -1,6 +1,7 @@
 //! Tests of the window's bundle adjustment.
 
 use super::*;
+use crate::refine::model::StereoObservation;
 use nalgebra::Rotation3;
 
 /// Central differences of the residual against both pose Jacobians.

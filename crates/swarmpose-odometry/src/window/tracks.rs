@@ -4,7 +4,7 @@
 use nalgebra::{Matrix3, Vector3};
 
 use super::Keyframe;
-use super::solve::{Pose, Scratch, huber, linearize, relative_poses};
+use super::residual::{Pose, Relative, huber, linearize, relative_poses};
 use crate::refine::model::{StereoModel, StereoObservation};
 
 /// A track seen at least twice in the window: its measurements
@@ -68,14 +68,14 @@ impl Tracks {
 /// `keep`, each with its point anchored in its first keyframe and fitted to the poses by
 /// one Gauss-Newton step on its own measurements (more changed no result in the
 /// ablations of RESULTS.md, and cost as much as a Levenberg-Marquardt iteration each), in
-/// a deterministic order, into `out`. Leaves `sc.rel` at `poses`.
+/// a deterministic order, into `out`. Leaves `rel` at the relative poses of `poses`.
 pub(super) fn tracks_of(
     model: &StereoModel,
     k: f64,
     frames: &[Keyframe],
     poses: &[Pose],
     keep: impl Fn(u32) -> bool,
-    sc: &mut Scratch,
+    rel: &mut Vec<Relative>,
     out: &mut Tracks,
 ) {
     let Tracks {
@@ -115,14 +115,14 @@ pub(super) fn tracks_of(
         (s, (z.u * 64.0) as i64, (z.v * 64.0) as i64)
     });
     let n = poses.len();
-    relative_poses(poses, &mut sc.rel);
+    relative_poses(poses, rel);
     for t in list.iter_mut() {
         let obs = &measurements[t.start..t.end];
         let anchor = obs[0].0;
         let mut h = Matrix3::zeros();
         let mut g = Vector3::zeros();
         for (slot, z) in obs {
-            if let Some(j) = linearize(model, (&sc.rel, n), anchor, *slot, &t.point, z) {
+            if let Some(j) = linearize(model, (rel, n), anchor, *slot, &t.point, z) {
                 let (w, _) = huber(j.residual.norm_squared(), k);
                 h += j.d_point.transpose() * j.d_point * w;
                 g += j.d_point.transpose() * j.residual * w;

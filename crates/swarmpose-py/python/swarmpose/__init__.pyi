@@ -331,5 +331,8 @@ def evaluate(
     *,
     format: Optional[str] = None,
     max_diff: float = 0.01,
+    segment_scale: float = 1.0,
 ) -> Dict[str, Any]:
-    """Trajectory metrics (as ``swarmpose evaluate --json``) of (N, 4, 4) poses or files."""
+    """Trajectory metrics (as ``swarmpose evaluate --json``) of (N, 4, 4) poses or files;
+    ``["kitti"]``: the KITTI devkit's segment errors, lengths x ``segment_scale``."""
+

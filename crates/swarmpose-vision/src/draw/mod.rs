@@ -2,8 +2,6 @@
 //! the left, frame J on the right, a line per match; once an estimator has run, inliers
 //! in green and outliers in red (yellow when no classification is given).
 
-use std::path::Path;
-
 use crate::features::GrayView;
 
 /// Colour of a match without classification.
@@ -68,11 +66,12 @@ impl Canvas {
         }
     }
 
+    #[cfg(feature = "png")]
     /// Saves as an RGB PNG.
     ///
     /// # Errors
     /// The encoder's or the file system's message, naming `path`.
-    pub fn save_png(&self, path: &Path) -> Result<(), String> {
+    pub fn save_png(&self, path: &std::path::Path) -> Result<(), String> {
         image::save_buffer(
             path,
             &self.rgb,

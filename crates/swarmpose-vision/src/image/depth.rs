@@ -2,8 +2,6 @@
 //! 12 bits when every value fits in 12 bits (cameras store 10- and 12-bit data in 16-bit
 //! PNGs; scaling by 16 bits would make such images near-black), else 16 bits.
 
-use std::io::Cursor;
-
 /// Where the depth used to scale an image to 8 bits comes from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum DepthSource {
@@ -29,13 +27,17 @@ pub struct Depth {
 
 /// The largest `sBIT` entry of a PNG (significant bits of its channels), if it has one
 /// that can be read.
+#[cfg(feature = "png")]
 pub(crate) fn sbit(bytes: &[u8]) -> Option<u8> {
-    let reader = png::Decoder::new(Cursor::new(bytes)).read_info().ok()?;
+    let reader = png::Decoder::new(std::io::Cursor::new(bytes))
+        .read_info()
+        .ok()?;
     let bits = reader.info().sbit.as_ref()?.iter().copied().max()?;
     (1..=16).contains(&bits).then_some(bits)
 }
 
 /// The depth of 16-bit `values` of a PNG whose `sBIT` is `sbit`.
+#[cfg(feature = "png")]
 pub fn of_16bit(values: &[u16], sbit: Option<u8>) -> Depth {
     if let Some(bits) = sbit {
         return Depth {
@@ -58,6 +60,7 @@ pub fn of_16bit(values: &[u16], sbit: Option<u8>) -> Depth {
 
 /// 16-bit values of `bits` significant bits scaled to 8 bits, rounded (values above the
 /// depth saturate at 255).
+#[cfg(feature = "png")]
 pub fn to_8bit(values: &[u16], bits: u8) -> Vec<u8> {
     let max = f64::from((1u32 << bits) - 1);
     values
@@ -66,7 +69,7 @@ pub fn to_8bit(values: &[u16], bits: u8) -> Vec<u8> {
         .collect()
 }
 
-#[cfg(test)]
+#[cfg(all(test, feature = "png"))]
 mod tests {
     use super::*;
 

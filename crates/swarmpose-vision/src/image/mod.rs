@@ -1,7 +1,9 @@
-//! Owned 8-bit grayscale images: PNG loading with errors naming the file, bilinear
-//! sampling, a small separable blur, halving and doubling.
+//! Owned 8-bit grayscale images: PNG loading with errors naming the file (feature `png`,
+//! on by default), bilinear sampling, a small separable blur, halving and doubling.
 
-use std::path::{Path, PathBuf};
+#[cfg(feature = "png")]
+use std::path::Path;
+use std::path::PathBuf;
 
 use crate::features::GrayView;
 
@@ -62,6 +64,7 @@ impl GrayImage {
         })
     }
 
+    #[cfg(feature = "png")]
     /// Loads a PNG (any colour type; converted to 8-bit luma).
     ///
     /// # Errors
@@ -74,6 +77,7 @@ impl GrayImage {
         Self::decode_png(&bytes, path)
     }
 
+    #[cfg(feature = "png")]
     /// Decodes the bytes of a PNG (any colour type; converted to 8-bit luma); messages
     /// name `path`.
     ///
@@ -83,6 +87,7 @@ impl GrayImage {
         Self::decode_png_with_depth(bytes, path).map(|(img, _)| img)
     }
 
+    #[cfg(feature = "png")]
     /// [`GrayImage::decode_png`], with the depth its data was read with: 16-bit images
     /// are scaled to 8 bits by the depth their data uses ([`depth`]: the `sBIT` chunk
     /// where present; 12 bits when every value fits and nothing says so; else 16), not
@@ -133,6 +138,7 @@ impl GrayImage {
         ))
     }
 
+    #[cfg(feature = "png")]
     /// Saves as an 8-bit grayscale PNG.
     ///
     /// # Errors
@@ -487,6 +493,7 @@ mod tests {
         }
     }
 
+    #[cfg(feature = "png")]
     #[test]
     fn load_errors_name_the_file() {
         let missing = Path::new("/nonexistent/dir/x.png");

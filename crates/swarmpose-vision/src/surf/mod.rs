@@ -80,6 +80,7 @@ mod hessian;
 pub mod integral;
 mod orientation;
 mod refine;
+mod response;
 mod smooth;
 #[cfg(test)]
 mod test_images;

@@ -6,7 +6,7 @@
 //! quadratic. Offsets are in grid samples (and layers), converted to pixels by the
 //! octave's sampling step and to a filter size by the layer spacing of the octave.
 
-use super::hessian::{Detection, ResponseLayer, is_local_max};
+use super::response::{Block, Detection, ResponseLayer, is_local_max};
 
 /// Gradient `g` and Hessian `H` of the response over (column, row, layer) at
 /// `(col, row)` of layer `mid`, by central differences, with the response `D` itself:
@@ -40,17 +40,6 @@ fn derivatives(
     let dys = (c(above, 0, 1) - c(above, 0, -1) - c(below, 0, 1) + c(below, 0, -1)) / 4.0;
     let hessian = nalgebra::Matrix3::new(dxx, dxy, dxs, dxy, dyy, dys, dxs, dys, dss);
     (v, g, hessian)
-}
-
-/// The centre of a 3×3×3 block: layer `mid` of the octave, grid `(col, row)`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(super) struct Block {
-    /// Layer within the octave.
-    pub mid: usize,
-    /// Grid column.
-    pub col: usize,
-    /// Grid row.
-    pub row: usize,
 }
 
 /// How many times the fit may move to a neighbouring sample.

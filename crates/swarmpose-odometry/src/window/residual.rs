@@ -1,0 +1,111 @@
+//! A keyframe's measurement of a track as the window's solver sees it: the pose type
+//! (`T_kw`, world to camera, perturbed as `E(ξ) T_kw`), the relative poses `T_ja` of the
+//! window's keyframes, the whitened residual of a measurement with its Jacobians (see
+//! [`super::solve`] for their derivation), and the Huber weight.
+
+use nalgebra::{Isometry3, Matrix3, Translation3, UnitQuaternion, Vector3};
+
+use crate::refine::model::{Matrix3x6, Matrix3xK, StereoModel, StereoObservation};
+use crate::refine::unit_quaternion;
+
+/// A pose `T_kw` as a rotation matrix and translation.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Pose {
+    pub(super) rot: Matrix3<f64>,
+    pub(super) trans: Vector3<f64>,
+}
+
+impl Pose {
+    pub(super) fn of(t: &Isometry3<f64>) -> Self {
+        Self {
+            rot: *t.rotation.to_rotation_matrix().matrix(),
+            trans: t.translation.vector,
+        }
+    }
+
+    pub(super) fn moved(&self, nu: &Vector3<f64>, omega: &Vector3<f64>) -> Self {
+        let e = *UnitQuaternion::from_scaled_axis(*omega)
+            .to_rotation_matrix()
+            .matrix();
+        Self {
+            rot: e * self.rot,
+            trans: e * self.trans + nu,
+        }
+    }
+
+    pub(super) fn isometry(&self) -> Isometry3<f64> {
+        Isometry3::from_parts(Translation3::from(self.trans), unit_quaternion(&self.rot))
+    }
+
+    /// `T_ja = T_jw T_aw⁻¹` for `self = T_jw`.
+    fn relative_to(&self, a: &Self) -> (Matrix3<f64>, Vector3<f64>) {
+        let rot = self.rot * a.rot.transpose();
+        (rot, self.trans - rot * a.trans)
+    }
+}
+
+/// Huber weight and cost of a squared whitened norm.
+pub(super) fn huber(s2: f64, k: f64) -> (f64, f64) {
+    if s2 <= k * k {
+        (1.0, s2)
+    } else {
+        let s = s2.sqrt();
+        (k / s, 2.0 * k * s - k * k)
+    }
+}
+
+/// A relative pose `T_ja`: rotation and translation (`P_j = R P_a + t`, metres).
+pub(super) type Relative = (Matrix3<f64>, Vector3<f64>);
+
+/// The relative poses `T_ja` of every pair of keyframes, row-major by `(j, a)`.
+pub(super) fn relative_poses(poses: &[Pose], out: &mut Vec<Relative>) {
+    out.clear();
+    for j in poses {
+        for a in poses {
+            out.push(j.relative_to(a));
+        }
+    }
+}
+
+/// One measurement linearised: whitened residual, `∂e/∂p`, and `∂e/∂ξ` for the observing
+/// keyframe (`j`) and the anchor (`a`), `None` for the anchor's own measurement.
+pub(super) struct Jac {
+    pub(super) residual: Vector3<f64>,
+    pub(super) d_point: Matrix3<f64>,
+    pub(super) d_correction: Matrix3xK,
+    pub(super) poses: Option<(Matrix3x6, Matrix3x6)>,
+}
+
+/// The measurement `z` in keyframe `slot` of the point `p` anchored in keyframe `anchor`,
+/// `rel` from [`relative_poses`] over `n` keyframes.
+pub(super) fn linearize(
+    model: &StereoModel,
+    (rel, n): (&[Relative], usize),
+    anchor: usize,
+    slot: usize,
+    p: &Vector3<f64>,
+    z: &StereoObservation,
+) -> Option<Jac> {
+    if slot == anchor {
+        let l = model.in_reference(p, z);
+        return Some(Jac {
+            residual: l.residual,
+            d_point: l.d_point,
+            d_correction: l.d_correction,
+            poses: None,
+        });
+    }
+    let (rot, trans) = &rel[slot * n + anchor];
+    let l = model.in_current(rot, trans, p, z)?;
+    let mut dh_da = Matrix3x6::zeros();
+    dh_da.fixed_view_mut::<3, 3>(0, 0).copy_from(&(-rot * p.z));
+    dh_da
+        .fixed_view_mut::<3, 3>(0, 3)
+        .copy_from(&(rot * Vector3::new(p.x, p.y, 1.0).cross_matrix()));
+    Some(Jac {
+        residual: l.residual,
+        d_point: l.d_point,
+        d_correction: l.d_correction,
+        poses: Some((l.d_pose, l.d_h * dh_da)),
+    })
+}
