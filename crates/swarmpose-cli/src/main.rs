@@ -55,7 +55,7 @@ enum Command {
     Evaluate(commands::evaluate::EvaluateArgs),
     /// Stereo visual odometry over a sequence: trajectory (KITTI, TUM), per-frame log,
     /// plots (figure 17) and, with ground truth, its evaluation.
-    Odometry(commands::odometry::OdometryArgs),
+    Odometry(Box<commands::odometry::OdometryArgs>),
 }
 
 fn run(cli: Cli) -> Result<(), CliError> {

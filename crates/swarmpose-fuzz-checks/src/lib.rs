@@ -9,10 +9,14 @@
 #![forbid(unsafe_code)]
 #![allow(clippy::missing_panics_doc)]
 
+mod ros;
+
 use std::path::Path;
 
 use swarmpose_eval::{Format, Trajectory};
 use swarmpose_vision::image::GrayImage;
+
+pub use ros::{ros_bag, ros_cdr};
 
 /// A fuzz target's property: panics when `data` breaks it.
 pub type Check = fn(&[u8]);
@@ -27,6 +31,8 @@ pub const TARGETS: &[(&str, Check)] = &[
     ("png_decode", png_decode),
     ("poses", poses),
     ("register_report", register_report),
+    ("ros_bag", ros::ros_bag),
+    ("ros_cdr", ros::ros_cdr),
 ];
 
 /// The checksum the seeds of the `register_report` corpus carry.

@@ -9,8 +9,8 @@ mod common;
 
 use nalgebra::Isometry3;
 use swarmpose_datasets::StereoSequence;
-use swarmpose_runs::synthetic::SyntheticSequence;
 use swarmpose_odometry::{CorrectionModel, OdometryConfig};
+use swarmpose_runs::synthetic::SyntheticSequence;
 
 fn path_length_m(poses: &[Isometry3<f64>]) -> f64 {
     poses

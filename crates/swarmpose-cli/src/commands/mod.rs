@@ -8,6 +8,7 @@ pub mod demo;
 pub mod evaluate;
 pub mod odometry;
 pub mod odometry_ins;
+pub mod odometry_mcap;
 pub mod odometry_output;
 pub mod odometry_split;
 pub mod register;

@@ -11,12 +11,14 @@ use std::path::PathBuf;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use nalgebra::Isometry3;
-use swarmpose_datasets::{StereoSequence, open};
+use swarmpose_datasets::StereoSequence;
 use swarmpose_odometry::frontend::RgbdNoise;
 use swarmpose_odometry::window::Marginalisation;
 use swarmpose_odometry::{
     CorrectionModel, Decision, FrameResult, Odometry, OdometryConfig, RunEnd,
 };
+use swarmpose_ros::convert::FrameNames;
+use swarmpose_ros::{BagInfo, StereoOptions as BagOptions, open_stereo};
 use swarmpose_runs::RunError;
 use swarmpose_runs::batch::{camera_of, run_rgbd_sequence, run_sequence, run_sequence_two_threads};
 use swarmpose_runs::output::{
@@ -27,6 +29,7 @@ use swarmpose_runs::plots::{PlotTrack, render_plots};
 use swarmpose_runs::rgbd::RgbdSequence;
 use swarmpose_runs::synthetic::SyntheticSequence;
 
+use super::odometry_mcap::McapOutput;
 use super::odometry_output::{OutputDir, StreamFile};
 use super::odometry_split::SplitLog;
 use super::stereo_options::StereoOptions;
@@ -42,9 +45,13 @@ pub const MIN_TRACKED_SHARE: f64 = 0.5;
 /// Arguments of `swarmpose odometry`.
 #[derive(Debug, Args)]
 #[command(after_help = "\
-SEQUENCE_DIR is a KITTI odometry sequence, a Karlsruhe sequence, a EuRoC MAV sequence or \
-a TUM RGB-D directory (see `swarmpose correspondences --help`). Outputs in --out, written \
-frame by frame as the run goes: trajectory.kitti.txt (KITTI poses), trajectory.tum.txt \
+SEQUENCE_DIR is a KITTI odometry sequence, a Karlsruhe sequence, a EuRoC MAV sequence, \
+a TUM RGB-D directory (see `swarmpose correspondences --help`) or a ROS 2 bag (an .mcap or \
+.db3 file, or a rosbag2 folder with metadata.yaml: two Image or CompressedImage topics with \
+their camera_info, found or named with --left/--right, paired by header stamp). Outputs in \
+--out, written frame by frame as the run goes: trajectory.kitti.txt (KITTI poses), \
+odometry.mcap (ROS 2 messages: nav_msgs/Odometry with covariance, PoseWithCovarianceStamped, \
+/tf, DiagnosticArray status, the paths; see README \"ROS 2\"), trajectory.tum.txt \
 (timestamp tx ty tz qx qy qz qw), frames.csv (per frame: status, reference frame, counts, \
 time per stage in ms, the motion from the previous frame, the position, the disparity \
 correction, 1 for a keyframe of the sliding window, and 1 for an ambiguous motion: two distinct \
@@ -56,7 +63,8 @@ trajectory.png/.svg (top view against the ground truth: figure 17) and, with gro
 errors.png, groundtruth.kitti.txt, groundtruth.tum.txt and evaluation.json.
 
 A frame the engine cannot track is predicted at constant velocity (at most 1 s), then \
-marked lost; frames.csv says which and why.
+marked lost; frames.csv says which and why. A bag cut short (its recorder killed) is run \
+up to its last whole frame, then exits with status 2 saying where it stopped.
 
 Exit status: 0 on success; 2 for bad options or an unreadable, malformed or too short \
 sequence (a frame that cannot be read stops the run: the frames before it are kept and the \
@@ -142,6 +150,28 @@ pub struct OdometryArgs {
     /// (split_check.csv; two more refinements a frame).
     #[arg(long)]
     pub split_check: bool,
+
+    /// ROS 2 bag: the left image topic (found when not given; give both or neither).
+    #[arg(long, value_name = "TOPIC")]
+    pub left: Option<String>,
+
+    /// ROS 2 bag: the right image topic.
+    #[arg(long, value_name = "TOPIC")]
+    pub right: Option<String>,
+
+    /// ROS 2 bag: largest difference of the header stamps of a left and a right image
+    /// paired into a frame, milliseconds (0: equal stamps).
+    #[arg(long, value_name = "MS", default_value_t = 0.0)]
+    pub stamp_tolerance: f64,
+
+    /// odometry.mcap: the fixed frame of the poses.
+    #[arg(long, value_name = "NAME", default_value = "odom")]
+    pub odom_frame: String,
+
+    /// odometry.mcap: the camera frame (default: the images' frame_id from a bag, else
+    /// camera_optical).
+    #[arg(long, value_name = "NAME")]
+    pub camera_frame: Option<String>,
 
     #[command(flatten)]
     pub stereo: StereoOptions,
@@ -234,6 +264,12 @@ fn config(args: &OdometryArgs) -> Result<OdometryConfig, CliError> {
 pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
     let config = config(args)?;
     let estimator = build(args.method, &args.options)?;
+    if !(args.stamp_tolerance.is_finite() && args.stamp_tolerance >= 0.0) {
+        return Err(CliError::usage(
+            "--stamp-tolerance must be a number of milliseconds, 0 or more",
+        ));
+    }
+    let mut bag: Option<BagInfo> = None;
     let source = match &args.sequence {
         None => {
             let seq = SyntheticSequence::default();
@@ -255,7 +291,14 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
             Source::Rgbd(seq, format!("{} (TUM RGB-D)", dir.display()))
         }
         Some(dir) => {
-            let seq = open(dir).map_err(|e| CliError::usage(e.to_string()))?;
+            let opts = BagOptions {
+                left: args.left.clone(),
+                right: args.right.clone(),
+                stamp_tolerance_ns: (args.stamp_tolerance * 1e6).round() as i64,
+            };
+            let opened = open_stereo(dir, &opts).map_err(|e| CliError::usage(e.to_string()))?;
+            bag = opened.bag;
+            let seq = opened.sequence;
             for note in seq.notes() {
                 warn(note);
             }
@@ -295,6 +338,21 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
         .split_check
         .then(|| SplitLog::create(&dir))
         .transpose()?;
+    let names = FrameNames {
+        odom: args.odom_frame.clone(),
+        camera: args.camera_frame.clone().unwrap_or_else(|| {
+            bag.as_ref()
+                .map(|b| b.frame_id.clone())
+                .filter(|f| !f.is_empty())
+                .unwrap_or_else(|| FrameNames::default().camera)
+        }),
+    };
+    let mut mcap = McapOutput::create(
+        &dir,
+        names,
+        bag.as_ref().map(|b| &b.camera_info),
+        bag.as_ref().map(|b| b.stamps_ns.clone()),
+    )?;
     let stop = StopRequest::install();
     let mut track = Track {
         poses: Vec::with_capacity(n),
@@ -313,7 +371,8 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
             .and_then(|()| tum.line(&tum_line(r.timestamp_s, &r.pose)))
             .and_then(|()| frames.line(&frames_row(r)))
             .and_then(|()| covariance_row(r).map_or(Ok(()), |row| cov.line(&row)))
-            .and_then(|()| split.as_mut().map_or(Ok(()), |s| s.add(r)));
+            .and_then(|()| split.as_mut().map_or(Ok(()), |s| s.add(r)))
+            .and_then(|()| mcap.frame(r));
         if let Err(e) = written {
             write_error = Some(e);
             return ControlFlow::Break(());
@@ -352,8 +411,13 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
     if let Some(e) = write_error {
         return Err(e);
     }
+    let (title, gt) = match &source {
+        Source::Stereo(_, t, gt) => (t.clone(), gt.clone()),
+        Source::Rgbd(s, t) => (t.clone(), s.ground_truth().map(<[_]>::to_vec)),
+    };
+    let done = track.summary.frames;
+    mcap.finish(gt.as_deref().map(|g| &g[..done.min(g.len())]))?;
     let ended = ended.map_err(|e| {
-        let done = track.summary.frames;
         // The smoothed poses so far too; a failure to write them leaves the error as it is.
         let _ = write_smoothed(&dir, &track);
         let mut err = odometry_error(e);
@@ -364,10 +428,6 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
         );
         err
     })?;
-    let (title, gt) = match &source {
-        Source::Stereo(_, t, gt) => (t.clone(), gt.clone()),
-        Source::Rgbd(s, t) => (t.clone(), s.ground_truth().map(<[_]>::to_vec)),
-    };
     if let RunEnd::Stopped(done) = ended {
         // Stopped by a signal between two frames: the summary of what was done.
         let gt = gt.map(|g| g[..done.min(g.len())].to_vec());
@@ -399,6 +459,12 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
         dir.path().display(),
         track.summary.text()
     ))?;
+    if let Some(stopped) = bag.as_ref().and_then(|b| b.stopped.as_deref()) {
+        return Err(CliError::usage(format!(
+            "{stopped}: the bag is cut; its {} whole frames were run and the outputs are written",
+            track.summary.frames
+        )));
+    }
     let share = track.summary.tracked_share();
     if share < MIN_TRACKED_SHARE {
         return Err(CliError {

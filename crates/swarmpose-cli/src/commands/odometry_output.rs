@@ -22,11 +22,13 @@ pub const LOCK: &str = ".swarmpose-lock";
 
 /// Every file a run may write in its folder: what [`OutputDir::prepare`] removes from a
 /// folder an earlier version wrote without a manifest, and the only names a run records.
-pub const OUTPUT_NAMES: [&str; 13] = [
+pub const OUTPUT_NAMES: [&str; 15] = [
     "trajectory.kitti.txt",
     "trajectory.tum.txt",
     "frames.csv",
     "motion_covariance.csv",
+    "split_check.csv",
+    "odometry.mcap",
     "calibration.json",
     "trajectory.smoothed.kitti.txt",
     "trajectory.smoothed.tum.txt",
@@ -176,6 +178,18 @@ impl OutputDir {
         writeln!(f, "{name}").map_err(|e| write_error(&manifest, &e))
     }
 
+    /// Creates `name` (listed in the manifest) for a writer that streams into it.
+    ///
+    /// # Errors
+    /// Exit status 1 naming the file.
+    pub fn create(&self, name: &str) -> Result<(File, PathBuf), CliError> {
+        self.record(name)?;
+        let path = self.path.join(name);
+        let file =
+            swarmpose_data::output::create_stream(&path).map_err(|e| write_error(&path, &e))?;
+        Ok((file, path))
+    }
+
     /// Writes `name` whole: to a temporary name first, renamed when complete, so that no
     /// file under its final name is ever truncated.
     ///
@@ -204,10 +218,7 @@ impl StreamFile {
     /// # Errors
     /// Exit status 1 naming the file.
     pub fn create(dir: &OutputDir, name: &str, header: Option<&str>) -> Result<Self, CliError> {
-        dir.record(name)?;
-        let path = dir.path.join(name);
-        let file =
-            swarmpose_data::output::create_stream(&path).map_err(|e| write_error(&path, &e))?;
+        let (file, path) = dir.create(name)?;
         let mut s = Self { path, file, len: 0 };
         if let Some(h) = header {
             s.line(h)?;

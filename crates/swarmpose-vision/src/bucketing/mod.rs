@@ -1,7 +1,7 @@
 //! Bucketing: keep the strongest few features in each cell of a regular grid, so
 //! features spread over the whole image instead of piling up on textured spots.
 
-use crate::features::{Features, Keypoint};
+use crate::features::Keypoint;
 
 /// Grid and quota of [`bucket_indices`].
 #[derive(Debug, Clone, Copy, PartialEq)]

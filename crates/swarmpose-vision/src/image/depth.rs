@@ -38,7 +38,7 @@ pub(crate) fn sbit(bytes: &[u8]) -> Option<u8> {
 
 /// The depth of 16-bit `values` of a PNG whose `sBIT` is `sbit`.
 #[cfg(feature = "png")]
-pub(crate) fn of_16bit(values: &[u16], sbit: Option<u8>) -> Depth {
+pub fn of_16bit(values: &[u16], sbit: Option<u8>) -> Depth {
     if let Some(bits) = sbit {
         return Depth {
             bits,
@@ -61,7 +61,7 @@ pub(crate) fn of_16bit(values: &[u16], sbit: Option<u8>) -> Depth {
 /// 16-bit values of `bits` significant bits scaled to 8 bits, rounded (values above the
 /// depth saturate at 255).
 #[cfg(feature = "png")]
-pub(crate) fn to_8bit(values: &[u16], bits: u8) -> Vec<u8> {
+pub fn to_8bit(values: &[u16], bits: u8) -> Vec<u8> {
     let max = f64::from((1u32 << bits) - 1);
     values
         .iter()

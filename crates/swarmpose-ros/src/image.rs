@@ -1,0 +1,174 @@
+//! ROS 2 images to what the engine takes: 8-bit gray, or depth in metres.
+//!
+//! | encoding | to gray |
+//! |---|---|
+//! | `mono8` | as is |
+//! | `mono16` | scaled to 8 bits as a 16-bit PNG without `sBIT` is by the folder loaders ([`swarmpose_vision::image::depth`]) |
+//! | `rgb8`, `bgr8`, `rgba8`, `bgra8` | luma as the `image` crate computes it for a colour PNG |
+//! | `CompressedImage` PNG | decoded as the folder loaders decode a PNG |
+//! | `CompressedImage` JPEG | decoded by the `image` crate (zune-jpeg), then luma |
+//!
+//! Depth: `16UC1` (millimetres) and `32FC1` (metres) to metres, 0 where there is none.
+//! Any other encoding is refused by name.
+
+use std::path::Path;
+
+use swarmpose_vision::image::GrayImage;
+use swarmpose_vision::image::depth::{of_16bit, to_8bit};
+
+use crate::msg::{CompressedImage, Image};
+
+/// The encodings [`image_to_gray`] reads.
+pub const GRAY_ENCODINGS: &[&str] = &["mono8", "mono16", "rgb8", "bgr8", "rgba8", "bgra8"];
+/// The encodings [`image_to_depth_m`] reads.
+pub const DEPTH_ENCODINGS: &[&str] = &["16UC1", "32FC1"];
+
+/// The rows of `img`, each `width * bytes_per_pixel` bytes, checked against `step` and
+/// the data's length.
+fn rows(img: &Image, bytes_per_pixel: usize) -> Result<impl Iterator<Item = &[u8]>, String> {
+    let (w, h) = (img.width as usize, img.height as usize);
+    let row = w.checked_mul(bytes_per_pixel).ok_or("width too large")?;
+    let step = img.step as usize;
+    if w == 0 || h == 0 {
+        return Err(format!("an empty {}x{} image", w, h));
+    }
+    if step < row {
+        return Err(format!(
+            "step {step} is shorter than a row of {w} {} pixels ({row} bytes)",
+            img.encoding
+        ));
+    }
+    let need = step
+        .checked_mul(h - 1)
+        .and_then(|x| x.checked_add(row))
+        .ok_or("image too large")?;
+    if img.data.len() < need {
+        return Err(format!(
+            "{} bytes of data for a {w}x{h} {} image of step {step} (needs {need})",
+            img.data.len(),
+            img.encoding
+        ));
+    }
+    Ok(img.data.chunks(step).take(h).map(move |r| &r[..row]))
+}
+
+/// Colour pixels (`channels` bytes each, red at `r`, blue at `b`) to gray as the `image`
+/// crate converts a colour PNG.
+fn colour_to_gray(img: &Image, channels: usize, r: usize, b: usize) -> Result<GrayImage, String> {
+    let mut rgb = Vec::with_capacity(img.width as usize * img.height as usize * 3);
+    for row in rows(img, channels)? {
+        for px in row.chunks_exact(channels) {
+            rgb.extend_from_slice(&[px[r], px[1], px[b]]);
+        }
+    }
+    let buf = image::RgbImage::from_raw(img.width, img.height, rgb).ok_or("bad image size")?;
+    let luma = image::DynamicImage::ImageRgb8(buf).into_luma8();
+    GrayImage::from_raw(img.width as usize, img.height as usize, luma.into_raw())
+        .ok_or_else(|| "bad image size".to_owned())
+}
+
+/// 16-bit values of the rows of `img`, honouring `is_bigendian`.
+fn values_u16(img: &Image) -> Result<Vec<u16>, String> {
+    let mut out = Vec::with_capacity(img.width as usize * img.height as usize);
+    for row in rows(img, 2)? {
+        out.extend(row.chunks_exact(2).map(|p| {
+            if img.is_bigendian != 0 {
+                u16::from_be_bytes([p[0], p[1]])
+            } else {
+                u16::from_le_bytes([p[0], p[1]])
+            }
+        }));
+    }
+    Ok(out)
+}
+
+/// An [`Image`] as 8-bit gray.
+///
+/// # Errors
+/// A one-line message naming an encoding not in [`GRAY_ENCODINGS`], or data too short
+/// for the size.
+pub fn image_to_gray(img: &Image) -> Result<GrayImage, String> {
+    let (w, h) = (img.width as usize, img.height as usize);
+    match img.encoding.as_str() {
+        "mono8" | "8UC1" => {
+            let data: Vec<u8> = rows(img, 1)?.flatten().copied().collect();
+            GrayImage::from_raw(w, h, data).ok_or_else(|| "bad image size".to_owned())
+        }
+        "mono16" => {
+            let v = values_u16(img)?;
+            let depth = of_16bit(&v, None);
+            GrayImage::from_raw(w, h, to_8bit(&v, depth.bits))
+                .ok_or_else(|| "bad image size".to_owned())
+        }
+        "rgb8" => colour_to_gray(img, 3, 0, 2),
+        "bgr8" => colour_to_gray(img, 3, 2, 0),
+        "rgba8" => colour_to_gray(img, 4, 0, 2),
+        "bgra8" => colour_to_gray(img, 4, 2, 0),
+        other => Err(format!(
+            "image encoding '{other}' is not one of {} (nor a depth image for a gray one)",
+            GRAY_ENCODINGS.join(", ")
+        )),
+    }
+}
+
+/// A depth [`Image`] in metres (0 where there is none).
+///
+/// # Errors
+/// A one-line message naming an encoding not in [`DEPTH_ENCODINGS`].
+pub fn image_to_depth_m(img: &Image) -> Result<Vec<f32>, String> {
+    match img.encoding.as_str() {
+        "16UC1" | "mono16" => Ok(values_u16(img)?
+            .into_iter()
+            .map(|mm| f32::from(mm) * 1e-3)
+            .collect()),
+        "32FC1" => {
+            let mut out = Vec::with_capacity(img.width as usize * img.height as usize);
+            for row in rows(img, 4)? {
+                out.extend(row.chunks_exact(4).map(|p| {
+                    let b = [p[0], p[1], p[2], p[3]];
+                    let m = if img.is_bigendian != 0 {
+                        f32::from_be_bytes(b)
+                    } else {
+                        f32::from_le_bytes(b)
+                    };
+                    if m.is_finite() && m > 0.0 { m } else { 0.0 }
+                }));
+            }
+            Ok(out)
+        }
+        other => Err(format!(
+            "depth encoding '{other}' is not one of {}",
+            DEPTH_ENCODINGS.join(", ")
+        )),
+    }
+}
+
+/// A [`CompressedImage`] (PNG or JPEG) as 8-bit gray.
+///
+/// # Errors
+/// A one-line message for another format (`compressedDepth` included) or bytes that do
+/// not decode.
+pub fn compressed_to_gray(img: &CompressedImage) -> Result<GrayImage, String> {
+    let format = img.format.to_ascii_lowercase();
+    if format.contains("compresseddepth") {
+        return Err(format!(
+            "CompressedImage format '{}' (compressedDepth) is not read: record depth as Image 16UC1 or 32FC1",
+            img.format
+        ));
+    }
+    if format.contains("png") {
+        return GrayImage::decode_png(&img.data, Path::new("CompressedImage"))
+            .map_err(|e| e.to_string());
+    }
+    if format.contains("jpeg") || format.contains("jpg") {
+        let decoded = image::load_from_memory_with_format(&img.data, image::ImageFormat::Jpeg)
+            .map_err(|e| format!("not a readable JPEG: {e}"))?;
+        let (w, h) = (decoded.width() as usize, decoded.height() as usize);
+        return GrayImage::from_raw(w, h, decoded.into_luma8().into_raw())
+            .ok_or_else(|| "bad JPEG size".to_owned());
+    }
+    Err(format!(
+        "CompressedImage format '{}' is neither png nor jpeg",
+        img.format
+    ))
+}

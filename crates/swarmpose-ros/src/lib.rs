@@ -1,0 +1,23 @@
+//! # swarmpose-ros
+//!
+//! ROS 2 without a ROS install: the message types swarmpose reads and writes ([`msg`],
+//! CDR through `cdr-encoding`), ROS 2 bags ([`bag`]: MCAP through the `mcap` crate,
+//! SQLite `.db3` through `rusqlite`, rosbag2 folders with split files), stereo frames
+//! from a bag ([`stereo`]), and the `odometry.mcap` writer ([`write`]).
+#![deny(missing_docs)]
+#![forbid(unsafe_code)]
+#![warn(clippy::unwrap_used)]
+
+pub mod bag;
+pub mod convert;
+pub mod error;
+pub mod image;
+pub mod msg;
+pub mod source;
+pub mod stereo;
+pub mod write;
+
+pub use bag::{Bag, Topic};
+pub use error::{CdrError, RosError};
+pub use source::{BagInfo, Opened, is_bag, open_stereo};
+pub use stereo::{BagSequence, StereoOptions};

@@ -1,0 +1,459 @@
+//! Stereo frames from a ROS 2 bag, behind [`swarmpose_datasets::StereoSequence`]: the
+//! camera topics found or named ([`topics`]), left and right paired by header stamp
+//! ([`pairing`]), the rig from `camera_info` ([`calib`]), images to gray
+//! ([`crate::image`]). Opening reads every image once for its header stamp; a frame is
+//! then read, converted and (raw streams) rectified when asked for.
+
+pub mod calib;
+pub mod pairing;
+pub mod topics;
+
+use std::path::Path;
+
+use nalgebra::Isometry3;
+use swarmpose_datasets::{DatasetError, RectifiedStereo, StereoPair, StereoSequence};
+use swarmpose_vision::image::GrayImage;
+use swarmpose_vision::rectify::remap;
+
+use crate::bag::{Bag, Topic};
+use crate::error::RosError;
+use crate::image::{compressed_to_gray, image_to_gray};
+use crate::msg::{CameraInfo, CompressedImage, Image, RosMessage, decode_header};
+use calib::{Rig, rig_from_camera_info};
+use pairing::pair_by_stamp;
+use topics::{CameraTopics, cameras, info_topic_of, is_image_type};
+
+/// How to find the stereo input of a bag.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct StereoOptions {
+    /// The left image topic (found when `None`).
+    pub left: Option<String>,
+    /// The right image topic (found when `None`).
+    pub right: Option<String>,
+    /// Largest difference of the header stamps of a left and a right image paired into
+    /// a frame, nanoseconds (0: equal stamps).
+    pub stamp_tolerance_ns: i64,
+}
+
+/// A stereo sequence read from a ROS 2 bag.
+#[derive(Debug)]
+pub struct BagSequence {
+    bag: Bag,
+    left: Topic,
+    right: Topic,
+    /// `(left message, right message, left header stamp ns)` of each frame.
+    frames: Vec<(usize, usize, i64)>,
+    rig: Rig,
+    size: (usize, usize),
+    left_info: CameraInfo,
+    frame_id: String,
+    unpaired: Vec<String>,
+    notes: Vec<String>,
+}
+
+fn topics_error(bag: &Bag, message: String) -> RosError {
+    RosError::Topics {
+        path: bag.path().to_owned(),
+        message: format!("{message}; {}", bag.listing()),
+    }
+}
+
+fn calib_error(bag: &Bag, message: String) -> RosError {
+    RosError::Calibration {
+        path: bag.path().to_owned(),
+        message,
+    }
+}
+
+/// The camera topics named in `opts`, or found.
+fn choose(bag: &Bag, opts: &StereoOptions) -> Result<(CameraTopics, CameraTopics), RosError> {
+    let named = |name: &str| -> Result<CameraTopics, RosError> {
+        let t = bag
+            .topic(name)
+            .ok_or_else(|| topics_error(bag, format!("no topic {name}")))?;
+        if !is_image_type(&t.msg_type) {
+            return Err(topics_error(
+                bag,
+                format!("{name} is a {}, not an image topic", t.msg_type),
+            ));
+        }
+        let info = info_topic_of(bag, name).ok_or_else(|| {
+            calib_error(
+                bag,
+                format!("no camera_info topic beside {name}: the rig is unknown"),
+            )
+        })?;
+        Ok(CameraTopics {
+            image: name.to_owned(),
+            info,
+        })
+    };
+    if let (Some(l), Some(r)) = (&opts.left, &opts.right) {
+        return Ok((named(l)?, named(r)?));
+    }
+    if opts.left.is_some() != opts.right.is_some() {
+        return Err(topics_error(
+            bag,
+            "name both the left and the right topic, or neither".to_owned(),
+        ));
+    }
+    let images: Vec<&str> = bag
+        .topics()
+        .iter()
+        .filter(|t| is_image_type(&t.msg_type) && !t.entries.is_empty())
+        .map(|t| t.name.as_str())
+        .collect();
+    let cams = cameras(bag);
+    match (images.len(), cams.len()) {
+        (0, _) => Err(topics_error(
+            bag,
+            "no image topic (sensor_msgs/msg/Image or CompressedImage with messages)".to_owned(),
+        )),
+        (_, 0) => Err(calib_error(
+            bag,
+            format!(
+                "no camera_info beside the image topics {}: the rig is unknown",
+                images.join(", ")
+            ),
+        )),
+        (_, 1) => Err(topics_error(
+            bag,
+            format!(
+                "one camera only ({}): stereo needs two image topics with camera_info",
+                cams[0].image
+            ),
+        )),
+        (_, 2) => order(bag, cams[0].clone(), cams[1].clone()),
+        (_, n) => Err(topics_error(
+            bag,
+            format!("{n} cameras with camera_info: name the pair with --left and --right"),
+        )),
+    }
+}
+
+/// The two cameras as (left, right): the right one is to the right in its `P`, or named
+/// `right`.
+fn order(
+    bag: &Bag,
+    a: CameraTopics,
+    b: CameraTopics,
+) -> Result<(CameraTopics, CameraTopics), RosError> {
+    let tx = |c: &CameraTopics| {
+        bag.topic(&c.info)
+            .and_then(|t| topics::first_info(bag, t))
+            .map_or(0.0, |i| i.p[3])
+    };
+    let (ta, tb) = (tx(&a), tx(&b));
+    if ta == 0.0 && tb < 0.0 {
+        return Ok((a, b));
+    }
+    if tb == 0.0 && ta < 0.0 {
+        return Ok((b, a));
+    }
+    let has = |c: &CameraTopics, w: &str| c.image.to_lowercase().contains(w);
+    if has(&a, "left") && has(&b, "right") {
+        return Ok((a, b));
+    }
+    if has(&b, "left") && has(&a, "right") {
+        return Ok((b, a));
+    }
+    Err(topics_error(
+        bag,
+        format!(
+            "cannot tell left from right among {} and {} (neither P nor the names say): name them \
+             with --left and --right",
+            a.image, b.image
+        ),
+    ))
+}
+
+/// The header stamps (nanoseconds) and the frame id of every image of `topic`.
+fn stamps(bag: &Bag, topic: &Topic) -> Result<(Vec<i64>, String), RosError> {
+    let mut out = Vec::with_capacity(topic.entries.len());
+    let mut frame_id = String::new();
+    for i in 0..topic.entries.len() {
+        let bytes = bag.read(topic, i)?;
+        let h = decode_header(&bytes).map_err(|e| RosError::Decode {
+            path: bag.path().to_owned(),
+            topic: topic.name.clone(),
+            index: i,
+            msg_type: topic.msg_type.clone(),
+            message: e.0,
+        })?;
+        if i == 0 {
+            frame_id = h.frame_id;
+        }
+        out.push(h.stamp.as_nanos());
+    }
+    Ok((out, frame_id))
+}
+
+/// The `camera_info` of a camera: the first message, checked to be the same in every
+/// other.
+fn camera_info(bag: &Bag, name: &str) -> Result<CameraInfo, RosError> {
+    let topic = bag
+        .topic(name)
+        .ok_or_else(|| calib_error(bag, format!("no topic {name}")))?;
+    if topic.entries.is_empty() {
+        return Err(calib_error(
+            bag,
+            format!("{name} has no message: the rig is unknown"),
+        ));
+    }
+    let first: CameraInfo = bag.decode(topic, 0)?;
+    for i in 1..topic.entries.len() {
+        let c: CameraInfo = bag.decode(topic, i)?;
+        if (c.width, c.height, &c.d, c.k, c.r, c.p)
+            != (
+                first.width,
+                first.height,
+                &first.d,
+                first.k,
+                first.r,
+                first.p,
+            )
+        {
+            return Err(calib_error(
+                bag,
+                format!(
+                    "{name}: message {i} gives another calibration than message 0 (a changing rig is not supported)"
+                ),
+            ));
+        }
+    }
+    Ok(first)
+}
+
+/// Image message `index` of `topic` as gray.
+fn gray(bag: &Bag, topic: &Topic, index: usize) -> Result<GrayImage, RosError> {
+    let image_error = |message: String| RosError::Image {
+        path: bag.path().to_owned(),
+        topic: topic.name.clone(),
+        index,
+        message,
+    };
+    if topic.msg_type == CompressedImage::TYPE {
+        let m: CompressedImage = bag.decode(topic, index)?;
+        compressed_to_gray(&m).map_err(image_error)
+    } else {
+        let m: Image = bag.decode(topic, index)?;
+        image_to_gray(&m).map_err(image_error)
+    }
+}
+
+impl BagSequence {
+    /// Opens the bag at `path` and finds its stereo input.
+    ///
+    /// # Errors
+    /// As [`Bag::open`]; [`RosError::Topics`] (listing the topics) when there is no
+    /// image topic, one camera only, an ambiguous choice, or no left/right pair within
+    /// the tolerance; [`RosError::Calibration`] for a missing or unusable
+    /// `camera_info`; [`RosError::Image`] for an encoding that is not read.
+    pub fn open(path: &Path, opts: &StereoOptions) -> Result<Self, RosError> {
+        let bag = Bag::open(path)?;
+        let (lc, rc) = choose(&bag, opts)?;
+        let topic = |n: &str| {
+            bag.topic(n)
+                .cloned()
+                .ok_or_else(|| topics_error(&bag, format!("no topic {n}")))
+        };
+        let (left, right) = (topic(&lc.image)?, topic(&rc.image)?);
+        let (ls, frame_id) = stamps(&bag, &left)?;
+        let (rs, _) = stamps(&bag, &right)?;
+        let tol = opts.stamp_tolerance_ns.max(0);
+        let p = pair_by_stamp(&ls, &rs, tol);
+        if p.pairs.is_empty() {
+            let gap = ls
+                .iter()
+                .filter_map(|l| rs.iter().map(|r| (r - l).abs()).min())
+                .min()
+                .map_or("no image on one side".to_owned(), |d| {
+                    format!("the nearest are {:.3} ms apart", d as f64 * 1e-6)
+                });
+            return Err(topics_error(
+                &bag,
+                format!(
+                    "no left image of {} has a right image of {} within {:.3} ms of its header stamp ({gap}): \
+                     unsynchronised cameras (allow more with the stamp tolerance)",
+                    left.name,
+                    right.name,
+                    tol as f64 * 1e-6
+                ),
+            ));
+        }
+        let mut unpaired: Vec<String> = p
+            .left_alone
+            .iter()
+            .map(|&i| format!("{} message {i} (stamp {} ns)", left.name, ls[i]))
+            .collect();
+        unpaired.extend(
+            p.right_alone
+                .iter()
+                .map(|&i| format!("{} message {i} (stamp {} ns)", right.name, rs[i])),
+        );
+        let (li, ri) = (camera_info(&bag, &lc.info)?, camera_info(&bag, &rc.info)?);
+        let (l0, r0) = (
+            gray(&bag, &left, p.pairs[0].0)?,
+            gray(&bag, &right, p.pairs[0].1)?,
+        );
+        let rig = rig_from_camera_info(&li, &ri, (l0.width, l0.height), (r0.width, r0.height))
+            .map_err(|m| calib_error(&bag, format!("{} and {}: {m}", lc.info, rc.info)))?;
+        let mut notes = Vec::new();
+        if !unpaired.is_empty() {
+            notes.push(format!(
+                "{} images without a partner within {:.3} ms, not used: {}",
+                unpaired.len(),
+                tol as f64 * 1e-6,
+                unpaired.join(", ")
+            ));
+        }
+        if let Some(s) = bag.stopped() {
+            notes.push(s.to_owned());
+        }
+        let frames = p.pairs.iter().map(|&(l, r)| (l, r, ls[l])).collect();
+        Ok(Self {
+            size: (l0.width, l0.height),
+            bag,
+            left,
+            right,
+            frames,
+            rig,
+            left_info: li,
+            frame_id,
+            unpaired,
+            notes,
+        })
+    }
+
+    /// The bag.
+    #[must_use]
+    pub fn bag(&self) -> &Bag {
+        &self.bag
+    }
+
+    /// The left and right image topics.
+    #[must_use]
+    pub fn topics(&self) -> (&str, &str) {
+        (&self.left.name, &self.right.name)
+    }
+
+    /// The header stamp of each frame's left image, nanoseconds.
+    #[must_use]
+    pub fn stamps_ns(&self) -> Vec<i64> {
+        self.frames.iter().map(|f| f.2).collect()
+    }
+
+    /// The left camera's `camera_info` (its first message).
+    #[must_use]
+    pub fn camera_info(&self) -> &CameraInfo {
+        &self.left_info
+    }
+
+    /// The left images' `frame_id` (the camera's optical frame).
+    #[must_use]
+    pub fn frame_id(&self) -> &str {
+        &self.frame_id
+    }
+
+    /// The images left without a partner, one line each.
+    #[must_use]
+    pub fn unpaired(&self) -> &[String] {
+        &self.unpaired
+    }
+
+    /// The rig: rectified images as they are, or raw ones with their remap tables.
+    #[must_use]
+    pub fn rig(&self) -> &Rig {
+        &self.rig
+    }
+
+    /// Frame `i`, rectified.
+    ///
+    /// # Errors
+    /// [`RosError`] naming the topic and message.
+    pub fn read_frame(&self, i: usize) -> Result<StereoPair, RosError> {
+        let &(l, r, _) = self.frames.get(i).ok_or_else(|| RosError::Container {
+            path: self.bag.path().to_owned(),
+            message: format!("frame {i} out of range ({} frames)", self.frames.len()),
+        })?;
+        let (left, right) = (
+            gray(&self.bag, &self.left, l)?,
+            gray(&self.bag, &self.right, r)?,
+        );
+        for (img, topic, k) in [(&left, &self.left, l), (&right, &self.right, r)] {
+            if (img.width, img.height) != self.size {
+                return Err(RosError::Image {
+                    path: self.bag.path().to_owned(),
+                    topic: topic.name.clone(),
+                    index: k,
+                    message: format!(
+                        "a {}x{} image in a {}x{} stream",
+                        img.width, img.height, self.size.0, self.size.1
+                    ),
+                });
+            }
+        }
+        Ok(match &self.rig {
+            Rig::Rectified(_) => StereoPair { left, right },
+            Rig::Raw {
+                left: lt,
+                right: rt,
+                ..
+            } => StereoPair {
+                left: remap(left.view(), lt),
+                right: remap(right.view(), rt),
+            },
+        })
+    }
+}
+
+/// A [`RosError`] as the sequence loaders' error: the bag and the message.
+pub(crate) fn to_dataset(e: &RosError) -> DatasetError {
+    let path = e.path().to_owned();
+    let full = e.to_string();
+    let prefix = format!("{}: ", path.display());
+    DatasetError::Parse {
+        message: full.strip_prefix(&prefix).unwrap_or(&full).to_owned(),
+        path,
+        line: 0,
+    }
+}
+
+impl StereoSequence for BagSequence {
+    fn layout(&self) -> &'static str {
+        "ros2 bag"
+    }
+
+    fn root(&self) -> &Path {
+        self.bag.path()
+    }
+
+    fn len(&self) -> usize {
+        self.frames.len()
+    }
+
+    fn calibration(&self) -> RectifiedStereo {
+        self.rig.rectified()
+    }
+
+    fn image_size(&self) -> (usize, usize) {
+        self.size
+    }
+
+    fn frame(&self, i: usize) -> Result<StereoPair, DatasetError> {
+        self.read_frame(i).map_err(|e| to_dataset(&e))
+    }
+
+    fn notes(&self) -> &[String] {
+        &self.notes
+    }
+
+    fn ground_truth(&self) -> Option<&[Isometry3<f64>]> {
+        None
+    }
+
+    fn timestamp_s(&self, i: usize) -> Option<f64> {
+        let first = self.frames.first()?.2;
+        Some((self.frames.get(i)?.2 - first) as f64 * 1e-9)
+    }
+}
