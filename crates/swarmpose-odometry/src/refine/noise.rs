@@ -38,13 +38,15 @@ pub fn cluster_factor(scores: &mut [Score], info_inv: &Matrix6<f64>) -> Option<f
     if scores.len() < 2 * k * k {
         return None;
     }
-    scores.sort_by(|a, b| a.u.total_cmp(&b.u));
+    // Unstable sorts allocate nothing (a stable sort takes a buffer); ties are broken by
+    // the other coordinate, so the regions do not depend on the input's order.
+    scores.sort_unstable_by(|a, b| a.u.total_cmp(&b.u).then(a.v.total_cmp(&b.v)));
     let mut m = Matrix6::zeros();
     let mut regions = 0usize;
     let n = scores.len();
     for band in 0..k {
         let cut = &mut scores[band * n / k..(band + 1) * n / k];
-        cut.sort_by(|a, b| a.v.total_cmp(&b.v));
+        cut.sort_unstable_by(|a, b| a.v.total_cmp(&b.v).then(a.u.total_cmp(&b.u)));
         let len = cut.len();
         for cell in 0..k {
             let g: Vector6<f64> = cut[cell * len / k..(cell + 1) * len / k]
