@@ -10,8 +10,7 @@ use std::fmt::Display;
 use clap::{Args, ValueEnum};
 use swarmpose_core::pso::{MAX_SWARM_SIZE, PsoConfig};
 use swarmpose_core::{
-    Estimator, MsacConfig, MsacEstimator, PsoEstimator, PsoEstimatorConfig, PsoPaperConfig,
-    PsoPaperEstimator, Threshold,
+    Estimator, EstimatorConfig, MsacConfig, PsoEstimatorConfig, PsoPaperConfig, Threshold,
 };
 
 use crate::error::CliError;
@@ -41,6 +40,17 @@ impl Method {
             Method::Svd => swarmpose_core::Method::Svd,
             Method::Msac => swarmpose_core::Method::Msac,
             Method::Wls => swarmpose_core::Method::Wls,
+        }
+    }
+
+    /// The command-line method of a registry entry.
+    pub fn of(core: swarmpose_core::Method) -> Self {
+        match core {
+            swarmpose_core::Method::Pso => Method::Pso,
+            swarmpose_core::Method::PsoPaper => Method::PsoPaper,
+            swarmpose_core::Method::Svd => Method::Svd,
+            swarmpose_core::Method::Msac => Method::Msac,
+            swarmpose_core::Method::Wls => Method::Wls,
         }
     }
 
@@ -279,43 +289,53 @@ fn reject(method: Method, options: &[&'static str]) -> Result<(), CliError> {
 /// # Errors
 /// A usage error when an option given does not apply to `method`.
 pub fn build(method: Method, options: &EstimatorOptions) -> Result<Box<dyn Estimator>, CliError> {
+    Ok(configure(EstimatorConfig::of(method.core()), options)?.build())
+}
+
+/// The settings of `base`'s estimator with `options` applied over them (a run
+/// configuration's estimator, or a method's defaults).
+///
+/// # Errors
+/// A usage error when an option given does not apply to the method.
+pub fn configure(
+    base: EstimatorConfig,
+    options: &EstimatorOptions,
+) -> Result<EstimatorConfig, CliError> {
     let pso = options.pso_given();
     let msac = options.msac_given();
-    Ok(match method {
-        Method::Pso => {
+    let method = Method::of(base.method());
+    Ok(match base {
+        EstimatorConfig::Pso(mut config) => {
             reject(method, &msac)?;
-            let mut config = PsoEstimatorConfig::default();
             if let Some(d) = options.threshold {
                 config.threshold = Threshold::Fixed(d);
             }
             config.pso = options.apply_pso(config.pso);
             config.seeded_particles = options.seeded_particles.unwrap_or(config.seeded_particles);
-            Box::new(PsoEstimator::new(config))
+            EstimatorConfig::Pso(config)
         }
-        Method::PsoPaper => {
+        EstimatorConfig::PsoPaper(mut config) => {
             let not_used: Vec<_> = msac
                 .into_iter()
                 .chain(options.seeded_particles.map(|_| "--seeded-particles"))
                 .collect();
             reject(method, &not_used)?;
-            let mut config = PsoPaperConfig::default();
             config.threshold_m = options.threshold.unwrap_or(config.threshold_m);
             config.pso = options.apply_pso(config.pso);
-            Box::new(PsoPaperEstimator::new(config))
+            EstimatorConfig::PsoPaper(config)
         }
-        Method::Svd | Method::Wls => {
+        base @ (EstimatorConfig::Svd | EstimatorConfig::Wls) => {
             let threshold = options.threshold.map(|_| "--threshold");
             let not_used: Vec<_> = threshold.into_iter().chain(pso).chain(msac).collect();
             reject(method, &not_used)?;
-            method.core().build(None)
+            base
         }
-        Method::Msac => {
+        EstimatorConfig::Msac(mut config) => {
             reject(method, &pso)?;
-            let mut config = MsacConfig::default();
             config.threshold_m = options.threshold.unwrap_or(config.threshold_m);
             config.confidence = options.confidence.unwrap_or(config.confidence);
             config.max_iterations = options.max_samples.unwrap_or(config.max_iterations);
-            Box::new(MsacEstimator::new(config))
+            EstimatorConfig::Msac(config)
         }
     })
 }

@@ -68,7 +68,8 @@ fn a_folder_in_use_is_refused_and_an_earlier_run_s_leftovers_removed() {
     // The run recorded its files (it records only names the cleaning knows, or fails).
     let manifest = std::fs::read_to_string(out_dir.join(".swarmpose-manifest")).expect("manifest");
     assert!(
-        manifest.lines().count() == 10
+        manifest.lines().count() == 11
+            && manifest.contains("config.json")
             && manifest.contains("trajectory.svg")
             && manifest.contains("odometry.mcap"),
         "{manifest}"

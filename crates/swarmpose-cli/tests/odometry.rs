@@ -489,3 +489,101 @@ fn closed_and_full_standard_output() {
         );
     }
 }
+
+#[test]
+fn a_run_s_configuration_reruns_it_byte_for_byte() {
+    let tmp = TempDir::new("odo-config");
+    let first = tmp.0.join("first");
+    let out = swarmpose(
+        &[
+            "odometry",
+            "--out",
+            s(&first),
+            "--quiet",
+            "--window",
+            "3",
+            "--seed",
+            "7",
+            "--particles",
+            "20",
+            "--calibration-memory",
+            "inf",
+        ],
+        None,
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let config = first.join("config.json");
+    let text = std::fs::read_to_string(&config).expect("config.json");
+    assert!(text.contains(r#""memory_s": "inf""#), "{text}");
+    assert!(text.contains(r#""swarm_size": 20"#), "{text}");
+
+    let second = tmp.0.join("second");
+    let out = swarmpose(
+        &[
+            "odometry",
+            "--out",
+            s(&second),
+            "--quiet",
+            "--config",
+            s(&config),
+        ],
+        None,
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for name in [
+        "config.json",
+        "trajectory.kitti.txt",
+        "motion_covariance.csv",
+    ] {
+        let a = std::fs::read(first.join(name)).expect("first");
+        let b = std::fs::read(second.join(name)).expect("second");
+        assert!(a == b, "{name} differs between the run and its rerun");
+    }
+    // An option beside the file replaces its setting.
+    let third = tmp.0.join("third");
+    let out = swarmpose(
+        &[
+            "odometry",
+            "--out",
+            s(&third),
+            "--quiet",
+            "--config",
+            s(&config),
+            "--seed",
+            "8",
+        ],
+        None,
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(third.join("config.json")).expect("third");
+    assert!(text.contains(r#""seed": 8"#) && text.contains(r#""swarm_size": 20"#));
+
+    let bad = tmp.0.join("bad.json");
+    std::fs::write(&bad, r#"{"odometry": {"window": {"keyframes": "ten"}}}"#).expect("bad");
+    let out = swarmpose(
+        &[
+            "odometry",
+            "--out",
+            s(&tmp.0.join("bad")),
+            "--config",
+            s(&bad),
+        ],
+        None,
+    );
+    check_error(
+        &out,
+        &["bad.json: configuration: invalid type", "expected usize"],
+    );
+}

@@ -45,9 +45,9 @@ pub mod synthetic;
 pub use arun::{arun, arun_weighted};
 pub use error::{DegeneracyKind, PoseError};
 pub use estimators::{
-    CHI2_3_99, Diagnostics, Estimate, Estimator, Method, MsacConfig, MsacEstimator, PsoEstimator,
-    PsoEstimatorConfig, PsoPaperConfig, PsoPaperEstimator, RangeNoise, RunnerUp, SvdEstimator,
-    Threshold, WlsEstimator, refine_mahalanobis,
+    CHI2_3_99, Diagnostics, Estimate, Estimator, EstimatorConfig, Method, MsacConfig,
+    MsacEstimator, PsoEstimator, PsoEstimatorConfig, PsoPaperConfig, PsoPaperEstimator, RangeNoise,
+    RunnerUp, SvdEstimator, Threshold, WlsEstimator, refine_mahalanobis,
 };
 pub use geometry::{Correspondences, MIN_CORRESPONDENCES};
 pub use rng::SeededRng;

@@ -1,7 +1,10 @@
 //! Settings of the odometry engine, with their defaults. One default configuration
 //! serves every sequence: nothing here is chosen for one data set.
 
-use swarmpose_vision::frontend::{Detector, DisparityCorrection};
+use swarmpose_core::EstimatorConfig;
+use swarmpose_vision::frontend::{
+    Detector, DisparityCorrection, OrbFrontendConfig, SurfFrontendConfig,
+};
 
 use crate::refine::RefineConfig;
 use crate::refine::model::PixelNoise;
@@ -10,6 +13,11 @@ use crate::window::WindowConfig;
 
 /// How the disparity correction of the stereo calibration is obtained.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(rename_all = "snake_case")
+)]
 pub enum Calibration {
     /// Chosen online by evidence ([`crate::selfcal`]): no correction, or any of a constant
     /// offset, a quadratic term and a term linear in `x` (the causes of
@@ -91,11 +99,26 @@ impl Calibration {
     }
 }
 
-/// Settings of [`crate::Odometry`].
+/// Settings of [`crate::Odometry`]: every setting of the engine, its front end's and its
+/// estimator's included, with their defaults. One default configuration serves every
+/// sequence. With the `serde` feature it is what a run configuration file holds (see
+/// `swarmpose_runs::config`); a file may give only the settings it changes.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(default, deny_unknown_fields)
+)]
 pub struct OdometryConfig {
     /// Detector and descriptor of the front end (default ORB).
     pub detector: Detector,
+    /// Settings of the ORB front end (used with [`Detector::Orb`]).
+    pub orb: OrbFrontendConfig,
+    /// Settings of the SURF front end (used with [`Detector::Surf`]).
+    pub surf: SurfFrontendConfig,
+    /// The robust estimator of each motion and its settings (default the robust PSO,
+    /// `pso`); [`crate::OdometryBuilder::estimator`] may give one of another kind.
+    pub estimator: EstimatorConfig,
     /// Refine each motion on the reprojection error in both images ([`crate::refine`])
     /// (default true). Without it the estimator's motion is used as it is and no
     /// covariance is given.
@@ -184,6 +207,9 @@ impl Default for OdometryConfig {
     fn default() -> Self {
         Self {
             detector: Detector::default(),
+            orb: OrbFrontendConfig::default(),
+            surf: SurfFrontendConfig::default(),
+            estimator: EstimatorConfig::default(),
             refine: true,
             calibration: Calibration::default(),
             min_inliers: 12,

@@ -20,7 +20,7 @@
 
 use std::ops::ControlFlow;
 
-use swarmpose_core::{Estimator, PsoEstimator, PsoEstimatorConfig};
+use swarmpose_core::Estimator;
 use swarmpose_vision::features::{BinaryDescriptor, FloatDescriptor64};
 use swarmpose_vision::frontend::{Detector, Frontend};
 use swarmpose_vision::image::GrayImage;
@@ -93,7 +93,8 @@ impl OdometryBuilder {
         self
     }
 
-    /// The robust estimator of the motion (default the robust PSO, `pso`).
+    /// The robust estimator of the motion, in place of the configuration's
+    /// ([`OdometryConfig::estimator`]): for an estimator of the embedder's own.
     pub fn estimator(mut self, estimator: Box<dyn Estimator>) -> Self {
         self.estimator = Some(estimator);
         self
@@ -132,9 +133,7 @@ impl OdometryBuilder {
         };
         let working_camera = scale.camera(&camera);
         let mut config = scale.config(&config);
-        let estimator = self
-            .estimator
-            .unwrap_or_else(|| Box::new(PsoEstimator::new(PsoEstimatorConfig::default())));
+        let estimator = self.estimator.unwrap_or_else(|| config.estimator.build());
         let sensor = match self.rgbd {
             Some(noise) => {
                 if config.detector != Detector::Orb {
@@ -153,7 +152,7 @@ impl OdometryBuilder {
         let work = working_camera;
         let inner = match config.detector {
             Detector::Orb => {
-                let f = Frontend::orb(work.rig);
+                let f = Frontend::orb_with(work.rig, &config.orb);
                 let noise = config
                     .pixel_noise
                     .unwrap_or_else(|| noise_of(&f.stereo, sensor, &work));
@@ -161,7 +160,7 @@ impl OdometryBuilder {
                 Inner::Orb(Box::new(f), t)
             }
             Detector::Surf => {
-                let f = Frontend::surf(work.rig);
+                let f = Frontend::surf_with(work.rig, &config.surf);
                 let noise = config
                     .pixel_noise
                     .unwrap_or_else(|| noise_of(&f.stereo, sensor, &work));

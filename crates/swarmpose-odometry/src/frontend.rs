@@ -67,6 +67,11 @@ pub(crate) fn stereo_frame<E: FeatureExtractor>(
 /// noise. Expressed as a stereo camera with a virtual baseline, the disparity
 /// `d = fx b / z` has the constant noise `σ_d = fx b k`.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(default, deny_unknown_fields)
+)]
 pub struct RgbdNoise {
     /// `k` in `σ_z = k z²`, 1/m (default 1.425e-3, Kinect v1).
     pub depth_coefficient: f64,

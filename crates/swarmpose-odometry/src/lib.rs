@@ -27,6 +27,8 @@
 #![warn(clippy::unwrap_used)]
 
 pub mod config;
+#[cfg(feature = "serde")]
+mod config_serde;
 pub mod engine;
 pub mod error;
 mod estimate;

@@ -4,7 +4,7 @@
 
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use swarmpose_core::{Estimator, Method};
+use swarmpose_core::{Estimator, EstimatorConfig, Method};
 
 /// The names `method=` accepts: the workspace's one registry
 /// ([`swarmpose_core::Method`]), as on the command line (`swarmpose register --method`).
@@ -39,4 +39,31 @@ pub(crate) fn estimator(method: &str, threshold_m: Option<f64>) -> PyResult<Box<
         )));
     }
     Ok(m.build(threshold_m))
+}
+
+/// The estimator settings of `base` (a run configuration's) with `method` (its defaults,
+/// when it differs from `base`'s) and the threshold `threshold_m` applied over them.
+///
+/// # Errors
+/// As [`estimator`].
+pub(crate) fn configure(
+    base: EstimatorConfig,
+    method: Option<&str>,
+    threshold_m: Option<f64>,
+) -> PyResult<EstimatorConfig> {
+    let name = method.unwrap_or(base.method().name());
+    // Checks the name, the threshold and that the method takes one.
+    estimator(name, threshold_m)?;
+    let m = Method::from_name(name).unwrap_or(base.method());
+    let base = if m == base.method() {
+        base
+    } else {
+        EstimatorConfig::of(m)
+    };
+    Ok(match (base, threshold_m) {
+        (EstimatorConfig::Pso(c), Some(d)) => EstimatorConfig::Pso(c.with_threshold(d)),
+        (EstimatorConfig::PsoPaper(c), Some(d)) => EstimatorConfig::PsoPaper(c.with_threshold(d)),
+        (EstimatorConfig::Msac(c), Some(d)) => EstimatorConfig::Msac(c.with_threshold(d)),
+        (other, _) => other,
+    })
 }

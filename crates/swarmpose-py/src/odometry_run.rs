@@ -28,15 +28,18 @@ use crate::sequence::Sequence;
 /// and its ``run`` attribute is the ``OdometryRun`` of those frames (so is a
 /// ``KeyboardInterrupt``'s).
 #[pyfunction]
-#[pyo3(signature = (sequence_dir, *, frame_period = 0.1, config = None, **options))]
+#[pyo3(signature = (sequence_dir, *, frame_period = None, config = None, **options))]
 pub(crate) fn odometry<'py>(
     py: Python<'py>,
     sequence_dir: PathBuf,
-    frame_period: f64,
+    frame_period: Option<f64>,
     config: Option<Bound<'py, OdometryConfig>>,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<OdometryRun> {
     let config = OdometryConfig::resolve(py, "odometry", config, options)?;
+    let mut run_config = config.get().run_config()?;
+    let frame_period = frame_period.unwrap_or(run_config.input.frame_period_s);
+    run_config.input.frame_period_s = frame_period;
     if !(frame_period.is_finite() && frame_period > 0.0) {
         return Err(PyValueError::new_err(
             "frame_period must be a positive number of seconds",
@@ -71,6 +74,9 @@ pub(crate) fn odometry<'py>(
     };
     let calibration = json_value(py, &calibration_json(&engine.calibration()))?.unbind();
     let run = OdometryRun {
+        config_json: run_config
+            .to_json()
+            .map_err(|e| PyValueError::new_err(e.to_string()))?,
         frames,
         ground_truth: seq.inner.ground_truth().map(<[_]>::to_vec),
         calibration,
@@ -88,6 +94,8 @@ pub(crate) fn odometry<'py>(
 /// The result of ``swarmpose.odometry``: every frame, and the sequence's ground truth.
 #[pyclass(frozen, module = "swarmpose")]
 pub(crate) struct OdometryRun {
+    /// The run's configuration, as a configuration file holds it.
+    config_json: String,
     frames: Vec<FrameResult>,
     ground_truth: Option<Vec<nalgebra::Isometry3<f64>>>,
     calibration: Py<PyAny>,
@@ -95,6 +103,14 @@ pub(crate) struct OdometryRun {
 
 #[pymethods]
 impl OdometryRun {
+    /// The run's configuration as the text of a configuration file (what the command
+    /// line writes as ``config.json``): saved to a file and given as
+    /// ``config_file=``, it reruns this run exactly.
+    #[getter]
+    fn config_json(&self) -> &str {
+        &self.config_json
+    }
+
     /// Poses of the left camera in the first frame's, (N, 4, 4) (metres).
     #[getter]
     fn poses<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray3<f64>> {

@@ -6,13 +6,15 @@
 
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
+use std::path::PathBuf;
+
 use pyo3::types::PyDict;
 use swarmpose_odometry::config::Calibration;
 use swarmpose_odometry::frontend::RgbdNoise;
 use swarmpose_odometry::window::Marginalisation;
 use swarmpose_odometry::working::check_band;
 use swarmpose_odometry::{CorrectionModel, StereoCamera};
-use swarmpose_vision::frontend::Detector;
+use swarmpose_runs::config::RunConfig;
 
 use crate::errors::odometry_error;
 use crate::methods;
@@ -84,13 +86,14 @@ odometry_config! {
     /// ``Odometry.rgbd`` and ``swarmpose.odometry`` take one as ``config=``, or these
     /// keywords themselves. The keywords:
     keywords {
-        method: &str as String = "pso" => "the estimator of each motion, one of \
-            ``swarmpose.METHODS``",
+        method: Option<String> = None => "the estimator of each motion, one of \
+            ``swarmpose.METHODS`` (``None``: ``\"pso\"``, or the configuration file's)",
         threshold: Option<f64> = None => "its inlier threshold in metres (``None``: ``pso`` \
             estimates it from the data; ``svd`` and ``wls`` have none)",
-        detector: &str as String = "orb" => "the feature detector, ``\"orb\"`` or \
-            ``\"surf\"`` (RGB-D: ``\"orb\"``)",
-        refine: bool = true => "refine each motion on the reprojection error",
+        detector: Option<String> = None => "the feature detector, ``\"orb\"`` or \
+            ``\"surf\"`` (``None``: ``\"orb\"``; RGB-D: ``\"orb\"``)",
+        refine: Option<bool> = None => "refine each motion on the reprojection error \
+            (``None``: ``True``)",
         calibrate: Option<String> = None => "the causes self-calibration may correct, e.g. \
             ``\"principal-point+yaw+focal\"``, or ``\"none\"`` (``None``: as the command line)",
         disparity_correction: Option<FixedCorrection> = None => "a fixed ``(offset, \
@@ -98,7 +101,7 @@ odometry_config! {
             (the terms in 1, x² and x) instead of self-calibration",
         min_inliers: Option<usize> = None => "fewest inliers for a motion, at least 3 \
             (``None``: 12)",
-        seed: u64 = 0 => "the estimator's seed; frame k uses seed + k",
+        seed: Option<u64> = None => "the estimator's seed; frame k uses seed + k (``None``: 0)",
         window: Option<usize> = None => "keyframes of the sliding-window bundle adjustment; \
             0: frame to frame (``None``: as the command line, 10)",
         marginalise: Option<String> = None => "what happens to the window's oldest keyframe \
@@ -110,6 +113,9 @@ odometry_config! {
         min_working_pixels: Option<usize> = None => "stereo images are doubled while they have \
             fewer pixels than this (``None``: 0, never; at most a quarter of \
             max_working_pixels, and at most 16 777 216)",
+        config_file: Option<PathBuf> = None => "a run configuration: the ``config.json`` \
+            every command-line run writes, or ``OdometryRun.config_json`` saved; its settings \
+            replace the defaults, and the keywords given beside it replace its settings",
     }
 }
 
@@ -158,66 +164,63 @@ impl OdometryConfig {
 
     /// Checks every setting as the engine will read it.
     fn check(&self) -> PyResult<()> {
-        let c = self.engine_config()?;
-        methods::estimator(&self.method, self.threshold)?;
+        let c = self.run_config()?.odometry;
         c.check().map_err(|e| odometry_error(&e))?;
         check_band(c.min_working_pixels, c.max_working_pixels).map_err(|e| odometry_error(&e))
     }
 
-    /// The engine's configuration (defaults: those of
-    /// [`swarmpose_odometry::OdometryConfig::default`] and of the command line).
-    fn engine_config(&self) -> PyResult<swarmpose_odometry::OdometryConfig> {
-        let detector: Detector =
-            self.detector
-                .parse()
-                .map_err(|e: swarmpose_vision::frontend::UnknownDetector| {
-                    PyValueError::new_err(e.to_string())
-                })?;
-        let mut c = swarmpose_odometry::OdometryConfig {
-            detector,
-            refine: self.refine,
-            seed: self.seed,
-            ..swarmpose_odometry::OdometryConfig::default()
+    /// The run's configuration: the defaults (those of the command line), or the
+    /// `config_file`'s settings, with the keywords given applied over them.
+    pub(crate) fn run_config(&self) -> PyResult<RunConfig> {
+        let mut rc = match &self.config_file {
+            Some(path) => {
+                RunConfig::read(path).map_err(|e| PyValueError::new_err(e.to_string()))?
+            }
+            None => RunConfig::default(),
         };
-        if let Some(k) = self.window {
-            c = c.with_window(k);
+        let c = &mut rc.odometry;
+        if let Some(name) = &self.detector {
+            c.detector =
+                name.parse()
+                    .map_err(|e: swarmpose_vision::frontend::UnknownDetector| {
+                        PyValueError::new_err(e.to_string())
+                    })?;
         }
+        c.refine = self.refine.unwrap_or(c.refine);
+        c.seed = self.seed.unwrap_or(c.seed);
+        c.window.keyframes = self.window.unwrap_or(c.window.keyframes);
         if let Some(mode) = &self.marginalise {
             let mode: Marginalisation = mode
                 .parse()
                 .map_err(|e: String| PyValueError::new_err(format!("marginalise {e}")))?;
-            c = c.with_marginalisation(mode);
+            c.window.marginalise = mode;
         }
-        if let Some(n) = self.max_working_pixels {
-            c.max_working_pixels = n;
+        c.max_working_pixels = self.max_working_pixels.unwrap_or(c.max_working_pixels);
+        c.min_working_pixels = self.min_working_pixels.unwrap_or(c.min_working_pixels);
+        c.min_inliers = self.min_inliers.unwrap_or(c.min_inliers);
+        if let Some(text) = &self.calibrate {
+            c.selfcal.candidates = CorrectionModel::parse(text).map_err(PyValueError::new_err)?;
         }
-        if let Some(n) = self.min_working_pixels {
-            c.min_working_pixels = n;
-        }
-        if let Some(n) = self.min_inliers {
-            c.min_inliers = n;
-        }
-        let causes = match &self.calibrate {
-            Some(text) => CorrectionModel::parse(text).map_err(PyValueError::new_err)?,
-            None => c.selfcal.candidates,
-        };
-        c.selfcal.candidates = causes;
         let terms = match self.disparity_correction {
             None => [None; 3],
             Some(FixedCorrection::Two((a, q))) => [Some(a), Some(q), None],
             Some(FixedCorrection::Three((a, q, l))) => [Some(a), Some(q), Some(l)],
         };
-        c.calibration = Calibration::from_terms(
-            causes,
-            terms,
-            [
-                "disparity_correction offset",
-                "disparity_correction quadratic",
-                "disparity_correction linear",
-            ],
-        )
-        .map_err(PyValueError::new_err)?;
-        Ok(c)
+        if self.calibrate.is_some() || self.disparity_correction.is_some() {
+            c.calibration = Calibration::from_terms(
+                c.selfcal.candidates,
+                terms,
+                [
+                    "disparity_correction offset",
+                    "disparity_correction quadratic",
+                    "disparity_correction linear",
+                ],
+            )
+            .map_err(PyValueError::new_err)?;
+        }
+        c.estimator =
+            methods::configure(c.estimator.clone(), self.method.as_deref(), self.threshold)?;
+        Ok(rc)
     }
 
     /// The engine for a stereo `camera`, or for an RGB-D camera with the depth noise
@@ -231,10 +234,8 @@ impl OdometryConfig {
         camera: StereoCamera,
         rgbd: Option<RgbdNoise>,
     ) -> PyResult<swarmpose_odometry::Odometry> {
-        let estimator = methods::estimator(&self.method, self.threshold)?;
-        let mut builder = swarmpose_odometry::Odometry::builder(camera)
-            .config(self.engine_config()?)
-            .estimator(estimator);
+        let mut builder =
+            swarmpose_odometry::Odometry::builder(camera).config(self.run_config()?.odometry);
         if let Some(noise) = rgbd {
             if let Some(name) = self.stereo_only() {
                 return Err(PyValueError::new_err(format!(

@@ -42,7 +42,7 @@ def test_the_keywords_are_declared_once():
     """Keyword-only, with the command line's defaults; a read-only property each; the
     stubs' constructor and ``**options`` type name the same keywords."""
     names = keywords()
-    assert names[:3] == ["method", "threshold", "detector"] and len(names) == 12
+    assert names[:3] == ["method", "threshold", "detector"] and len(names) == 13
     params = inspect.signature(OdometryConfig).parameters.values()
     assert all(p.kind is inspect.Parameter.KEYWORD_ONLY for p in params)
     default = OdometryConfig()
@@ -50,7 +50,8 @@ def test_the_keywords_are_declared_once():
         assert getattr(default, p.name) == p.default, p.name
         with pytest.raises(AttributeError):
             setattr(default, p.name, p.default)
-    assert (default.method, default.detector, default.refine, default.seed) == ("pso", "orb", True, 0)
+    # None: the command line's default, or the configuration file's setting.
+    assert (default.method, default.detector, default.refine, default.seed) == (None,) * 4
     for call in (swarmpose.Odometry, swarmpose.Odometry.from_sequence, swarmpose.Odometry.rgbd,
                  swarmpose.odometry):
         sig = inspect.signature(call)
@@ -129,12 +130,13 @@ def test_repr_and_equality():
     config = OdometryConfig(method="svd", window=5, disparity_correction=(0.25, 0.0),
                             marginalise="finished")
     assert repr(config) == (
-        "OdometryConfig(method='svd', threshold=None, detector='orb', refine=True, "
-        "calibrate=None, disparity_correction=(0.25, 0.0), min_inliers=None, seed=0, "
-        "window=5, marginalise='finished', max_working_pixels=None, min_working_pixels=None)")
+        "OdometryConfig(method='svd', threshold=None, detector=None, refine=None, "
+        "calibrate=None, disparity_correction=(0.25, 0.0), min_inliers=None, seed=None, "
+        "window=5, marginalise='finished', max_working_pixels=None, min_working_pixels=None, "
+        "config_file=None)")
     assert config == eval(repr(config), {"OdometryConfig": OdometryConfig})
     assert config != OdometryConfig(method="svd", window=5)
-    assert OdometryConfig() == OdometryConfig(method="pso")
+    assert OdometryConfig(seed=0) == OdometryConfig(seed=0)
 
 
 @pytest.mark.parametrize("options, message", [

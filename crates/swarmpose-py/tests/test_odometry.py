@@ -332,3 +332,26 @@ def test_fixed_correction_out_of_range():
         swarmpose.Odometry(**KITTI_CAMERA, disparity_correction=(1e9, 0.0))
     with pytest.raises(ValueError, match="finite"):
         swarmpose.Odometry(**KITTI_CAMERA, disparity_correction=(0.0, float("nan")))
+
+
+def test_a_run_configuration_reruns_the_run(kitti_seq2, swarmpose_bin, tmp_path):
+    """The ``config.json`` a command-line run writes, given as ``config_file=``, gives
+    that run's trajectory and the same configuration text; keywords given beside it
+    replace its settings; a misspelt setting is refused, naming itself."""
+    out = tmp_path / "cli"
+    subprocess.run([str(swarmpose_bin), "odometry", str(kitti_seq2), "--out", str(out),
+                    "--quiet", "--window", "3", "--seed", "4", "--method", "msac",
+                    "--calibrate", "none"], check=True, capture_output=True)
+    cli = read_kitti(out / "trajectory.kitti.txt")
+    run = swarmpose.odometry(kitti_seq2, config_file=out / "config.json")
+    assert np.max(np.abs(run.poses - cli)) < 1e-12
+    assert run.config_json == (out / "config.json").read_text(encoding="utf-8")
+    saved = tmp_path / "python.json"
+    saved.write_text(run.config_json, encoding="utf-8")
+    again = swarmpose.odometry(kitti_seq2, config_file=saved, seed=5)
+    assert '"seed": 5' in again.config_json and '"method": "msac"' in again.config_json
+    assert np.max(np.abs(again.poses - run.poses)) > 0
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"odometry": {"windw": 3}}', encoding="utf-8")
+    with pytest.raises(ValueError, match="unknown field `windw`"):
+        swarmpose.odometry(kitti_seq2, config_file=bad)

@@ -23,6 +23,14 @@ pub enum RunError {
         /// What is wrong.
         message: String,
     },
+    /// A run configuration file that cannot be used (bad input).
+    #[error("{}configuration: {message}", if path.as_os_str().is_empty() { String::new() } else { format!("{}: ", path.display()) })]
+    Config {
+        /// The file (empty for a text that came from no file).
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
     /// An output file could not be written.
     #[error("{path}: cannot write: {message}")]
     Write {
@@ -52,7 +60,7 @@ impl RunError {
     pub fn is_input(&self) -> bool {
         match self {
             Self::AtFrame { source, .. } => source.is_input(),
-            Self::Engine(_) | Self::Dataset(_) | Self::Rgbd { .. } => true,
+            Self::Engine(_) | Self::Dataset(_) | Self::Rgbd { .. } | Self::Config { .. } => true,
             Self::Write { .. } | Self::Eval(_) => false,
         }
     }

@@ -7,6 +7,7 @@
 //! | what | module |
 //! |---|---|
 //! | loops that feed a sequence's frames to the engine, one at a time | [`batch`] |
+//! | the configuration of a run, written with every run and read back | [`config`] |
 //! | output rows and files (trajectory, per-frame log, covariances, summary) | [`output`] |
 //! | the plots of figure 17 | [`plots`] |
 //! | TUM RGB-D input | [`rgbd`] |
@@ -17,6 +18,7 @@
 #![warn(clippy::unwrap_used)]
 
 pub mod batch;
+pub mod config;
 pub mod error;
 pub mod output;
 pub mod plots;

@@ -103,7 +103,7 @@ fn self_calibrate(
     }
     let (_, selfcal) = args.stereo.calibration()?;
     let config = OdometryConfig {
-        detector: args.stereo.detector,
+        detector: args.stereo.detector(),
         calibration: Calibration::Auto,
         selfcal,
         ..OdometryConfig::default()
@@ -218,7 +218,7 @@ pub fn run(args: &CorrespondencesArgs) -> Result<(), CliError> {
     let a = seq.frame(i).map_err(dataset_error)?;
     let b = seq.frame(j).map_err(dataset_error)?;
     let rig = seq.calibration();
-    let m = match args.stereo.detector {
+    let m = match args.stereo.detector() {
         Detector::Orb => matches(&mut Frontend::orb(rig), correction, args, &a, &b)?,
         Detector::Surf => matches(&mut Frontend::surf(rig), correction, args, &a, &b)?,
     };
@@ -328,12 +328,12 @@ mod tests {
             inliers: None,
             circular_check: false,
             stereo: StereoOptions {
-                detector: Detector::Orb,
+                detector: Some(Detector::Orb),
                 disparity_offset: None,
                 disparity_quadratic: None,
                 disparity_linear: None,
-                calibrate: swarmpose_odometry::CorrectionModel::DEFAULT_CANDIDATES,
-                calibration_memory: swarmpose_odometry::selfcal::SelfCalConfig::default().memory_s,
+                calibrate: None,
+                calibration_memory: None,
             },
             no_covariance: false,
             self_calibrate: None,

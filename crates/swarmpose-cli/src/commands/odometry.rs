@@ -11,6 +11,7 @@ use std::path::PathBuf;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use nalgebra::Isometry3;
+use swarmpose_core::EstimatorConfig;
 use swarmpose_datasets::StereoSequence;
 use swarmpose_odometry::frontend::RgbdNoise;
 use swarmpose_odometry::window::Marginalisation;
@@ -21,6 +22,7 @@ use swarmpose_ros::convert::FrameNames;
 use swarmpose_ros::{BagInfo, StereoOptions as BagOptions, open_stereo};
 use swarmpose_runs::RunError;
 use swarmpose_runs::batch::{camera_of, run_rgbd_sequence, run_sequence, run_sequence_two_threads};
+use swarmpose_runs::config::{InputConfig, RunConfig};
 use swarmpose_runs::output::{
     COVARIANCE_HEADER, FRAMES_HEADER, Smoothed, Summary, calibration_json, covariance_row,
     frames_row, kitti_line, tum_line,
@@ -34,7 +36,7 @@ use super::odometry_output::{OutputDir, StreamFile};
 use super::odometry_split::SplitLog;
 use super::stereo_options::StereoOptions;
 use crate::error::{CliError, EXIT_NOT_USABLE};
-use crate::methods::{EstimatorOptions, Method, build};
+use crate::methods::{EstimatorOptions, Method, configure};
 use crate::signals::StopRequest;
 use crate::streams::{err, out, warn};
 
@@ -81,17 +83,23 @@ pub struct OdometryArgs {
     #[arg(value_name = "SEQUENCE_DIR")]
     pub sequence: Option<PathBuf>,
 
-    /// Estimator.
-    #[arg(long, value_enum, default_value_t = Method::Pso)]
-    pub method: Method,
+    /// Estimator [default: pso].
+    #[arg(long, value_enum)]
+    pub method: Option<Method>,
+
+    /// A run configuration (the config.json every run writes): its settings replace the
+    /// defaults, and the options given beside it replace its settings. The same file and
+    /// input rerun a run byte for byte.
+    #[arg(long, value_name = "FILE")]
+    pub config: Option<PathBuf>,
 
     /// Output directory (created if needed).
     #[arg(long, value_name = "DIR", default_value = "out/odometry")]
     pub out: PathBuf,
 
-    /// Seed of the estimator (frame k uses seed + k).
-    #[arg(long, value_name = "N", default_value_t = 0)]
-    pub seed: u64,
+    /// Seed of the estimator (frame k uses seed + k) [default: 0].
+    #[arg(long, value_name = "N")]
+    pub seed: Option<u64>,
 
     /// Keep the estimator's motion: no reprojection refinement (and no covariance).
     #[arg(long)]
@@ -101,40 +109,56 @@ pub struct OdometryArgs {
     /// window bundle adjustment; 0: frame to frame only; 2 is frame to frame again). A
     /// frame becomes a keyframe when its features moved beyond their noise since the last
     /// one or it lost most of that one's tracks.
-    #[arg(long, value_name = "K", default_value_t = swarmpose_odometry::window::WindowConfig::default().keyframes)]
-    pub window: usize,
+    #[arg(long, value_name = "K", help = with_default(
+        "Refine the last K keyframes and the feature tracks they share together (a sliding \
+         window bundle adjustment; 0: frame to frame only; 2 is frame to frame again)",
+        OdometryConfig::default().window.keyframes))]
+    pub window: Option<usize>,
 
     /// What happens to the oldest keyframe's information when it leaves the window: `off`
     /// (discarded: the next keyframe is held fixed at its estimate), `finished` (its pose
     /// and the tracks it sees that have ended are marginalised into a Gaussian prior on
     /// the other keyframes) or `all` (with every track it sees; those that go on begin a
     /// new point). See docs/window.md.
-    #[arg(long, value_name = "MODE", default_value = "off", value_parser = |s: &str| s.parse::<Marginalisation>())]
-    pub marginalise: Marginalisation,
+    #[arg(long, value_name = "MODE", value_parser = |s: &str| s.parse::<Marginalisation>(),
+          help = with_default(
+              "What happens to the oldest keyframe's information when it leaves the window: \
+               off, finished or all (docs/window.md)",
+              OdometryConfig::default().window.marginalise.name()))]
+    pub marginalise: Option<Marginalisation>,
 
     /// Fewest inliers for a motion to be accepted (at least 3).
-    #[arg(long, value_name = "N", default_value_t = OdometryConfig::default().min_inliers,
-          value_parser = min_inliers, allow_negative_numbers = true)]
-    pub min_inliers: usize,
+    #[arg(long, value_name = "N", value_parser = min_inliers, allow_negative_numbers = true,
+          help = with_default("Fewest inliers for a motion to be accepted (at least 3)",
+                              OdometryConfig::default().min_inliers))]
+    pub min_inliers: Option<usize>,
 
     /// Most pixels of a stereo image the engine works on: larger images are halved (2x2
     /// means) until they have at most this many (1920x1080 is halved once; the front end
     /// is made for cameras of about half a megapixel to a megapixel).
-    #[arg(long, value_name = "N", default_value_t = OdometryConfig::default().max_working_pixels,
-          value_parser = clap::value_parser!(usize))]
-    pub max_working_pixels: usize,
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(usize), help = with_default(
+        "Most pixels of a stereo image the engine works on: larger images are halved (2x2 \
+         means) until they have at most this many (1920x1080 is halved once)",
+        OdometryConfig::default().max_working_pixels))]
+    pub max_working_pixels: Option<usize>,
 
     /// Fewest pixels of a stereo image the engine works on: smaller images are doubled
     /// (bicubic) until they have at least this many (default 0: never; at most a quarter
     /// of --max-working-pixels, and at most 16777216). 250000 doubles 620x188 and 480x288: it helps some
     /// sequences and hurts others (RESULTS.md, "Other image sizes").
-    #[arg(long, value_name = "N", default_value_t = OdometryConfig::default().min_working_pixels,
-          value_parser = clap::value_parser!(usize))]
-    pub min_working_pixels: usize,
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(usize), help = with_default(
+        "Fewest pixels of a stereo image the engine works on: smaller images are doubled \
+         (bicubic) until they have at least this many (0: never; at most a quarter of \
+         --max-working-pixels, and at most 16777216). 250000 doubles 620x188 and 480x288: \
+         it helps some sequences and hurts others (RESULTS.md, \"Other image sizes\")",
+        OdometryConfig::default().min_working_pixels))]
+    pub min_working_pixels: Option<usize>,
 
-    /// Seconds between frames of a sequence without timestamps.
-    #[arg(long, value_name = "S", default_value_t = 0.1)]
-    pub frame_period: f64,
+    /// Seconds between frames of a sequence without timestamps [default: 0.1].
+    #[arg(long, value_name = "S", help = with_default(
+        "Seconds between frames of a sequence without timestamps",
+        InputConfig::default().frame_period_s))]
+    pub frame_period: Option<f64>,
 
     /// No progress bar.
     #[arg(long)]
@@ -142,9 +166,12 @@ pub struct OdometryArgs {
 
     /// Threads: 1, or 2 to load and run the front end of the next frame while the back
     /// end works on this one (the same trajectory; stereo sequences only).
-    #[arg(long, value_name = "N", default_value_t = 1,
-          value_parser = clap::value_parser!(u8).range(1..=2))]
-    pub threads: u8,
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u8).range(1..=2),
+          help = with_default(
+              "Threads: 1, or 2 to load and run the front end of the next frame while the \
+               back end works on this one (the same trajectory; stereo sequences only)",
+              RunConfig::default().threads))]
+    pub threads: Option<u8>,
 
     /// Check each pair's covariance on two spatially disjoint halves of its matches
     /// (split_check.csv; two more refinements a frame).
@@ -161,12 +188,15 @@ pub struct OdometryArgs {
 
     /// ROS 2 bag: largest difference of the header stamps of a left and a right image
     /// paired into a frame, milliseconds (0: equal stamps).
-    #[arg(long, value_name = "MS", default_value_t = 0.0)]
-    pub stamp_tolerance: f64,
+    #[arg(long, value_name = "MS", help = with_default(
+        "ROS 2 bag: largest difference of the header stamps of a left and a right image \
+         paired into a frame, milliseconds (0: equal stamps)",
+        InputConfig::default().stamp_tolerance_ms))]
+    pub stamp_tolerance: Option<f64>,
 
-    /// odometry.mcap: the fixed frame of the poses.
-    #[arg(long, value_name = "NAME", default_value = "odom")]
-    pub odom_frame: String,
+    /// odometry.mcap: the fixed frame of the poses [default: odom].
+    #[arg(long, value_name = "NAME")]
+    pub odom_frame: Option<String>,
 
     /// odometry.mcap: the camera frame (default: the images' frame_id from a bag, else
     /// camera_optical).
@@ -232,28 +262,61 @@ struct Track {
     times: swarmpose_odometry::StageTimes,
 }
 
-/// The engine's configuration from the arguments.
-fn config(args: &OdometryArgs) -> Result<OdometryConfig, CliError> {
-    if !(args.frame_period.is_finite() && args.frame_period > 0.0) {
-        return Err(CliError::usage(
-            "--frame-period must be a positive number of seconds",
-        ));
+/// `text` with its default value noted, as clap notes it.
+fn with_default(text: &str, default: impl std::fmt::Display) -> String {
+    format!("{text} [default: {default}]")
+}
+
+/// The run's configuration: the defaults, or the `--config` file, with the options given
+/// applied over them.
+///
+/// # Errors
+/// An unreadable or invalid configuration file, or options that do not apply.
+pub fn run_config(args: &OdometryArgs) -> Result<RunConfig, CliError> {
+    let mut rc = match &args.config {
+        Some(path) => RunConfig::read(path).map_err(|e| CliError::usage(e.to_string()))?,
+        None => RunConfig::default(),
+    };
+    let o = &mut rc.odometry;
+    args.stereo.apply(o)?;
+    let base = match args.method {
+        Some(m) if m.core() != o.estimator.method() => EstimatorConfig::of(m.core()),
+        _ => o.estimator.clone(),
+    };
+    o.estimator = configure(base, &args.options)?;
+    o.refine &= !args.no_refine;
+    o.split_check |= args.split_check;
+    let set = |field: &mut usize, v: Option<usize>| *field = v.unwrap_or(*field);
+    set(&mut o.min_inliers, args.min_inliers);
+    set(&mut o.window.keyframes, args.window);
+    set(&mut o.max_working_pixels, args.max_working_pixels);
+    set(&mut o.min_working_pixels, args.min_working_pixels);
+    o.seed = args.seed.unwrap_or(o.seed);
+    o.window.marginalise = args.marginalise.unwrap_or(o.window.marginalise);
+    let input = &mut rc.input;
+    input.frame_period_s = args.frame_period.unwrap_or(input.frame_period_s);
+    input.stamp_tolerance_ms = args.stamp_tolerance.unwrap_or(input.stamp_tolerance_ms);
+    if args.left.is_some() || args.right.is_some() {
+        input.left_topic.clone_from(&args.left);
+        input.right_topic.clone_from(&args.right);
     }
-    let (calibration, selfcal) = args.stereo.calibration()?;
-    Ok(OdometryConfig {
-        detector: args.stereo.detector,
-        refine: !args.no_refine,
-        calibration,
-        min_inliers: args.min_inliers,
-        seed: args.seed,
-        selfcal,
-        max_working_pixels: args.max_working_pixels,
-        min_working_pixels: args.min_working_pixels,
-        split_check: args.split_check,
-        ..OdometryConfig::default()
+    if let Some(f) = &args.odom_frame {
+        rc.output.odom_frame.clone_from(f);
     }
-    .with_window(args.window)
-    .with_marginalisation(args.marginalise))
+    if args.camera_frame.is_some() {
+        rc.output.camera_frame.clone_from(&args.camera_frame);
+    }
+    rc.threads = args.threads.unwrap_or(rc.threads);
+    rc.check().map_err(|m| {
+        CliError::usage(match m.strip_prefix("input.frame_period_s") {
+            Some(rest) => format!("--frame-period{rest}"),
+            None => match m.strip_prefix("input.stamp_tolerance_ms") {
+                Some(rest) => format!("--stamp-tolerance{rest}"),
+                None => m,
+            },
+        })
+    })?;
+    Ok(rc)
 }
 
 /// Runs `odometry`.
@@ -262,13 +325,8 @@ fn config(args: &OdometryArgs) -> Result<OdometryConfig, CliError> {
 /// Bad options or sequence (exit 2), unwritable outputs (exit 1), a result that is not
 /// usable (exit 3).
 pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
-    let config = config(args)?;
-    let estimator = build(args.method, &args.options)?;
-    if !(args.stamp_tolerance.is_finite() && args.stamp_tolerance >= 0.0) {
-        return Err(CliError::usage(
-            "--stamp-tolerance must be a number of milliseconds, 0 or more",
-        ));
-    }
+    let rc = run_config(args)?;
+    let config = rc.odometry.clone();
     let mut bag: Option<BagInfo> = None;
     let source = match &args.sequence {
         None => {
@@ -282,7 +340,7 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
             Source::Stereo(Box::new(seq), "built-in synthetic sequence".into(), gt)
         }
         Some(dir) if swarmpose_runs::rgbd::detect(dir) => {
-            if args.threads != 1 {
+            if rc.threads != 1 {
                 return Err(CliError::usage(
                     "--threads 2 is for stereo sequences; a TUM RGB-D directory runs on one thread",
                 ));
@@ -292,9 +350,9 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
         }
         Some(dir) => {
             let opts = BagOptions {
-                left: args.left.clone(),
-                right: args.right.clone(),
-                stamp_tolerance_ns: (args.stamp_tolerance * 1e6).round() as i64,
+                left: rc.input.left_topic.clone(),
+                right: rc.input.right_topic.clone(),
+                stamp_tolerance_ns: (rc.input.stamp_tolerance_ms * 1e6).round() as i64,
             };
             let opened = open_stereo(dir, &opts).map_err(|e| CliError::usage(e.to_string()))?;
             bag = opened.bag;
@@ -319,17 +377,22 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
     }
     let mut odometry = match &source {
         Source::Stereo(seq, ..) => Odometry::builder(camera_of(seq.as_ref()))
-            .config(config)
-            .estimator(estimator)
+            .config(config.clone())
             .build(),
         Source::Rgbd(seq, _) => Odometry::builder(seq.camera().map_err(odometry_error)?)
             .config(config)
-            .estimator(estimator)
             .rgbd(RgbdNoise::default())
             .build(),
     }
     .map_err(odometry_error)?;
     let dir = OutputDir::prepare(&args.out)?;
+    // The settings first: a run that stops early still says how it was made.
+    let settings = rc.to_json().map_err(|e| CliError::usage(e.to_string()))?;
+    dir.write(swarmpose_runs::config::FILE_NAME, settings.as_bytes())?;
+    err(&format!(
+        "swarmpose: settings in {} (rerun with --config)",
+        dir.path().join(swarmpose_runs::config::FILE_NAME).display()
+    ));
     let mut kitti = StreamFile::create(&dir, "trajectory.kitti.txt", None)?;
     let mut tum = StreamFile::create(&dir, "trajectory.tum.txt", None)?;
     let mut frames = StreamFile::create(&dir, "frames.csv", Some(FRAMES_HEADER))?;
@@ -339,8 +402,8 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
         .then(|| SplitLog::create(&dir))
         .transpose()?;
     let names = FrameNames {
-        odom: args.odom_frame.clone(),
-        camera: args.camera_frame.clone().unwrap_or_else(|| {
+        odom: rc.output.odom_frame.clone(),
+        camera: rc.output.camera_frame.clone().unwrap_or_else(|| {
             bag.as_ref()
                 .map(|b| b.frame_id.clone())
                 .filter(|f| !f.is_empty())
@@ -393,16 +456,16 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
         ControlFlow::Continue(())
     };
     let ended = match &source {
-        Source::Stereo(seq, ..) if args.threads == 2 => run_sequence_two_threads(
+        Source::Stereo(seq, ..) if rc.threads == 2 => run_sequence_two_threads(
             seq.as_ref(),
             &mut odometry,
-            args.frame_period,
+            rc.input.frame_period_s,
             &mut on_frame,
         ),
         Source::Stereo(seq, ..) => run_sequence(
             seq.as_ref(),
             &mut odometry,
-            args.frame_period,
+            rc.input.frame_period_s,
             &mut on_frame,
         ),
         Source::Rgbd(seq, _) => run_rgbd_sequence(seq, &mut odometry, &mut on_frame),

@@ -22,7 +22,8 @@ pub const LOCK: &str = ".swarmpose-lock";
 
 /// Every file a run may write in its folder: what [`OutputDir::prepare`] removes from a
 /// folder an earlier version wrote without a manifest, and the only names a run records.
-pub const OUTPUT_NAMES: [&str; 15] = [
+pub const OUTPUT_NAMES: [&str; 16] = [
+    swarmpose_runs::config::FILE_NAME,
     "trajectory.kitti.txt",
     "trajectory.tum.txt",
     "frames.csv",

@@ -31,7 +31,7 @@ pub use msac::{MsacConfig, MsacEstimator};
 pub use pso_paper::{PsoPaperConfig, PsoPaperEstimator};
 pub use pso_robust::{PsoEstimator, PsoEstimatorConfig, Threshold};
 pub use ray_noise::RangeNoise;
-pub use registry::Method;
+pub use registry::{EstimatorConfig, Method};
 pub use svd::SvdEstimator;
 pub use wls::WlsEstimator;
 

@@ -16,6 +16,11 @@ use crate::rng::SeededRng;
 
 /// Settings of [`MsacEstimator`]. Defaults in brackets.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(default, deny_unknown_fields)
+)]
 pub struct MsacConfig {
     /// Inlier threshold δ on `|dst - (R src + t)|`, metres [0.1]. About `3.4 σ` for
     /// isotropic Gaussian noise of σ per axis (99 % of inliers).

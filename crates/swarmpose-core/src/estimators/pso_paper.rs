@@ -16,6 +16,11 @@ use crate::rng::SeededRng;
 
 /// Settings of [`PsoPaperEstimator`]. Defaults in brackets.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(default, deny_unknown_fields)
+)]
 pub struct PsoPaperConfig {
     /// Support threshold δ of eq. (15), metres [0.1]. The paper compares the squared
     /// residual with δ; here δ is a distance: a feature supports `q` when

@@ -61,30 +61,81 @@ impl Method {
     /// threshold δ (metres; `None` keeps the default: automatic for `pso`).
     #[must_use]
     pub fn build(self, threshold_m: Option<f64>) -> Box<dyn Estimator> {
+        let mut config = EstimatorConfig::of(self);
+        if let Some(d) = threshold_m {
+            config = match config {
+                EstimatorConfig::Pso(c) => EstimatorConfig::Pso(c.with_threshold(d)),
+                EstimatorConfig::PsoPaper(c) => EstimatorConfig::PsoPaper(c.with_threshold(d)),
+                EstimatorConfig::Msac(c) => EstimatorConfig::Msac(c.with_threshold(d)),
+                other => other,
+            };
+        }
+        config.build()
+    }
+}
+
+/// An estimator with all its settings: what a run configuration records. In a
+/// configuration file, `{"method": "pso", ...the settings of PsoEstimatorConfig}`.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(tag = "method", rename_all = "kebab-case")
+)]
+pub enum EstimatorConfig {
+    /// [`Method::Pso`].
+    Pso(PsoEstimatorConfig),
+    /// [`Method::PsoPaper`].
+    PsoPaper(PsoPaperConfig),
+    /// [`Method::Svd`] (no settings).
+    Svd,
+    /// [`Method::Msac`].
+    Msac(MsacConfig),
+    /// [`Method::Wls`] (no settings).
+    Wls,
+}
+
+impl Default for EstimatorConfig {
+    /// The robust PSO with its default settings.
+    fn default() -> Self {
+        Self::of(Method::Pso)
+    }
+}
+
+impl EstimatorConfig {
+    /// `method` with its default settings.
+    #[must_use]
+    pub fn of(method: Method) -> Self {
+        match method {
+            Method::Pso => Self::Pso(PsoEstimatorConfig::default()),
+            Method::PsoPaper => Self::PsoPaper(PsoPaperConfig::default()),
+            Method::Svd => Self::Svd,
+            Method::Msac => Self::Msac(MsacConfig::default()),
+            Method::Wls => Self::Wls,
+        }
+    }
+
+    /// The method.
+    #[must_use]
+    pub fn method(&self) -> Method {
         match self {
-            Method::Pso => {
-                let mut c = PsoEstimatorConfig::default();
-                if let Some(d) = threshold_m {
-                    c = c.with_threshold(d);
-                }
-                Box::new(PsoEstimator::new(c))
-            }
-            Method::PsoPaper => {
-                let mut c = PsoPaperConfig::default();
-                if let Some(d) = threshold_m {
-                    c = c.with_threshold(d);
-                }
-                Box::new(PsoPaperEstimator::new(c))
-            }
-            Method::Svd => Box::new(SvdEstimator),
-            Method::Msac => {
-                let mut c = MsacConfig::default();
-                if let Some(d) = threshold_m {
-                    c = c.with_threshold(d);
-                }
-                Box::new(MsacEstimator::new(c))
-            }
-            Method::Wls => Box::new(WlsEstimator),
+            Self::Pso(_) => Method::Pso,
+            Self::PsoPaper(_) => Method::PsoPaper,
+            Self::Svd => Method::Svd,
+            Self::Msac(_) => Method::Msac,
+            Self::Wls => Method::Wls,
+        }
+    }
+
+    /// The estimator.
+    #[must_use]
+    pub fn build(&self) -> Box<dyn Estimator> {
+        match self {
+            Self::Pso(c) => Box::new(PsoEstimator::new(c.clone())),
+            Self::PsoPaper(c) => Box::new(PsoPaperEstimator::new(c.clone())),
+            Self::Svd => Box::new(SvdEstimator),
+            Self::Msac(c) => Box::new(MsacEstimator::new(c.clone())),
+            Self::Wls => Box::new(WlsEstimator),
         }
     }
 }
@@ -99,6 +150,7 @@ mod tests {
             assert_eq!(Method::from_name(m.name()), Some(m));
             assert_eq!(m.build(None).name(), m.name());
             assert_eq!(m.build(Some(0.1)).name(), m.name());
+            assert_eq!(EstimatorConfig::of(m).method(), m);
         }
         assert_eq!(Method::from_name("nope"), None);
     }

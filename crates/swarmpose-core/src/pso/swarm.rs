@@ -12,6 +12,11 @@ pub const MAX_SWARM_SIZE: usize = 1_000_000;
 
 /// Settings of a [`ParticleSwarm`]. Defaults in brackets.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(default, deny_unknown_fields)
+)]
 pub struct PsoConfig {
     /// Number of particles \[32\].
     pub swarm_size: usize,

@@ -33,6 +33,11 @@ use model::{Linearized, Matrix3xK, Parts, StereoModel, StereoObservation};
 
 /// Settings of the refinement.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(default, deny_unknown_fields)
+)]
 pub struct RefineConfig {
     /// Most Levenberg-Marquardt iterations per round (default 10).
     pub max_iterations: usize,

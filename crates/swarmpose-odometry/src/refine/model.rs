@@ -44,6 +44,11 @@ pub struct StereoObservation {
 /// `disparity_px` for `d` (the disparity is refined on an image window, so it is more
 /// precise than the keypoint position, whose error is common to both images).
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(deny_unknown_fields)
+)]
 pub struct PixelNoise {
     /// Standard deviation of `u` and `v`, pixels.
     pub position_px: f64,

@@ -1,7 +1,14 @@
 //! The causes of a disparity error that self-calibration may correct, as a set.
 
 /// A set of causes of a disparity error, each a term of the correction (bit flags).
+///
+/// In a configuration file it is its [`CorrectionModel::name`] (`"principal-point+yaw"`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(into = "String", try_from = "String")
+)]
 pub struct CorrectionModel(pub u8);
 
 impl CorrectionModel {
@@ -97,6 +104,20 @@ impl CorrectionModel {
                     )
                 })
         })
+    }
+}
+
+impl From<CorrectionModel> for String {
+    fn from(m: CorrectionModel) -> String {
+        m.name()
+    }
+}
+
+impl TryFrom<String> for CorrectionModel {
+    type Error = String;
+
+    fn try_from(text: String) -> Result<Self, String> {
+        Self::parse(&text)
     }
 }
 

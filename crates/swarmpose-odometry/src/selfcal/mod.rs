@@ -69,6 +69,11 @@ pub(crate) const K: usize = crate::refine::model::CALIBRATION_TERMS;
 
 /// Settings of the self-calibration.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(default, deny_unknown_fields)
+)]
 pub struct SelfCalConfig {
     /// How much lower, in χ² units, the held-out score must become for a term to be
     /// added to the correction (default 10; the false-alarm rate on exact rigs is
@@ -99,6 +104,7 @@ pub struct SelfCalConfig {
     /// the estimate can reach the correction its own evidence confirms. In seconds, so
     /// that the memory does not depend on the frame rate. RESULTS.md gives the effect
     /// of other values on every sequence.
+    #[cfg_attr(feature = "serde", serde(with = "crate::config_serde"))]
     pub memory_s: f64,
     /// How many disparity standard deviations a pair's matches must spread about their
     /// best plane in `(u, v, d)` for the pair to add rigidity evidence (default

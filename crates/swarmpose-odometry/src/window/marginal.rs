@@ -50,6 +50,11 @@ use crate::refine::model::{CALIBRATION_TERMS, StereoModel};
 
 /// What happens to the oldest keyframe's information when it leaves the window.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(rename_all = "snake_case")
+)]
 pub enum Marginalisation {
     /// Discarded (the default): the next keyframe becomes the fixed one at its estimate.
     #[default]

@@ -60,6 +60,11 @@ pub use marginal::Marginalisation;
 
 /// Settings of the sliding window.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(default, deny_unknown_fields)
+)]
 pub struct WindowConfig {
     /// Keyframes in the window, K (default 10; 0: no window, frame to frame only). 2 is
     /// the frame-to-frame refinement again; from 3 on, tracks span several frames. The

@@ -57,9 +57,9 @@ class Registration:
     @property
     def runner_up(self) -> Optional[RunnerUp]: ...
     @property
-    def method(self) -> str: ...
+    def method(self) -> Optional[str]: ...
     @property
-    def seed(self) -> int: ...
+    def seed(self) -> Optional[int]: ...
     @property
     def n_correspondences(self) -> int: ...
     @property
@@ -157,29 +157,30 @@ class OdometryConfig:
     def __init__(
         self,
         *,
-        method: str = "pso",
+        method: Optional[str] = None,
         threshold: Optional[float] = None,
-        detector: str = "orb",
-        refine: bool = True,
+        detector: Optional[str] = None,
+        refine: Optional[bool] = None,
         calibrate: Optional[str] = None,
         disparity_correction: Optional[Union[Tuple[float, float], Tuple[float, float, float]]] = None,
         min_inliers: Optional[int] = None,
-        seed: int = 0,
+        seed: Optional[int] = None,
         window: Optional[int] = None,
         marginalise: Optional[str] = None,
         max_working_pixels: Optional[int] = None,
         min_working_pixels: Optional[int] = None,
+        config_file: Optional[_Path] = None,
     ) -> None: ...
     def __eq__(self, other: object) -> bool: ...
     __hash__: ClassVar[None]  # type: ignore[assignment]
     @property
-    def method(self) -> str: ...
+    def method(self) -> Optional[str]: ...
     @property
     def threshold(self) -> Optional[float]: ...
     @property
-    def detector(self) -> str: ...
+    def detector(self) -> Optional[str]: ...
     @property
-    def refine(self) -> bool: ...
+    def refine(self) -> Optional[bool]: ...
     @property
     def calibrate(self) -> Optional[str]: ...
     @property
@@ -187,7 +188,7 @@ class OdometryConfig:
     @property
     def min_inliers(self) -> Optional[int]: ...
     @property
-    def seed(self) -> int: ...
+    def seed(self) -> Optional[int]: ...
     @property
     def window(self) -> Optional[int]: ...
     @property
@@ -196,24 +197,27 @@ class OdometryConfig:
     def max_working_pixels(self) -> Optional[int]: ...
     @property
     def min_working_pixels(self) -> Optional[int]: ...
+    @property
+    def config_file(self) -> Optional["os.PathLike[str]"]: ...
 
 # OdometryConfig's keywords as the entry points' ``**options`` (all optional); the
 # tests check that they are the constructor's.
 _OdometryOptions = TypedDict(
     "_OdometryOptions",
     {
-        "method": str,
+        "method": Optional[str],
         "threshold": Optional[float],
-        "detector": str,
-        "refine": bool,
+        "detector": Optional[str],
+        "refine": Optional[bool],
         "calibrate": Optional[str],
         "disparity_correction": Optional[Union[Tuple[float, float], Tuple[float, float, float]]],
         "min_inliers": Optional[int],
-        "seed": int,
+        "seed": Optional[int],
         "window": Optional[int],
         "marginalise": Optional[str],
         "max_working_pixels": Optional[int],
         "min_working_pixels": Optional[int],
+        "config_file": Optional[_Path],
     },
     total=False,
 )
@@ -272,9 +276,9 @@ class Odometry:
     def working_camera(self) -> Dict[str, float]:
         """``camera`` halved above ``max_working_pixels`` pixels, doubled below ``min_working_pixels``."""
     @property
-    def detector(self) -> str: ...
+    def detector(self) -> Optional[str]: ...
     @property
-    def method(self) -> str: ...
+    def method(self) -> Optional[str]: ...
     @property
     def calibration(self) -> Dict[str, Any]: ...
     @property
@@ -282,6 +286,10 @@ class Odometry:
 
 class OdometryRun:
     """Every frame of a ``swarmpose.odometry`` run."""
+    @property
+    def config_json(self) -> str:
+        """The run's configuration as a configuration file's text (``config.json``):
+        saved and given as ``config_file=``, it reruns this run exactly."""
     @property
     def poses(self) -> npt.NDArray[np.float64]: ...
     @property
@@ -302,7 +310,7 @@ class OdometryRun:
 def odometry(
     sequence_dir: _Path,
     *,
-    frame_period: float = 0.1,
+    frame_period: Optional[float] = None,
     config: Optional[OdometryConfig] = None,
     **options: Unpack[_OdometryOptions],
 ) -> OdometryRun:

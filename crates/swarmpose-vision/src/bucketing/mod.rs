@@ -5,6 +5,11 @@ use crate::features::Keypoint;
 
 /// Grid and quota of [`bucket_indices`].
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(default, deny_unknown_fields)
+)]
 pub struct BucketConfig {
     /// Cell width, pixels.
     pub cell_width: usize,

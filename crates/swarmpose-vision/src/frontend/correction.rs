@@ -46,6 +46,11 @@ pub const CORRECTION_TERMS: usize = 5;
 /// `ψ` (`offset` and `quadratic`, both `−f ψ`), a focal length (`linear_x`), a roll
 /// (`linear_y`), a pitch (`cross_xy`). The default is no correction.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(default, deny_unknown_fields)
+)]
 pub struct DisparityCorrection {
     /// Constant term, pixels (principal point plus yaw).
     pub offset_px: f64,

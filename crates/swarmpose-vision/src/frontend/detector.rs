@@ -5,6 +5,11 @@ use std::str::FromStr;
 
 /// A detector and descriptor of the front end.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(rename_all = "snake_case")
+)]
 pub enum Detector {
     /// FAST corners with upright BRIEF descriptors ([`super::Frontend::orb`]): fast.
     #[default]

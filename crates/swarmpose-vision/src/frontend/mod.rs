@@ -8,19 +8,19 @@
 mod correction;
 mod detector;
 mod refine;
+mod settings;
 
 pub use correction::{CORRECTION_TERMS, DisparityCorrection};
 pub use detector::{Detector, UnknownDetector};
 pub use refine::{CHI2_3_99, refine_stereo, refine_weighted};
+pub use settings::{OrbFrontendConfig, SurfFrontendConfig};
 
 use nalgebra::{Matrix3, Point3};
 use swarmpose_core::{Correspondences, PoseError};
 
 use crate::bucketing::{BucketConfig, bucket_indices};
 use crate::features::{Descriptor, FeatureExtractor, Features, GrayView, Keypoint};
-use crate::orb::{OrbConfig, OrbExtractor};
 use crate::stereo::{RectifiedStereo, StereoConfig, match_stereo};
-use crate::surf::{Surf, SurfConfig};
 use crate::temporal::{TemporalConfig, circular_check, mutual_matches};
 
 /// The triangulated features of one stereo frame, index-aligned: feature `k` is seen at
@@ -160,78 +160,7 @@ pub struct Frontend<E> {
     pub bucketing: Option<BucketConfig>,
 }
 
-impl Frontend<OrbExtractor> {
-    /// The fast binary front end, tuned on KITTI: upright BRIEF (a car-mounted camera
-    /// does not roll, and steering the pattern costs distinctiveness), FAST threshold
-    /// 12 with 20 features per 48-pixel cell on the left, every FAST-10 corner on the
-    /// right, frame-to-frame search within 150 pixels.
-    #[must_use]
-    pub fn orb(rig: RectifiedStereo) -> Self {
-        let extractor = OrbExtractor::new(OrbConfig {
-            fast_threshold: 12,
-            bucketing: Some(BucketConfig {
-                cell_width: 48,
-                cell_height: 48,
-                per_cell: 20,
-            }),
-            max_features: 4000,
-            oriented: false,
-        });
-        let mut right = extractor.clone();
-        right.config.fast_threshold = 10;
-        right.config.bucketing = None;
-        right.config.max_features = usize::MAX;
-        Self {
-            extractor,
-            right_extractor: Some(right),
-            rig,
-            stereo: StereoConfig::default(),
-            temporal: TemporalConfig {
-                max_displacement_px: Some(150.0),
-                ..TemporalConfig::default()
-            },
-            bucketing: None,
-        }
-    }
-}
-
-impl Frontend<Surf> {
-    /// The SURF front end: upright SURF configured for odometry
-    /// ([`SurfConfig::odometry`]: threshold 0.0004, finest-layer maxima, no octave
-    /// smoothing) with the matching and bucketing of [`Frontend::float_descriptor`].
-    /// With the default [`SurfConfig`] (threshold 0.0008, tuned for repeatability under
-    /// rotation and scale) the bucketed left images keep a third fewer features and 8
-    /// of the 50 kitti_vo_seq2 pairs fall back to constant velocity; see the SURF module
-    /// documentation.
-    #[must_use]
-    pub fn surf(rig: RectifiedStereo) -> Self {
-        Self::float_descriptor(Surf::new(SurfConfig::odometry()), rig)
-    }
-}
-
 impl<E: FeatureExtractor> Frontend<E> {
-    /// A front end for a real-valued descriptor (SURF): Euclidean distance limits
-    /// suited to unit-length descriptors, a stricter ratio, and bucketing.
-    #[must_use]
-    pub fn float_descriptor(extractor: E, rig: RectifiedStereo) -> Self {
-        Self {
-            extractor,
-            right_extractor: None,
-            rig,
-            stereo: StereoConfig {
-                max_distance: 0.35,
-                ratio: 0.85,
-                ..StereoConfig::default()
-            },
-            temporal: TemporalConfig {
-                max_distance: 0.4,
-                ratio: 0.85,
-                ..TemporalConfig::default()
-            },
-            bucketing: Some(BucketConfig::default()),
-        }
-    }
-
     /// Extracts (and buckets) the features of one left image.
     #[must_use]
     pub fn extract(&self, image: GrayView<'_>) -> Features<E::Descriptor> {

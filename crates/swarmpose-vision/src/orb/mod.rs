@@ -22,6 +22,11 @@ pub const ORIENTATION_RADIUS: usize = 15;
 
 /// Settings of [`OrbExtractor`].
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(default, deny_unknown_fields)
+)]
 pub struct OrbConfig {
     /// FAST intensity threshold, gray levels (default 20).
     pub fast_threshold: u8,

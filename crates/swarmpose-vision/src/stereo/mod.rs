@@ -16,6 +16,11 @@ use subpixel::{refine_disparity, refine_disparity_lk, row_offset};
 
 /// Settings of [`match_stereo`].
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(default, deny_unknown_fields)
+)]
 pub struct StereoConfig {
     /// Largest row difference between a left and a right keypoint, pixels (default 1.0).
     pub row_tolerance_px: f32,
@@ -70,24 +75,29 @@ pub struct StereoConfig {
     pub row_offset_stride: usize,
 }
 
+impl StereoConfig {
+    /// The default settings, usable in constants.
+    pub const DEFAULT: Self = Self {
+        row_tolerance_px: 1.0,
+        min_disparity_px: 1.0,
+        max_disparity_px: 160.0,
+        max_distance: 50.0,
+        ratio: 0.9,
+        left_right_check: true,
+        subpixel_radius: 3,
+        gauss_newton: true,
+        vertical_alignment: true,
+        min_point_disparity_px: 5.0,
+        disparity_offset_px: 0.0,
+        disparity_sigma_px: 0.25,
+        position_sigma_px: 0.5,
+        row_offset_stride: 4,
+    };
+}
+
 impl Default for StereoConfig {
     fn default() -> Self {
-        Self {
-            row_tolerance_px: 1.0,
-            min_disparity_px: 1.0,
-            max_disparity_px: 160.0,
-            max_distance: 50.0,
-            ratio: 0.9,
-            left_right_check: true,
-            subpixel_radius: 3,
-            gauss_newton: true,
-            vertical_alignment: true,
-            min_point_disparity_px: 5.0,
-            disparity_offset_px: 0.0,
-            disparity_sigma_px: 0.25,
-            position_sigma_px: 0.5,
-            row_offset_stride: 4,
-        }
+        Self::DEFAULT
     }
 }
 

@@ -90,6 +90,11 @@ use integral::IntegralImage;
 
 /// Parameters of [`Surf`].
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(default, deny_unknown_fields)
+)]
 pub struct SurfConfig {
     /// Minimum blob response `det(H_approx) = Dxx·Dyy − (0.9·Dxy)²`, with the filter
     /// responses normalised by the filter area and intensities scaled to `[0, 1]`.

@@ -10,6 +10,11 @@ use crate::features::{Descriptor, Keypoint};
 
 /// Settings of [`mutual_matches`].
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(default, deny_unknown_fields)
+)]
 pub struct TemporalConfig {
     /// Largest descriptor distance of a match (default 60).
     pub max_distance: f32,
@@ -23,14 +28,19 @@ pub struct TemporalConfig {
     pub circular_check: bool,
 }
 
+impl TemporalConfig {
+    /// The default settings, usable in constants.
+    pub const DEFAULT: Self = Self {
+        max_distance: 60.0,
+        ratio: 0.9,
+        max_displacement_px: Some(250.0),
+        circular_check: false,
+    };
+}
+
 impl Default for TemporalConfig {
     fn default() -> Self {
-        Self {
-            max_distance: 60.0,
-            ratio: 0.9,
-            max_displacement_px: Some(250.0),
-            circular_check: false,
-        }
+        Self::DEFAULT
     }
 }
 

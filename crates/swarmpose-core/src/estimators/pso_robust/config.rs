@@ -7,6 +7,11 @@ use crate::pso::{MAX_SWARM_SIZE, PsoConfig};
 
 /// How `pso` chooses its inlier threshold when the data carry no per-point noise.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(rename_all = "snake_case")
+)]
 pub enum Threshold {
     /// A fixed δ, metres.
     Fixed(f64),
@@ -25,6 +30,11 @@ impl std::fmt::Display for Threshold {
 
 /// Settings of [`super::PsoEstimator`]. Defaults in brackets.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(default, deny_unknown_fields)
+)]
 pub struct PsoEstimatorConfig {
     /// Inlier threshold δ on `|dst - (R src + t)|` [`Threshold::Auto`]. A fixed δ of about
     /// `3.4 σ` suits isotropic Gaussian noise of σ per axis. Ignored when the data carry a
