@@ -4,7 +4,6 @@
 //! error (eq. 20 of the relative rotations) and translation error (RPE, 1 frame).
 
 use std::path::Path;
-use std::sync::Once;
 
 use image::codecs::png::{CompressionType, FilterType, PngEncoder};
 use image::{ExtendedColorType, ImageEncoder};
@@ -17,20 +16,9 @@ use crate::error::RunError;
 
 /// DejaVu Sans, the copy `swarmpose-sim` ships (Bitstream Vera license, see
 /// `crates/swarmpose-sim/assets/DejaVuSans-LICENSE.txt`).
-static FONT: &[u8] = include_bytes!("../../swarmpose-sim/assets/DejaVuSans.ttf");
-const FAMILY: &str = "sans-serif";
+use swarmpose_sim::plots::font::{FAMILY, register_font};
 const EST: RGBColor = RGBColor(214, 39, 40);
 const GT: RGBColor = RGBColor(31, 119, 180);
-
-fn register_font() {
-    static ONCE: Once = Once::new();
-    ONCE.call_once(|| {
-        for style in [FontStyle::Normal, FontStyle::Bold] {
-            // A second registration of the family (by swarmpose-sim) is harmless.
-            let _ = plotters::style::register_font(FAMILY, style, FONT);
-        }
-    });
-}
 
 /// The estimated trajectory to draw.
 #[derive(Debug, Clone, Copy)]
@@ -222,7 +210,8 @@ pub fn render_plots(
     gt: Option<&[Isometry3<f64>]>,
     evaluation: Option<&Evaluation>,
 ) -> Result<Vec<(&'static str, Vec<u8>)>, RunError> {
-    register_font();
+    // Without the font the labels are missing; the figure is still drawn.
+    let _ = register_font();
     let mut out = Vec::new();
     let size = (1000u32, 1000u32);
     let png = Path::new("trajectory.png");

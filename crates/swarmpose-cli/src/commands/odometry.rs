@@ -389,10 +389,12 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
     // The settings first: a run that stops early still says how it was made.
     let settings = rc.to_json().map_err(|e| CliError::usage(e.to_string()))?;
     dir.write(swarmpose_runs::config::FILE_NAME, settings.as_bytes())?;
-    err(&format!(
-        "swarmpose: settings in {} (rerun with --config)",
-        dir.path().join(swarmpose_runs::config::FILE_NAME).display()
-    ));
+    if !args.quiet {
+        err(&format!(
+            "swarmpose: settings in {} (rerun with --config)",
+            dir.path().join(swarmpose_runs::config::FILE_NAME).display()
+        ));
+    }
     let mut kitti = StreamFile::create(&dir, "trajectory.kitti.txt", None)?;
     let mut tum = StreamFile::create(&dir, "trajectory.tum.txt", None)?;
     let mut frames = StreamFile::create(&dir, "frames.csv", Some(FRAMES_HEADER))?;

@@ -5,7 +5,6 @@
 
 use std::fmt::Write as _;
 use std::path::Path;
-use std::sync::Once;
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -16,8 +15,7 @@ use crate::output_file::write_bytes;
 
 /// DejaVu Sans, the copy `swarmpose-sim` ships (Bitstream Vera license, see
 /// `crates/swarmpose-sim/assets/DejaVuSans-LICENSE.txt`).
-static FONT: &[u8] = include_bytes!("../../../swarmpose-sim/assets/DejaVuSans.ttf");
-const FAMILY: &str = "sans-serif";
+use swarmpose_sim::plots::font::{FAMILY, register_font};
 const LINE: RGBColor = RGBColor(214, 39, 40);
 
 /// The segment table printed on standard output.
@@ -54,15 +52,6 @@ pub fn segment_table(k: &KittiSegments, estimate: &Path) -> String {
         );
     }
     s
-}
-
-fn register_font() {
-    static ONCE: Once = Once::new();
-    ONCE.call_once(|| {
-        for style in [FontStyle::Normal, FontStyle::Bold] {
-            let _ = plotters::style::register_font(FAMILY, style, FONT);
-        }
-    });
 }
 
 /// One panel: `(length, value)` points with a line, as the devkit's gnuplot figures.
@@ -105,7 +94,8 @@ fn panel<DB: DrawingBackend>(
 /// # Errors
 /// What plotters reports.
 pub fn segment_svg(k: &KittiSegments, title: &str) -> Result<String, String> {
-    register_font();
+    // Without the font the labels are missing; the figure is still drawn.
+    let _ = register_font();
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (1100, 480)).into_drawing_area();

@@ -1,7 +1,6 @@
 //! Drawing one figure with plotters, on a bitmap (saved as PNG with `image`) or SVG.
 
 use std::path::Path;
-use std::sync::Once;
 
 use image::codecs::png::{CompressionType, FilterType, PngEncoder};
 use image::{ExtendedColorType, ImageEncoder};
@@ -12,9 +11,7 @@ use plotters::prelude::*;
 use crate::error::SimError;
 use crate::stats::Quartiles;
 
-/// DejaVu Sans (Bitstream Vera license, see `assets/DejaVuSans-LICENSE.txt`).
-static FONT: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
-const FAMILY: &str = "sans-serif";
+use super::font::FAMILY;
 
 /// One estimator's curve: `(x, quartiles)` per outlier fraction (x in percent).
 #[derive(Debug, Clone, PartialEq)]
@@ -69,19 +66,14 @@ const COLORS: [RGBColor; 8] = [
 ];
 
 fn register_font() -> Result<(), SimError> {
-    static ONCE: Once = Once::new();
-    let mut result = Ok(());
-    ONCE.call_once(|| {
-        for style in [FontStyle::Normal, FontStyle::Bold] {
-            if plotters::style::register_font(FAMILY, style, FONT).is_err() {
-                result = Err(SimError::Plot {
-                    name: "font".into(),
-                    message: "the embedded font is not a valid TTF".into(),
-                });
-            }
-        }
-    });
-    result
+    if super::font::register_font() {
+        Ok(())
+    } else {
+        Err(SimError::Plot {
+            name: "font".into(),
+            message: "the embedded font is not a valid TTF".into(),
+        })
+    }
 }
 
 fn plot_err(fig: &Figure, e: impl std::fmt::Display) -> SimError {

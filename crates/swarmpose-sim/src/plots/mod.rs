@@ -10,6 +10,8 @@ use std::path::{Path, PathBuf};
 use crate::error::SimError;
 use crate::stats::{Cell, Quartiles, Summary};
 
+pub mod font;
+
 pub use draw::{Figure, Panel, Series, render_png, render_svg};
 
 /// Figure size in pixels.
