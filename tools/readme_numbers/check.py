@@ -28,7 +28,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 README = os.path.join(ROOT, "README.md")
 RESULTS = os.path.join(ROOT, "crates", "swarmpose-odometry", "RESULTS.md")
 SECTION = re.compile(r"<!-- generated: ([\w-]+) \((.*?)\) -->\n(.*?)<!-- end generated: \1 -->", re.S)
-FIGURE = re.compile(r"(?<![\w.])[-+]?\d+(?:\.\d+)?(?:\s?%)|(?<![\w.])[-+]?\d+\.\d+(?![\w.])")
+FIGURE = re.compile(r"(?<![\w.\-])[-+]?\d+(?:\.\d+)?(?:\s?%)|(?<![\w.\-])[-+]?\d+\.\d+(?![\w.])")
 README_COMMAND = "python3 tools/readme_numbers/check.py --update"
 
 
@@ -88,14 +88,15 @@ def main():
     readme = open(README, encoding="utf-8").read()
     results = sections(open(RESULTS, encoding="utf-8").read())
     problems = []
-    for name, body in sections(readme).items():
+    for m in reversed(list(SECTION.finditer(readme))):
+        name, body = m.group(1), m.group(3)
         if name not in GENERATORS:
             problems.append(f"README.md: generated section {name!r}: no generator in this script")
             continue
         want = GENERATORS[name](results)
         if body != want:
             if args.update:
-                readme = readme.replace(body, want, 1)
+                readme = readme[:m.start(3)] + want + readme[m.end(3):]
             else:
                 problems.append(f"README.md: generated section {name!r} differs from RESULTS.md (run {README_COMMAND})")
     if args.update:
