@@ -493,13 +493,18 @@ fn closed_and_full_standard_output() {
 #[test]
 fn a_run_s_configuration_reruns_it_byte_for_byte() {
     let tmp = TempDir::new("odo-config");
-    let first = tmp.0.join("first");
-    let out = swarmpose(
+    let run = |name: &str, options: &[&str]| {
+        let dir = tmp.0.join(name);
+        let mut args = vec!["odometry", "--out", s(&dir), "--quiet"];
+        args.extend_from_slice(options);
+        let out = swarmpose(&args, None);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{stderr}");
+        dir
+    };
+    let first = run(
+        "first",
         &[
-            "odometry",
-            "--out",
-            s(&first),
-            "--quiet",
             "--window",
             "3",
             "--seed",
@@ -509,35 +514,13 @@ fn a_run_s_configuration_reruns_it_byte_for_byte() {
             "--calibration-memory",
             "inf",
         ],
-        None,
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
     );
     let config = first.join("config.json");
     let text = std::fs::read_to_string(&config).expect("config.json");
     assert!(text.contains(r#""memory_s": "inf""#), "{text}");
     assert!(text.contains(r#""swarm_size": 20"#), "{text}");
 
-    let second = tmp.0.join("second");
-    let out = swarmpose(
-        &[
-            "odometry",
-            "--out",
-            s(&second),
-            "--quiet",
-            "--config",
-            s(&config),
-        ],
-        None,
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let second = run("second", &["--config", s(&config)]);
     for name in [
         "config.json",
         "trajectory.kitti.txt",
@@ -548,25 +531,7 @@ fn a_run_s_configuration_reruns_it_byte_for_byte() {
         assert!(a == b, "{name} differs between the run and its rerun");
     }
     // An option beside the file replaces its setting.
-    let third = tmp.0.join("third");
-    let out = swarmpose(
-        &[
-            "odometry",
-            "--out",
-            s(&third),
-            "--quiet",
-            "--config",
-            s(&config),
-            "--seed",
-            "8",
-        ],
-        None,
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let third = run("third", &["--config", s(&config), "--seed", "8"]);
     let text = std::fs::read_to_string(third.join("config.json")).expect("third");
     assert!(text.contains(r#""seed": 8"#) && text.contains(r#""swarm_size": 20"#));
 
