@@ -6,7 +6,7 @@ use pyo3::types::PyDict;
 use swarmpose_odometry::{FrameResult, Status};
 use swarmpose_vision::frontend::DisparityCorrection;
 
-use crate::arrays::{matrix, transform};
+use crate::arrays::{matrix, transform, vector};
 
 /// One frame's pose, its status, counts and stage timings.
 #[pyclass(frozen, module = "swarmpose")]
@@ -170,6 +170,25 @@ impl Frame {
     #[getter]
     fn correction_model(&self) -> String {
         self.result.correction_model.name()
+    }
+
+    /// The split-feature check of ``covariance`` (``split_check=True``; ``None`` without
+    /// it, or when a half of the inliers was too small): a dict with ``difference`` (6,),
+    /// the motion from the second half of the features minus the first's (metres,
+    /// radians), ``covariance`` (6, 6), its covariance under the model, ``nees``, the
+    /// normalised squared difference (6 on average when the covariance is honest), and
+    /// ``inliers``, each half's inlier count. See docs/covariance.md.
+    #[getter]
+    fn split<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        let Some(s) = &self.result.split else {
+            return Ok(None);
+        };
+        let d = PyDict::new(py);
+        d.set_item("difference", vector(py, s.difference.as_slice()))?;
+        d.set_item("covariance", matrix(py, &s.covariance))?;
+        d.set_item("nees", s.nees)?;
+        d.set_item("inliers", (s.inliers[0], s.inliers[1]))?;
+        Ok(Some(d))
     }
 
     fn __repr__(&self) -> String {

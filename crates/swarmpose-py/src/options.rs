@@ -113,6 +113,9 @@ odometry_config! {
         min_working_pixels: Option<usize> = None => "stereo images are doubled while they have \
             fewer pixels than this (``None``: 0, never; at most a quarter of \
             max_working_pixels, and at most 16 777 216)",
+        split_check: Option<bool> = None => "check each pair's covariance on two spatially \
+            disjoint halves of its matches (``Frame.split``; two more refinements a frame; \
+            ``None``: ``False``)",
         config_file: Option<PathBuf> = None => "a run configuration: the ``config.json`` \
             every command-line run writes, or ``OdometryRun.config_json`` saved; its settings \
             replace the defaults, and the keywords given beside it replace its settings",
@@ -187,6 +190,7 @@ impl OdometryConfig {
                     })?;
         }
         c.refine = self.refine.unwrap_or(c.refine);
+        c.split_check = self.split_check.unwrap_or(c.split_check);
         c.seed = self.seed.unwrap_or(c.seed);
         c.window.keyframes = self.window.unwrap_or(c.window.keyframes);
         if let Some(mode) = &self.marginalise {

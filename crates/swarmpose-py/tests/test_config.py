@@ -42,7 +42,7 @@ def test_the_keywords_are_declared_once():
     """Keyword-only, with the command line's defaults; a read-only property each; the
     stubs' constructor and ``**options`` type name the same keywords."""
     names = keywords()
-    assert names[:3] == ["method", "threshold", "detector"] and len(names) == 13
+    assert names[:3] == ["method", "threshold", "detector"] and len(names) == 14
     params = inspect.signature(OdometryConfig).parameters.values()
     assert all(p.kind is inspect.Parameter.KEYWORD_ONLY for p in params)
     default = OdometryConfig()
@@ -133,7 +133,7 @@ def test_repr_and_equality():
         "OdometryConfig(method='svd', threshold=None, detector=None, refine=None, "
         "calibrate=None, disparity_correction=(0.25, 0.0), min_inliers=None, seed=None, "
         "window=5, marginalise='finished', max_working_pixels=None, min_working_pixels=None, "
-        "config_file=None)")
+        "split_check=None, config_file=None)")
     assert config == eval(repr(config), {"OdometryConfig": OdometryConfig})
     assert config != OdometryConfig(method="svd", window=5)
     assert OdometryConfig(seed=0) == OdometryConfig(seed=0)

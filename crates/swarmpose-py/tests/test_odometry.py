@@ -355,3 +355,25 @@ def test_a_run_configuration_reruns_the_run(kitti_seq2, swarmpose_bin, tmp_path)
     bad.write_text('{"odometry": {"windw": 3}}', encoding="utf-8")
     with pytest.raises(ValueError, match="unknown field `windw`"):
         swarmpose.odometry(kitti_seq2, config_file=bad)
+
+
+def test_the_split_check_per_frame(kitti_seq2):
+    """``split_check=True`` gives each tracked frame its split-feature check: the motion
+    difference of the two halves, its covariance (symmetric), and the NEES that is that
+    difference normalised by it; without it, ``Frame.split`` is ``None``."""
+    seq = swarmpose.Sequence(kitti_seq2)
+    checked = swarmpose.Odometry.from_sequence(kitti_seq2, split_check=True, window=0)
+    plain = swarmpose.Odometry.from_sequence(kitti_seq2, window=0)
+    splits = []
+    for i in range(6):
+        left, right = seq[i]
+        frame = checked.track(left, right, 0.1 * i)
+        assert plain.track(left, right, 0.1 * i).split is None
+        if frame.split is not None:
+            splits.append(frame.split)
+    assert len(splits) >= 4
+    for s in splits:
+        d, c = s["difference"], s["covariance"]
+        assert d.shape == (6,) and c.shape == (6, 6) and np.allclose(c, c.T)
+        assert s["nees"] == pytest.approx(d @ np.linalg.solve(c, d), rel=1e-6)
+        assert min(s["inliers"]) > 0

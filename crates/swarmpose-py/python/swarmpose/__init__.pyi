@@ -142,6 +142,10 @@ class Frame:
     @property
     def correction_model(self) -> str: ...
     @property
+    def split(self) -> Optional[Dict[str, Any]]:
+        """The split-feature check of ``covariance`` (``split_check=True``): ``difference``
+        (6,), ``covariance`` (6, 6), ``nees``, ``inliers``; ``None`` without it."""
+    @property
     def keyframe(self) -> bool: ...
     @property
     def window_poses(self) -> List[Tuple[int, npt.NDArray[np.float64]]]:
@@ -169,6 +173,7 @@ class OdometryConfig:
         marginalise: Optional[str] = None,
         max_working_pixels: Optional[int] = None,
         min_working_pixels: Optional[int] = None,
+        split_check: Optional[bool] = None,
         config_file: Optional[_Path] = None,
     ) -> None: ...
     def __eq__(self, other: object) -> bool: ...
@@ -198,6 +203,8 @@ class OdometryConfig:
     @property
     def min_working_pixels(self) -> Optional[int]: ...
     @property
+    def split_check(self) -> Optional[bool]: ...
+    @property
     def config_file(self) -> Optional["os.PathLike[str]"]: ...
 
 # OdometryConfig's keywords as the entry points' ``**options`` (all optional); the
@@ -217,6 +224,7 @@ _OdometryOptions = TypedDict(
         "marginalise": Optional[str],
         "max_working_pixels": Optional[int],
         "min_working_pixels": Optional[int],
+        "split_check": Optional[bool],
         "config_file": Optional[_Path],
     },
     total=False,
