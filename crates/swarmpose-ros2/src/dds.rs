@@ -21,7 +21,7 @@ use crate::error::NodeError;
 /// Depth of the image subscriptions' history: enough for the images that arrive while
 /// the receiving thread is busy, so that the node, not DDS, decides what to drop (and
 /// counts it).
-pub const IMAGE_DEPTH: i32 = 8;
+pub const IMAGE_DEPTH: usize = 8;
 
 /// The topic names, in and out.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -79,12 +79,12 @@ impl Network {
 }
 
 /// Sensor data QoS (best effort, volatile, keep last `depth`).
-fn sensor_qos(depth: i32) -> QosProfile {
+fn sensor_qos(depth: usize) -> QosProfile {
     QosProfile::subscription_default().history(History::KeepLast { depth })
 }
 
 /// Reliable QoS, keep last `depth`.
-fn reliable_qos(depth: i32) -> QosProfile {
+fn reliable_qos(depth: usize) -> QosProfile {
     QosProfile::publisher_default()
         .reliability_reliable(WhenFull::DEFAULT)
         .durability(Durability::Volatile)
