@@ -129,7 +129,7 @@ def echo(binary, kitti, domain, pairs, buffer_bytes=None):
             got = None
             while got is None and time.perf_counter() - t < 2.0:
                 for h in r.take(N=10):
-                    if stamp_ns(h.stamp) == ns:
+                    if hasattr(h, "stamp") and stamp_ns(h.stamp) == ns:
                         got = time.perf_counter()
                 time.sleep(0.0002)
             if got is not None and i >= 5:

@@ -487,7 +487,8 @@ fn write_smoothed(dir: &OutputDir, track: &Track) -> Result<(), CliError> {
     dir.write(
         "trajectory.smoothed.tum.txt",
         swarmpose_eval::trajectory::tum_text(&track.stamps, track.smoothed.poses()).as_bytes(),
-    )
+    )?;
+    Ok(())
 }
 
 /// The end of a run: evaluation, plots, calibration, summary.

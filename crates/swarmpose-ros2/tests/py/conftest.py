@@ -37,15 +37,25 @@ def kitti_dir():
     return path
 
 
+_built = []
+
+
+def built(package: str, binary: str) -> Path:
+    """`binary` of `package`: the node and the CLI built (incrementally) by cargo, both in
+    one invocation (one feature set: no rebuild between them)."""
+    if not _built:
+        subprocess.run(
+            ["cargo", "build", "--quiet", "-p", "swarmpose-ros2", "-p", "swarmpose-cli", "--bins"],
+            cwd=REPO,
+            check=True,
+        )
+        _built.append(True)
+    return TARGET / binary
+
+
 @pytest.fixture(scope="session")
-def binaries():
-    """The node and the CLI, built (incrementally) by cargo."""
-    subprocess.run(
-        ["cargo", "build", "--quiet", "-p", "swarmpose-ros2", "-p", "swarmpose-cli"],
-        cwd=REPO,
-        check=True,
-    )
-    return {"node": TARGET / "swarmpose-ros2", "cli": TARGET / "swarmpose"}
+def node_binary():
+    return built("swarmpose-ros2", "swarmpose-ros2")
 
 
 @pytest.fixture(scope="session")
@@ -56,14 +66,14 @@ def kitti(kitti_dir):
 
 
 @pytest.fixture(scope="session")
-def offline(binaries, kitti_dir, tmp_path_factory):
+def offline(kitti_dir, tmp_path_factory):
     """The offline run `swarmpose odometry` of the sequence: its Odometry messages (in
     odometry.mcap), frame by frame."""
     from mcap_ros2.reader import read_ros2_messages
 
     out = tmp_path_factory.mktemp("offline")
     subprocess.run(
-        [str(binaries["cli"]), "odometry", str(kitti_dir), "--out", str(out), "--quiet"],
+        [str(built("swarmpose-cli", "swarmpose")), "odometry", str(kitti_dir), "--out", str(out), "--quiet"],
         check=True,
         stdout=subprocess.DEVNULL,
     )
@@ -102,11 +112,11 @@ class Node:
 
 
 @pytest.fixture
-def node_factory(binaries):
+def node_factory(node_binary):
     started = []
 
     def start(domain, out=None, *args):
-        n = Node(binaries["node"], domain, out, *args)
+        n = Node(node_binary, domain, out, *args)
         started.append(n)
         return n
 

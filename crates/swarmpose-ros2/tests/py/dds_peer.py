@@ -153,10 +153,12 @@ class Peer:
     def poll(self):
         """Takes what the node published."""
         now = time.perf_counter()
+        # Cyclone hands "invalid samples" (a writer gone) among the data: skipped.
         for m in self.odometry.take(N=100):
-            self.received.append((now, m))
-        self.statuses.extend(self.status.take(N=100))
-        self.paths.extend(self.path.take(N=10))
+            if hasattr(m, "header"):
+                self.received.append((now, m))
+        self.statuses.extend(m for m in self.status.take(N=100) if hasattr(m, "status"))
+        self.paths.extend(m for m in self.path.take(N=10) if hasattr(m, "poses"))
 
     def wait_odometry(self, ns: int, timeout_s: float) -> bool:
         """Waits for the odometry stamped `ns`."""
