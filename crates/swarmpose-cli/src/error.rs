@@ -58,6 +58,16 @@ impl From<CsvError> for CliError {
     }
 }
 
+impl From<swarmpose_runs::RunError> for CliError {
+    fn from(e: swarmpose_runs::RunError) -> Self {
+        if e.is_input() {
+            Self::usage(e.to_string())
+        } else {
+            Self::failure(e.to_string())
+        }
+    }
+}
+
 /// `text` on one line: line breaks become `"; "`, blank lines are dropped.
 pub fn one_line(text: &str) -> String {
     text.lines()

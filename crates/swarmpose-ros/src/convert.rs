@@ -64,6 +64,13 @@ pub fn ros_pose(p: &Isometry3<f64>) -> Pose {
     }
 }
 
+/// Seconds from the header stamp `first_ns` to `ns` (nanoseconds): a stream's time as
+/// the engine takes it, the same for a bag read offline and for the live node.
+#[must_use]
+pub fn seconds_since(first_ns: i64, ns: i64) -> f64 {
+    (ns - first_ns) as f64 * 1e-9
+}
+
 /// A 6x6 matrix as ROS's row-major 36 numbers.
 #[must_use]
 pub fn row_major(m: &Matrix6<f64>) -> [f64; 36] {

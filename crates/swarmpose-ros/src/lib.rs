@@ -3,7 +3,8 @@
 //! ROS 2 without a ROS install: the message types swarmpose reads and writes ([`msg`],
 //! CDR through `cdr-encoding`), ROS 2 bags ([`bag`]: MCAP through the `mcap` crate,
 //! SQLite `.db3` through `rusqlite`, rosbag2 folders with split files), stereo frames
-//! from a bag ([`stereo`]), and the `odometry.mcap` writer ([`write`]).
+//! from a bag ([`stereo`]), the `odometry.mcap` writer ([`write`]), and an engine's
+//! results as messages ([`result`]).
 #![deny(missing_docs)]
 #![forbid(unsafe_code)]
 #![warn(clippy::unwrap_used)]
@@ -13,6 +14,7 @@ pub mod convert;
 pub mod error;
 pub mod image;
 pub mod msg;
+pub mod result;
 pub mod source;
 pub mod stereo;
 pub mod write;

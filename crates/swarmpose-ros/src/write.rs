@@ -20,8 +20,7 @@ use mcap::{Compression, WriteOptions, Writer};
 use crate::error::RosError;
 use crate::msg::{
     CameraInfo, CompressedImage, DiagnosticArray, Header, Odometry, Path, PointCloud2, Pose,
-    PoseStamped, PoseWithCovarianceStamped, RosMessage, TfMessage, Time, TransformStamped, encode,
-    schema_text,
+    PoseStamped, PoseWithCovarianceStamped, RosMessage, TfMessage, Time, encode, schema_text,
 };
 
 /// The topic names of `odometry.mcap`, in one place.
@@ -193,21 +192,7 @@ impl OdometryMcap {
         };
         self.write(Topics::POSE, stamp, &pose)?;
         let p = o.pose.pose;
-        let tf = TfMessage {
-            transforms: vec![TransformStamped {
-                header: o.header.clone(),
-                child_frame_id: o.child_frame_id.clone(),
-                transform: crate::msg::Transform {
-                    translation: crate::msg::Vector3 {
-                        x: p.position.x,
-                        y: p.position.y,
-                        z: p.position.z,
-                    },
-                    rotation: p.orientation,
-                },
-            }],
-        };
-        self.write(Topics::TF, stamp, &tf)?;
+        self.write(Topics::TF, stamp, &crate::result::tf_of(o))?;
         self.write(Topics::STATUS, stamp, &f.status)?;
         if let Some(img) = &f.image {
             self.write(Topics::IMAGE, stamp, img)?;

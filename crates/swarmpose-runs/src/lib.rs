@@ -21,6 +21,7 @@ pub mod batch;
 pub mod config;
 pub mod error;
 pub mod output;
+pub mod output_dir;
 pub mod plots;
 pub mod rgbd;
 pub mod synthetic;

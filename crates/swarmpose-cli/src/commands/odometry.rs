@@ -23,16 +23,14 @@ use swarmpose_ros::{BagInfo, StereoOptions as BagOptions, open_stereo};
 use swarmpose_runs::RunError;
 use swarmpose_runs::batch::{camera_of, run_rgbd_sequence, run_sequence, run_sequence_two_threads};
 use swarmpose_runs::config::{InputConfig, RunConfig};
-use swarmpose_runs::output::{
-    COVARIANCE_HEADER, FRAMES_HEADER, Smoothed, Summary, calibration_json, covariance_row,
-    frames_row, kitti_line, tum_line,
-};
+use swarmpose_runs::output::{Smoothed, Summary, calibration_json};
+use swarmpose_runs::output_dir::FrameFiles;
 use swarmpose_runs::plots::{PlotTrack, render_plots};
 use swarmpose_runs::rgbd::RgbdSequence;
 use swarmpose_runs::synthetic::SyntheticSequence;
 
 use super::odometry_mcap::McapOutput;
-use super::odometry_output::{OutputDir, StreamFile};
+use super::odometry_output::OutputDir;
 use super::odometry_split::SplitLog;
 use super::stereo_options::StereoOptions;
 use crate::error::{CliError, EXIT_NOT_USABLE};
@@ -385,7 +383,7 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
             .build(),
     }
     .map_err(odometry_error)?;
-    let dir = OutputDir::prepare(&args.out)?;
+    let dir = super::odometry_output::prepare(&args.out)?;
     // The settings first: a run that stops early still says how it was made.
     let settings = rc.to_json().map_err(|e| CliError::usage(e.to_string()))?;
     dir.write(swarmpose_runs::config::FILE_NAME, settings.as_bytes())?;
@@ -395,10 +393,7 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
             dir.path().join(swarmpose_runs::config::FILE_NAME).display()
         ));
     }
-    let mut kitti = StreamFile::create(&dir, "trajectory.kitti.txt", None)?;
-    let mut tum = StreamFile::create(&dir, "trajectory.tum.txt", None)?;
-    let mut frames = StreamFile::create(&dir, "frames.csv", Some(FRAMES_HEADER))?;
-    let mut cov = StreamFile::create(&dir, "motion_covariance.csv", Some(COVARIANCE_HEADER))?;
+    let mut files = FrameFiles::create(&dir)?;
     let mut split = args
         .split_check
         .then(|| SplitLog::create(&dir))
@@ -431,11 +426,9 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
     pb.set_prefix("odometry");
     let mut write_error: Option<CliError> = None;
     let mut on_frame = |r: &FrameResult| -> ControlFlow<()> {
-        let written = kitti
-            .line(&kitti_line(&r.pose))
-            .and_then(|()| tum.line(&tum_line(r.timestamp_s, &r.pose)))
-            .and_then(|()| frames.line(&frames_row(r)))
-            .and_then(|()| covariance_row(r).map_or(Ok(()), |row| cov.line(&row)))
+        let written = files
+            .frame(r)
+            .map_err(CliError::from)
             .and_then(|()| split.as_mut().map_or(Ok(()), |s| s.add(r)))
             .and_then(|()| mcap.frame(r));
         if let Err(e) = written {
@@ -559,7 +552,8 @@ fn write_smoothed(dir: &OutputDir, track: &Track) -> Result<(), CliError> {
     dir.write(
         "trajectory.smoothed.tum.txt",
         swarmpose_eval::trajectory::tum_text(&track.stamps, track.smoothed.poses()).as_bytes(),
-    )
+    )?;
+    Ok(())
 }
 
 /// The end of a run: evaluation, plots, calibration, summary.

@@ -3,9 +3,10 @@
 //! covariance order, units) are those of [`swarmpose_ros::convert`].
 
 use nalgebra::Isometry3;
-use swarmpose_odometry::{FrameResult, Status};
-use swarmpose_ros::convert::{FrameNames, Measurement, odometry, pose_in_odom, ros_pose};
-use swarmpose_ros::msg::{CameraInfo, DiagnosticArray, DiagnosticStatus, Header, KeyValue, Time};
+use swarmpose_odometry::FrameResult;
+use swarmpose_ros::convert::{FrameNames, pose_in_odom, ros_pose};
+use swarmpose_ros::msg::{CameraInfo, Time};
+use swarmpose_ros::result::{OdometryMessages, status};
 use swarmpose_ros::write::{FrameMessages, OdometryMcap};
 
 use super::odometry_output::OutputDir;
@@ -17,49 +18,13 @@ pub const FILE: &str = "odometry.mcap";
 /// The writer of a run's `odometry.mcap`.
 pub struct McapOutput {
     writer: OdometryMcap,
-    names: FrameNames,
-    /// Each frame's time, seconds (for the time since a frame's reference).
-    times_s: Vec<f64>,
+    messages: OdometryMessages,
     /// The header stamps of a bag's frames, nanoseconds (`None`: the run's times).
     stamps_ns: Option<Vec<i64>>,
 }
 
 fn failure(e: &swarmpose_ros::RosError) -> CliError {
     CliError::failure(e.to_string())
-}
-
-/// The tracking status of a frame as a diagnostic.
-fn status(r: &FrameResult, stamp: Time) -> DiagnosticArray {
-    let level = match r.status {
-        Status::First | Status::Tracked => DiagnosticStatus::OK,
-        Status::ConstantVelocity(_) => DiagnosticStatus::WARN,
-        Status::Lost(_) => DiagnosticStatus::ERROR,
-    };
-    let kv = |key: &str, value: String| KeyValue {
-        key: key.to_owned(),
-        value,
-    };
-    DiagnosticArray {
-        header: Header {
-            stamp,
-            frame_id: String::new(),
-        },
-        status: vec![DiagnosticStatus {
-            level,
-            name: "swarmpose: tracking".to_owned(),
-            message: r.status.text(),
-            hardware_id: String::new(),
-            values: vec![
-                kv("frame", r.index.to_string()),
-                kv(
-                    "reference",
-                    r.reference.map_or_else(String::new, |i| i.to_string()),
-                ),
-                kv("matches", r.counts.matches.to_string()),
-                kv("inliers", r.counts.inliers.to_string()),
-            ],
-        }],
-    }
 }
 
 impl McapOutput {
@@ -81,8 +46,7 @@ impl McapOutput {
         }
         Ok(Self {
             writer,
-            names,
-            times_s: Vec::new(),
+            messages: OdometryMessages::new(names),
             stamps_ns,
         })
     }
@@ -100,20 +64,10 @@ impl McapOutput {
     /// # Errors
     /// Exit status 1 when the file cannot be written.
     pub fn frame(&mut self, r: &FrameResult) -> Result<(), CliError> {
-        self.times_s.push(r.timestamp_s);
         let stamp_ns = self.stamp_ns(r.index, r.timestamp_s);
-        let measured = r
-            .reference
-            .filter(|_| r.status.is_tracked())
-            .map(|k| Measurement {
-                motion: r.measured_motion,
-                covariance: r.covariance,
-                dt_s: self.times_s.get(k).map_or(0.0, |t0| r.timestamp_s - t0),
-            });
-        let first = matches!(r.status, Status::First);
         let msg = FrameMessages {
-            odometry: odometry(stamp_ns, &r.pose, first, measured.as_ref(), &self.names),
-            status: status(r, Time::from_nanos(stamp_ns)),
+            odometry: self.messages.odometry(r, stamp_ns),
+            status: status(r, Time::from_nanos(stamp_ns), Vec::new()),
             image: None,
             points: None,
         };

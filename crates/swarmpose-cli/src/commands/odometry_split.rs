@@ -42,10 +42,10 @@ impl SplitLog {
         };
         let d = &s.difference;
         self.nees.push(s.nees);
-        self.file.line(&format!(
+        Ok(self.file.line(&format!(
             "{},{:.6},{:e},{:e},{:e},{:e},{:e},{:e},{},{}",
             r.index, s.nees, d[0], d[1], d[2], d[3], d[4], d[5], s.inliers[0], s.inliers[1]
-        ))
+        ))?)
     }
 
     /// The summary line: mean and median NEES over the pairs checked.

@@ -454,6 +454,6 @@ impl StereoSequence for BagSequence {
 
     fn timestamp_s(&self, i: usize) -> Option<f64> {
         let first = self.frames.first()?.2;
-        Some((self.frames.get(i)?.2 - first) as f64 * 1e-9)
+        Some(crate::convert::seconds_since(first, self.frames.get(i)?.2))
     }
 }
