@@ -29,7 +29,7 @@ use crate::error::OdometryError;
 use crate::estimate::{initial_motion, observations, window_links};
 use crate::frontend::ms;
 use crate::intake::{StereoCamera, check_timestamp};
-use crate::record::{Counts, FrameResult, StageTimes, Status};
+use crate::record::{Counts, FrameResult, Reason, StageTimes, Status};
 use crate::refine::evidence::MatrixK;
 use crate::refine::model::{PixelNoise, StereoModel, StereoObservation};
 use crate::refine::split::{SplitCheck, split_check};
@@ -230,20 +230,23 @@ impl<D: Descriptor> Tracker<D> {
         timestamp_s: f64,
         times: &mut StageTimes,
         counts: &mut Counts,
-    ) -> Result<Measured, String> {
+    ) -> Result<Measured, Reason> {
         let Some(reference) = self.reference.as_ref() else {
-            return Err("no reference frame with enough points".into());
+            return Err(Reason::NoReference);
         };
         let (ref_pose, ref_timestamp_s, ref_index) =
             (reference.pose, reference.timestamp_s, reference.index);
         let min = self.config.min_inliers.max(crate::config::MIN_INLIERS);
         let t = Instant::now();
         let m = match_frames(&reference.frame, frame, &self.temporal)
-            .map_err(|e| format!("matching failed: {e}"))?;
+            .map_err(Reason::Matching)?;
         times.match_ms = ms(t);
         counts.matches = m.correspondences.len();
         if counts.matches < min {
-            return Err(format!("{} matches, fewer than {min}", counts.matches));
+            return Err(Reason::TooFewMatches {
+                matches: counts.matches,
+                min,
+            });
         }
         let (correction, model) = self.correction();
         let focal_px = self.focal_px();
@@ -324,7 +327,7 @@ impl<D: Descriptor> Tracker<D> {
             &start,
             min,
         )
-        .map_err(|e| format!("refinement: {e}"))?;
+        .map_err(Reason::Refinement)?;
         if let Some(p) = prediction.as_ref()
             && let Some(second) = ambiguity::second_motion(
                 &model_now,
@@ -456,7 +459,10 @@ impl<D: Descriptor> Tracker<D> {
         let enough_points = frame.len() >= min;
         let n_points = frame.len();
 
-        let too_few = || format!("{n_points} stereo points, fewer than {min}");
+        let too_few = || Reason::TooFewPoints {
+            points: n_points,
+            min,
+        };
         let (correction, correction_model) = self.correction();
         let focal_px = self.focal_px();
         let mut result = FrameResult {
