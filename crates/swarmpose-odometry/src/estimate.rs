@@ -140,11 +140,12 @@ pub(crate) fn initial_motion(
                 .map(|p| Point3::new(p.x, p.y, p.z * focal_scale))
                 .collect()
         };
-        stretched = Correspondences::new(z(data.src()), z(data.dst()))
-            .map_err(|error| Reason::FocalLength {
+        stretched = Correspondences::new(z(data.src()), z(data.dst())).map_err(|error| {
+            Reason::FocalLength {
                 scale: focal_scale,
                 error,
-            })?;
+            }
+        })?;
         &stretched
     };
     let e = estimator
