@@ -254,7 +254,7 @@ enum Step {
     /// It took a step that lowered the cost by less than a millionth: converged.
     Converged,
     /// The damping grew past its bound without a step that lowers the cost.
-    NoStep,
+    Stalled,
 }
 
 impl Workspace {
@@ -271,7 +271,7 @@ impl Workspace {
     ) -> Step {
         loop {
             if *lambda > 1e8 {
-                return Step::NoStep;
+                return Step::Stalled;
             }
             if !self.solve_damped(*lambda) {
                 *lambda *= 10.0;
