@@ -21,8 +21,8 @@
 use std::ops::ControlFlow;
 
 use swarmpose_core::Estimator;
-use swarmpose_vision::features::{BinaryDescriptor, FloatDescriptor64};
-use swarmpose_vision::frontend::{Detector, Frontend};
+use swarmpose_vision::features::{BinaryDescriptor, FeatureExtractor, FloatDescriptor64};
+use swarmpose_vision::frontend::{Detector, Frontend, StereoFrame};
 use swarmpose_vision::image::GrayImage;
 use swarmpose_vision::orb::OrbExtractor;
 use swarmpose_vision::surf::Surf;
@@ -431,44 +431,11 @@ impl Odometry {
                 // One frame in flight between the threads: memory stays bounded.
                 let (tx, rx) = std::sync::mpsc::sync_channel(1);
                 scope.spawn(move || {
-                    let [mut hl, mut hr] = [Resampler::default(), Resampler::default()];
+                    let mut resamplers = [Resampler::default(), Resampler::default()];
                     for (index, item) in frames.enumerate() {
-                        let front = item.and_then(|mut frame| {
-                            let input = StereoInput {
-                                left: frame.left.view(),
-                                right: frame.right.view(),
-                                timestamp_s: frame.timestamp_s,
-                            };
-                            // The timestamp's order is checked by the back end.
-                            check_stereo(&camera, &input, None).map_err(E::from)?;
-                            let mut times = StageTimes {
-                                load_ms: frame.load_ms,
-                                ..StageTimes::default()
-                            };
-                            if levels != 0 {
-                                let t0 = std::time::Instant::now();
-                                // The back end takes the working left image (the
-                                // tracks' patches); the right one is not needed there.
-                                let l = hl.apply(frame.left.view(), levels);
-                                // Into the frame's own buffer: no allocation when halving.
-                                frame.left.data.clear();
-                                frame.left.data.extend_from_slice(l.data);
-                                (frame.left.width, frame.left.height) = (l.width, l.height);
-                                let r = hr.apply(frame.right.view(), levels);
-                                times.load_ms += crate::frontend::ms(t0);
-                                let features =
-                                    stereo_frame(frontend, frame.left.view(), r, &mut times)
-                                        .map_err(E::from)?;
-                                return Ok((features, frame, times));
-                            }
-                            let features = stereo_frame(
-                                frontend,
-                                frame.left.view(),
-                                frame.right.view(),
-                                &mut times,
-                            )
-                            .map_err(E::from)?;
-                            Ok((features, frame, times))
+                        let front = item.and_then(|frame| {
+                            owned_front_end(frontend, &camera, levels, &mut resamplers, frame)
+                                .map_err(E::from)
                         });
                         let failed = front.is_err();
                         let message = front.map_err(|e| e.at_frame(index));
@@ -494,4 +461,42 @@ impl Odometry {
             })
         })
     }
+}
+
+/// The front end of a frame of [`Odometry::run_two_threads`] from `camera`: its images
+/// resampled `levels` times (the left one into the frame's own buffer: the back end
+/// takes the working left image for the tracks' patches), then its features and stereo
+/// matches. Returns them with the frame and its stage times. The timestamp's order is
+/// checked by the back end.
+fn owned_front_end<E: FeatureExtractor>(
+    frontend: &Frontend<E>,
+    camera: &StereoCamera,
+    levels: i32,
+    [hl, hr]: &mut [Resampler; 2],
+    mut frame: OwnedStereoFrame,
+) -> Result<(StereoFrame<E::Descriptor>, OwnedStereoFrame, StageTimes), OdometryError> {
+    let input = StereoInput {
+        left: frame.left.view(),
+        right: frame.right.view(),
+        timestamp_s: frame.timestamp_s,
+    };
+    check_stereo(camera, &input, None)?;
+    let mut times = StageTimes {
+        load_ms: frame.load_ms,
+        ..StageTimes::default()
+    };
+    if levels != 0 {
+        let t0 = std::time::Instant::now();
+        let l = hl.apply(frame.left.view(), levels);
+        // Into the frame's own buffer: no allocation when halving.
+        frame.left.data.clear();
+        frame.left.data.extend_from_slice(l.data);
+        (frame.left.width, frame.left.height) = (l.width, l.height);
+        let r = hr.apply(frame.right.view(), levels);
+        times.load_ms += crate::frontend::ms(t0);
+        let features = stereo_frame(frontend, frame.left.view(), r, &mut times)?;
+        return Ok((features, frame, times));
+    }
+    let features = stereo_frame(frontend, frame.left.view(), frame.right.view(), &mut times)?;
+    Ok((features, frame, times))
 }

@@ -5,6 +5,7 @@ use nalgebra::{Isometry3, Point3};
 use swarmpose_core::{Correspondences, Estimator};
 use swarmpose_vision::frontend::{DisparityCorrection, FrameMatches};
 
+use crate::record::Reason;
 use crate::refine::model::StereoObservation;
 use crate::window::Link;
 
@@ -117,14 +118,17 @@ pub(crate) fn initial_motion(
     estimator: &dyn Estimator,
     seed: u64,
     min_inliers: usize,
-) -> Result<Initial, String> {
+) -> Result<Initial, Reason> {
     let corrected;
     let data = if *correction == DisparityCorrection::default() {
         &m.correspondences
     } else {
         corrected = m
             .with_disparity_correction(*correction, baseline_m)
-            .map_err(|e| format!("disparity correction {correction}: {e}"))?;
+            .map_err(|error| Reason::Correction {
+                correction: *correction,
+                error,
+            })?;
         &corrected.correspondences
     };
     let stretched;
@@ -136,23 +140,27 @@ pub(crate) fn initial_motion(
                 .map(|p| Point3::new(p.x, p.y, p.z * focal_scale))
                 .collect()
         };
-        stretched = Correspondences::new(z(data.src()), z(data.dst()))
-            .map_err(|e| format!("focal length x {focal_scale}: {e}"))?;
+        stretched = Correspondences::new(z(data.src()), z(data.dst())).map_err(|error| {
+            Reason::FocalLength {
+                scale: focal_scale,
+                error,
+            }
+        })?;
         &stretched
     };
     let e = estimator
         .estimate_seeded(data, seed)
-        .map_err(|e| format!("estimator: {e}"))?;
+        .map_err(Reason::Estimator)?;
     let initial = Initial {
         motion: e.transform,
         inliers: e.inliers.len(),
         ambiguous: e.diagnostics.runner_up.is_some(),
     };
     if initial.inliers < min_inliers {
-        return Err(format!(
-            "estimator: {} inliers, fewer than {min_inliers}",
-            initial.inliers
-        ));
+        return Err(Reason::TooFewInliers {
+            inliers: initial.inliers,
+            min: min_inliers,
+        });
     }
     Ok(initial)
 }

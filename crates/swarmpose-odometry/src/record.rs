@@ -1,22 +1,85 @@
 //! What the engine returns for each frame.
 
 use nalgebra::{Isometry3, Matrix6};
+use swarmpose_core::PoseError;
 use swarmpose_vision::frontend::DisparityCorrection;
 
+use crate::refine::RefineError;
 use crate::refine::split::SplitCheck;
 use crate::selfcal::CorrectionModel;
 
 /// What happened to the motion into one frame.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum Status {
     /// The first frame: the origin.
     First,
     /// The motion was estimated from the images.
     Tracked,
     /// The motion could not be estimated (the reason): predicted from the last velocity.
-    ConstantVelocity(String),
+    ConstantVelocity(Reason),
     /// No motion could be estimated or predicted (the reason): the pose is held.
-    Lost(String),
+    Lost(Reason),
+}
+
+/// Why the motion into a frame could not be measured, in the order of the stages that
+/// can fail ([`crate::tracker`]). Its text (`Display`) is the reason [`Status::text`]
+/// gives in parentheses.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum Reason {
+    /// The frame has fewer 3D points than a motion needs.
+    #[error("{points} stereo points, fewer than {min}")]
+    TooFewPoints {
+        /// Points with a depth in the frame.
+        points: usize,
+        /// Fewest inliers a motion needs ([`crate::OdometryConfig::min_inliers`]).
+        min: usize,
+    },
+    /// No earlier frame had enough points to measure from.
+    #[error("no reference frame with enough points")]
+    NoReference,
+    /// Matching the frame's features to the reference's failed.
+    #[error("matching failed: {0}")]
+    Matching(PoseError),
+    /// Too few of the frame's features matched the reference's.
+    #[error("{matches} matches, fewer than {min}")]
+    TooFewMatches {
+        /// Matches with the reference frame.
+        matches: usize,
+        /// Fewest inliers a motion needs.
+        min: usize,
+    },
+    /// The disparity correction could not be applied to the matches' points.
+    #[error("disparity correction {correction}: {error}")]
+    Correction {
+        /// The correction applied.
+        correction: DisparityCorrection,
+        /// What went wrong.
+        error: PoseError,
+    },
+    /// The focal length change could not be applied to the matches' points.
+    #[error("focal length x {scale}: {error}")]
+    FocalLength {
+        /// Ratio of the focal length applied to the calibration's.
+        scale: f64,
+        /// What went wrong.
+        error: PoseError,
+    },
+    /// The robust estimator found no motion.
+    #[error("estimator: {0}")]
+    Estimator(PoseError),
+    /// The robust estimator's motion has too few inliers.
+    #[error("estimator: {inliers} inliers, fewer than {min}")]
+    TooFewInliers {
+        /// Inliers of the estimator's motion.
+        inliers: usize,
+        /// Fewest inliers a motion needs.
+        min: usize,
+    },
+    /// The reprojection refinement failed (too few consistent points, or a motion the
+    /// points do not determine).
+    #[error("refinement: {0}")]
+    Refinement(RefineError),
 }
 
 impl Status {
@@ -172,4 +235,83 @@ pub struct FrameResult {
     /// inliers, and the normalised difference. `None` otherwise, or when a half had too
     /// few inliers.
     pub split: Option<SplitCheck>,
+}
+
+#[cfg(test)]
+mod tests {
+    use swarmpose_core::PoseError;
+    use swarmpose_vision::frontend::DisparityCorrection;
+
+    use super::{Reason, Status};
+    use crate::refine::RefineError;
+
+    /// Each reason's text is the one the engine wrote before the reasons were an enum
+    /// (frames.csv, Python and the CLI show it): the old format strings, written out.
+    #[test]
+    fn reasons_read_as_before() {
+        let e = PoseError::TooFewPoints { got: 2, needed: 3 };
+        let c = DisparityCorrection {
+            offset_px: 0.5,
+            ..DisparityCorrection::default()
+        };
+        let cases = [
+            (
+                Reason::TooFewPoints { points: 7, min: 12 },
+                "7 stereo points, fewer than 12".to_owned(),
+            ),
+            (
+                Reason::NoReference,
+                "no reference frame with enough points".to_owned(),
+            ),
+            (Reason::Matching(e.clone()), format!("matching failed: {e}")),
+            (
+                Reason::TooFewMatches {
+                    matches: 5,
+                    min: 12,
+                },
+                "5 matches, fewer than 12".to_owned(),
+            ),
+            (
+                Reason::Correction {
+                    correction: c,
+                    error: e.clone(),
+                },
+                format!("disparity correction {c}: {e}"),
+            ),
+            (
+                Reason::FocalLength {
+                    scale: 1.0025,
+                    error: e.clone(),
+                },
+                format!("focal length x 1.0025: {e}"),
+            ),
+            (Reason::Estimator(e.clone()), format!("estimator: {e}")),
+            (
+                Reason::TooFewInliers {
+                    inliers: 9,
+                    min: 12,
+                },
+                "estimator: 9 inliers, fewer than 12".to_owned(),
+            ),
+            (
+                Reason::Refinement(RefineError::TooFewInliers {
+                    got: 11,
+                    needed: 12,
+                }),
+                "refinement: 11 points consistent with the motion, fewer than 12".to_owned(),
+            ),
+        ];
+        for (reason, text) in cases {
+            assert_eq!(reason.to_string(), text);
+            assert_eq!(
+                Status::ConstantVelocity(reason.clone()).text(),
+                format!("constant-velocity ({text})")
+            );
+            assert_eq!(Status::Lost(reason).text(), format!("lost ({text})"));
+        }
+        assert_eq!(
+            format!("{e}"),
+            "too few correspondences: 2, at least 3 are needed"
+        );
+    }
 }

@@ -53,6 +53,13 @@ pub struct RefineConfig {
     /// motion is only approximately right); the first round also keeps every match up to
     /// the median χ², so that a rough start keeps the better half.
     pub initial_gate_chi2: f64,
+    /// Most Gauss-Newton iterations of the alignment that moves each match's measurement
+    /// in the current frame to where the reference's image patch appears, to a fraction
+    /// of a pixel, before the refinement (when both frames come with images; default 10).
+    pub align_iterations: usize,
+    /// Largest move of that alignment from the matched keypoint, pixels (default 2.0);
+    /// a match whose patch would move further is left out of the refinement.
+    pub align_max_move_px: f32,
 }
 
 impl Default for RefineConfig {
@@ -63,6 +70,8 @@ impl Default for RefineConfig {
             huber_k: 2.5,
             gate_chi2: 16.27,
             initial_gate_chi2: 100.0,
+            align_iterations: 10,
+            align_max_move_px: 2.0,
         }
     }
 }
@@ -388,7 +397,6 @@ pub fn refine(
             current: current.len(),
         });
     }
-    let needed = min_inliers.max(3);
     let mut pose = Pose::from_motion(start);
     // Points fitted to the starting pose, then gated.
     let mut fitted: Vec<Option<(Vector3<f64>, f64)>> = reference
@@ -402,7 +410,23 @@ pub fn refine(
             fit_point(model, &pose, p, a, b)
         })
         .collect();
-    // The first gate also keeps the better half, in case the start is rough.
+    let mut problem = Problem {
+        model,
+        config,
+        reference,
+        current,
+        active: Vec::new(),
+    };
+    let mut points: Vec<Vector3<f64>> = Vec::with_capacity(fitted.len());
+    let needed = min_inliers.max(3);
+    let iterations = problem.gated_rounds(&mut pose, &mut fitted, &mut points, needed)?;
+    problem.result(pose, points, folds, iterations)
+}
+
+/// The gate of the first round: the configuration's, or the median χ² of the matches
+/// `fitted` at the starting pose when that is larger (the first round keeps the better
+/// half, in case the start is rough).
+fn first_gate(config: &RefineConfig, fitted: &[Option<(Vector3<f64>, f64)>]) -> f64 {
     let mut chi2s: Vec<f64> = Vec::with_capacity(fitted.len());
     chi2s.extend(fitted.iter().filter_map(|f| f.map(|(_, c)| c)));
     let median = if chi2s.is_empty() {
@@ -411,106 +435,146 @@ pub fn refine(
         let mid = chi2s.len() / 2;
         *chi2s.select_nth_unstable_by(mid, f64::total_cmp).1
     };
-    let mut gate = config.initial_gate_chi2.max(median);
-    let mut problem = Problem {
-        model,
-        config,
-        reference,
-        current,
-        active: Vec::new(),
-    };
-    let mut iterations = 0;
-    // Each round's buffers: the matches within the gate and their points.
-    let mut active: Vec<usize> = Vec::with_capacity(fitted.len());
-    problem.active.reserve(fitted.len());
-    let mut points: Vec<Vector3<f64>> = Vec::with_capacity(fitted.len());
-    for round in 0..config.rounds.max(1) {
-        active.clear();
-        active.extend(
-            fitted
-                .iter()
-                .enumerate()
-                .filter_map(|(i, f)| f.and_then(|(_, c2)| (c2 <= gate).then_some(i))),
-        );
-        if active.len() < needed {
-            return Err(RefineError::TooFewInliers {
-                got: active.len(),
-                needed,
-            });
+    config.initial_gate_chi2.max(median)
+}
+
+impl Problem<'_> {
+    /// Rounds of gating the matches `fitted` (each one's point and χ², fitted to the
+    /// pose) and refining `pose` on those within the gate, until the gated set settles
+    /// or [`RefineConfig::rounds`] are done; every match is fitted again to each new
+    /// pose. Leaves the last round's matches in `self.active` and their points in
+    /// `points`; returns the Levenberg-Marquardt iterations.
+    fn gated_rounds(
+        &mut self,
+        pose: &mut Pose,
+        fitted: &mut [Option<(Vector3<f64>, f64)>],
+        points: &mut Vec<Vector3<f64>>,
+        needed: usize,
+    ) -> Result<usize, RefineError> {
+        let mut gate = first_gate(self.config, fitted);
+        let mut iterations = 0;
+        // Each round's buffers: the matches within the gate and their points.
+        let mut active: Vec<usize> = Vec::with_capacity(fitted.len());
+        self.active.reserve(fitted.len());
+        for round in 0..self.config.rounds.max(1) {
+            active.clear();
+            active.extend(
+                fitted
+                    .iter()
+                    .enumerate()
+                    .filter_map(|(i, f)| f.and_then(|(_, c2)| (c2 <= gate).then_some(i))),
+            );
+            if active.len() < needed {
+                return Err(RefineError::TooFewInliers {
+                    got: active.len(),
+                    needed,
+                });
+            }
+            let settled = round > 0 && active == self.active;
+            std::mem::swap(&mut self.active, &mut active);
+            if settled {
+                break;
+            }
+            points.clear();
+            points.extend(
+                self.active
+                    .iter()
+                    .filter_map(|&i| fitted[i].map(|(p, _)| p)),
+            );
+            iterations += self.solve(pose, points)?;
+            self.refit(pose, fitted);
+            gate = self.config.gate_chi2;
         }
-        let settled = round > 0 && active == problem.active;
-        std::mem::swap(&mut problem.active, &mut active);
-        if settled {
-            break;
-        }
-        points.clear();
-        points.extend(
-            problem
-                .active
-                .iter()
-                .filter_map(|&i| fitted[i].map(|(p, _)| p)),
-        );
-        iterations += problem.solve(&mut pose, &mut points)?;
-        // Every match re-fitted to the new pose, for the next gate.
+        Ok(iterations)
+    }
+
+    /// Every match of `fitted` fitted again to `pose`, for the next gate.
+    fn refit(&self, pose: &Pose, fitted: &mut [Option<(Vector3<f64>, f64)>]) {
+        let (model, reference, current) = (self.model, self.reference, self.current);
         for (i, f) in fitted.iter_mut().enumerate() {
             let start = match f {
                 Some((p, _)) => *p,
                 None => model.anchor(&reference[i]),
             };
             *f = if start.z > 0.0 {
-                fit_point(model, &pose, start, &reference[i], &current[i])
+                fit_point(model, pose, start, &reference[i], &current[i])
             } else {
                 None
             };
         }
-        gate = config.gate_chi2;
     }
-    let mut blocks = Vec::with_capacity(points.len());
-    let reduced = problem
-        .build(&pose, &points, folds, &mut blocks, Parts::All)
-        .ok_or(RefineError::Singular)?;
-    let mut both = reduced[0];
-    both += &reduced[1];
-    let info = both.pose_pose;
-    let inv = info.try_inverse().ok_or(RefineError::Singular)?;
-    let n = problem.active.len();
-    let k = config.huber_k;
-    let mut chi2 = 0.0;
-    let mut scores = Vec::with_capacity(n);
-    for ((&i, p), b) in problem.active.iter().zip(&points).zip(&blocks) {
-        let Some((la, lb)) = linearize(
-            model,
-            &pose,
-            p,
-            &reference[i],
-            &current[i],
-            Parts::PointPose,
-        ) else {
-            continue;
-        };
-        let (sa, sb) = (la.residual.norm_squared(), lb.residual.norm_squared());
-        let wb = huber_weight(sb, k);
-        chi2 += huber_weight(sa, k) * sa + wb * sb;
-        scores.push(noise::Score {
-            u: current[i].u,
-            v: current[i].v,
-            r: lb.d_pose.transpose() * lb.residual * wb
-                - b.pose.transpose() * (b.pp_inv * b.gradient),
-        });
+
+    /// The refined motion at `pose` with the active matches' `points`: its covariance
+    /// from the normal equations (per fold of `folds`), scaled by the residuals' and the
+    /// regions' variance factors.
+    fn result(
+        self,
+        pose: Pose,
+        points: Vec<Vector3<f64>>,
+        folds: Option<&[u8]>,
+        iterations: usize,
+    ) -> Result<Refined, RefineError> {
+        let mut blocks = Vec::with_capacity(points.len());
+        let reduced = self
+            .build(&pose, &points, folds, &mut blocks, Parts::All)
+            .ok_or(RefineError::Singular)?;
+        let mut both = reduced[0];
+        both += &reduced[1];
+        let info = both.pose_pose;
+        let inv = info.try_inverse().ok_or(RefineError::Singular)?;
+        let n = self.active.len();
+        let (chi2, mut scores) = self.scores(&pose, &points, &blocks);
+        let dof = (3 * n).saturating_sub(6).max(1) as f64;
+        let scale2 = chi2 / dof;
+        let cluster_factor = noise::cluster_factor(&mut scores, &inv);
+        Ok(Refined {
+            motion: pose.motion(),
+            covariance: inv * noise::variance_factor(scale2, cluster_factor),
+            inliers: self.active,
+            points,
+            scale2,
+            cluster_factor,
+            iterations,
+            reduced,
+        })
     }
-    let dof = (3 * n).saturating_sub(6).max(1) as f64;
-    let scale2 = chi2 / dof;
-    let cluster_factor = noise::cluster_factor(&mut scores, &inv);
-    Ok(Refined {
-        motion: pose.motion(),
-        covariance: inv * noise::variance_factor(scale2, cluster_factor),
-        inliers: problem.active,
-        points,
-        scale2,
-        cluster_factor,
-        iterations,
-        reduced,
-    })
+
+    /// The Huber-weighted `χ²` of the active matches at `pose` with `points` (and their
+    /// elimination `blocks`), and each match's score on the pose with its point
+    /// eliminated, at its position in B ([`noise::cluster_factor`]).
+    fn scores(
+        &self,
+        pose: &Pose,
+        points: &[Vector3<f64>],
+        blocks: &[PointBlocks],
+    ) -> (f64, Vec<noise::Score>) {
+        let k = self.config.huber_k;
+        let (reference, current) = (self.reference, self.current);
+        let mut chi2 = 0.0;
+        let mut scores = Vec::with_capacity(self.active.len());
+        for ((&i, p), b) in self.active.iter().zip(points).zip(blocks) {
+            let Some((la, lb)) = linearize(
+                self.model,
+                pose,
+                p,
+                &reference[i],
+                &current[i],
+                Parts::PointPose,
+            ) else {
+                continue;
+            };
+            let (sa, sb) = (la.residual.norm_squared(), lb.residual.norm_squared());
+            let wb = huber_weight(sb, k);
+            chi2 += huber_weight(sa, k) * sa + wb * sb;
+            scores.push(noise::Score {
+                u: current[i].u,
+                v: current[i].v,
+                r: lb.d_pose.transpose() * lb.residual * wb
+                    - b.pose.transpose() * (b.pp_inv * b.gradient),
+            });
+        }
+        (chi2, scores)
+    }
 }
 
 #[cfg(test)]

@@ -367,9 +367,18 @@ mod tests {
         test_model(correction)
     }
 
-    /// Central differences of the residual against the analytic Jacobians.
-    #[test]
-    fn jacobians_match_finite_differences() {
+    /// Step of the central differences.
+    const H: f64 = 1e-6;
+
+    /// A model with every correction term, a pose `(R, t)` of B, a point (by inverse
+    /// depth in A) and a measurement in B, for the finite differences.
+    fn jacobian_case() -> (
+        StereoModel,
+        Matrix3<f64>,
+        Vector3<f64>,
+        Vector3<f64>,
+        StereoObservation,
+    ) {
         let m = model(DisparityCorrection::from_coefficients([
             0.7, 1.9, -0.4, 0.3, 0.8,
         ]));
@@ -381,8 +390,16 @@ mod tests {
             v: 111.0,
             d: 31.0,
         };
+        (m, rot, trans, p, z)
+    }
+
+    /// Central differences of the residual against the analytic Jacobians by the point
+    /// and the pose.
+    #[test]
+    fn jacobians_match_finite_differences() {
+        let (m, rot, trans, p, z) = jacobian_case();
         let lin = m.in_current(&rot, &trans, &p, &z).expect("in front");
-        let h = 1e-6;
+        let h = H;
         for k in 0..3 {
             let mut dp = Vector3::zeros();
             dp[k] = h;
@@ -408,6 +425,24 @@ mod tests {
                 lin.d_pose.column(k)
             );
         }
+        let la = m.in_reference(&p, &z);
+        for k in 0..3 {
+            let mut dp = Vector3::zeros();
+            dp[k] = h;
+            let num = (m.in_reference(&(p + dp), &z).residual
+                - m.in_reference(&(p - dp), &z).residual)
+                / (2.0 * h);
+            assert!((num - la.d_point.column(k)).norm() < 1e-4);
+        }
+    }
+
+    /// Central differences of the residual against the analytic Jacobians by the
+    /// calibration terms: the disparity correction's and the focal length's.
+    #[test]
+    fn calibration_jacobians_match_finite_differences() {
+        let (m, rot, trans, p, z) = jacobian_case();
+        let lin = m.in_current(&rot, &trans, &p, &z).expect("in front");
+        let h = H;
         for k in 0..CORRECTION_TERMS {
             let shifted = |s: f64| {
                 let mut c = m.correction.coefficients();
@@ -444,14 +479,6 @@ mod tests {
         assert!(((bp - bm) / (2.0 * h) - col).norm() < 1e-4, "focal in B");
         let col = la.d_correction.column(FOCAL_TERM);
         assert!(((ap - am) / (2.0 * h) - col).norm() < 1e-4, "focal in A");
-        for k in 0..3 {
-            let mut dp = Vector3::zeros();
-            dp[k] = h;
-            let num = (m.in_reference(&(p + dp), &z).residual
-                - m.in_reference(&(p - dp), &z).residual)
-                / (2.0 * h);
-            assert!((num - la.d_point.column(k)).norm() < 1e-4);
-        }
     }
 
     #[test]

@@ -40,6 +40,7 @@
 //! Memory is bounded: at most `keyframes` frames, each with its own observations, and the
 //! track identities and patches of the newest frame's features.
 
+mod link;
 pub mod marginal;
 mod prior;
 mod residual;
@@ -110,18 +111,6 @@ pub struct Link {
     /// The detected keypoint in the current frame.
     pub current_keypoint: StereoObservation,
 }
-
-/// Iterations of a template's (affine) alignment.
-const ALIGN_ITERATIONS: usize = 10;
-/// Largest move of a template's alignment from the pair's measurement, pixels (as the
-/// pair's).
-const ALIGN_MAX_MOVE_PX: f32 = 2.0;
-/// Smallest normalised cross-correlation of an aligned template with the image: below,
-/// the patch has changed too much since the track began (scale, occlusion) and the track
-/// ends. Set before any run; with a translation-only alignment 0.7 and 0.9 gave the
-/// same figures on the real sequences (within 0.01 points of drift) and suite means of
-/// 0.068 % and 0.056 % (0.060 % at 0.8; docs/window.md).
-const ALIGN_MIN_NCC: f32 = 0.8;
 
 /// The left images of the reference and the current frame, for the tracks' templates.
 #[derive(Debug, Clone, Copy)]
@@ -345,82 +334,27 @@ impl Window {
             .map_or(*pose, |r| r.pose_cw.inverse() * motion);
         let mut observations = self.spare.pop().unwrap_or_default();
         observations.reserve(links.len());
-        let mut current = Keyframe {
+        self.link_tracks(links, images, &mut observations);
+        let current = Keyframe {
             index,
             pose_cw: start.inverse(),
             observations,
             keyframe: false,
         };
-        let mut tracks = std::mem::take(&mut self.next_tracks);
-        tracks.clear();
-        tracks.reserve(links.len());
-        let mut used = std::mem::take(&mut self.used);
-        used.clear();
-        used.reserve(links.len());
-        let at = |z: &StereoObservation| (z.u as f32, z.v as f32);
-        for l in links {
-            if tracks.contains_key(&l.current_feature) {
-                continue;
-            }
-            let (track, z) = match (self.newest_tracks.get(&l.reference_feature), images) {
-                (Some(&t), None) => (t, l.current_keypoint),
-                (Some(&t), Some(im)) => {
-                    let found = self.templates.get(&t).and_then(|tpl| {
-                        tpl.align_affine(
-                            im.current,
-                            at(&l.current),
-                            ALIGN_ITERATIONS,
-                            ALIGN_MAX_MOVE_PX,
-                            Some(ALIGN_MIN_NCC),
-                        )
-                    });
-                    match found {
-                        Some((u, v)) => (
-                            t,
-                            StereoObservation {
-                                u: f64::from(u),
-                                v: f64::from(v),
-                                d: l.current.d,
-                            },
-                        ),
-                        None => {
-                            let t = self.new_track();
-                            if let Some(tpl) =
-                                PatchTemplate::sample(im.current, at(&l.current_keypoint))
-                            {
-                                self.templates.insert(t, tpl);
-                            }
-                            (t, l.current_keypoint)
-                        }
-                    }
-                }
-                (None, _) => {
-                    let t = self.new_track();
-                    if let Some(r) = self.frames.back_mut() {
-                        r.observations.push((t, l.reference));
-                    }
-                    match images
-                        .and_then(|im| PatchTemplate::sample(im.reference, at(&l.reference)))
-                    {
-                        Some(tpl) => {
-                            self.templates.insert(t, tpl);
-                            (t, l.current)
-                        }
-                        None => (t, l.current_keypoint),
-                    }
-                }
-            };
-            if used.insert(track) {
-                tracks.insert(l.current_feature, track);
-                current.observations.push((track, z));
-            }
+        let dropped = self.push_newest(model, current);
+        // Two frames that are a pair add nothing to the pair's refinement; two that are
+        // not (the newest measured from a frame that left) do.
+        if self.frames.len() < 3 && !dropped {
+            return None;
         }
-        // The map of the frame before is kept for the next frame's.
-        self.next_tracks = std::mem::replace(&mut self.newest_tracks, tracks);
-        // `used` holds the tracks of the newest frame: the live ones.
-        self.templates.retain(|t, _| used.contains(t));
-        self.used = used;
-        // The previous frame leaves unless it is a keyframe: its tracks go on in this one.
+        self.refine_newest(model, calibration_covariance)
+    }
+
+    /// Adds the newest frame `current`: the frame before it leaves unless it is a
+    /// keyframe (its tracks go on in this one; returns true then), `current` becomes a
+    /// keyframe or not ([`KeyframeRule`]), and the oldest keyframes leave to make room,
+    /// their information marginalised into the prior on the others or discarded.
+    fn push_newest(&mut self, model: &StereoModel, mut current: Keyframe) -> bool {
         let dropped = self.frames.back().is_some_and(|f| !f.keyframe);
         if dropped && let Some(f) = self.frames.pop_back() {
             self.recycle(f);
@@ -429,8 +363,6 @@ impl Window {
             .frames
             .back()
             .is_none_or(|last| self.rule.is_keyframe(last, &current, &model.noise));
-        // The oldest keyframes leave to make room: their information is marginalised into
-        // the prior on the others, or discarded.
         while self.frames.len() >= self.config.keyframes {
             if self.config.marginalise != Marginalisation::Off {
                 self.prior = marginal::marginalise(
@@ -447,11 +379,17 @@ impl Window {
             }
         }
         self.frames.push_back(current);
-        // Two frames that are a pair add nothing to the pair's refinement; two that are
-        // not (the newest measured from a frame that left) do.
-        if self.frames.len() < 3 && !dropped {
-            return None;
-        }
+        dropped
+    }
+
+    /// Refines the window ([`solve::refine_window`]) and returns the newest frame's pose
+    /// (the camera in the world), what was done, and the window's motion of the newest
+    /// frame from its oldest keyframe.
+    fn refine_newest(
+        &mut self,
+        model: &StereoModel,
+        calibration_covariance: &MatrixK,
+    ) -> Option<(Isometry3<f64>, WindowReport, WindowMotion)> {
         let report = solve::refine_window(
             model,
             calibration_covariance,

@@ -2,6 +2,7 @@
 
 use super::*;
 use crate::refine::model::StereoObservation;
+use crate::window::residual::linearize;
 use nalgebra::Rotation3;
 
 /// Central differences of the residual against both pose Jacobians.

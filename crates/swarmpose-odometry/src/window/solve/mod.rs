@@ -18,17 +18,19 @@
 
 use nalgebra::allocator::Allocator;
 use nalgebra::{
-    DMatrix, DVector, DefaultAllocator, Dim, Dyn, Matrix3, Matrix6, OMatrix, SMatrix, Vector3,
-    Vector6,
+    DMatrix, DVector, DefaultAllocator, Dim, Dyn, Matrix3, Matrix6, OMatrix, Vector3, Vector6,
 };
 
+mod system;
+
 use super::prior::{Prior, terms};
-use super::residual::{Pose, Relative, huber, linearize, relative_poses};
+use super::residual::{Pose, Relative, huber, relative_poses};
 use super::tracks::{Tracks, tracks_of};
 use super::{Keyframe, WindowConfig, WindowReport};
 use crate::refine::evidence::{Matrix6xK, MatrixK};
-use crate::refine::model::{CALIBRATION_TERMS, Matrix3x6, StereoModel};
+use crate::refine::model::{Matrix3x6, StereoModel};
 use crate::refine::noise::{Score, cluster_factor, variance_factor};
+use system::build;
 
 /// Robust cost `Σ ρ` of every track at the relative poses `rel` of `n` keyframes, or
 /// infinity when a point leaves a view.
@@ -92,123 +94,6 @@ pub(super) struct Scratch {
     /// The reduced system of the last build: `S` and the gradient `g`.
     s: DMatrix<f64>,
     g: DVector<f64>,
-}
-
-/// Adds `block` to the `H_pξ` of variable `v` among `hpx[start..]`, and `score` to its
-/// entry of `hgx` (kept beside `hpx`).
-fn add_hpx(
-    (hpx, hgx): (&mut Vec<(usize, Matrix3x6)>, &mut Vec<Vector6<f64>>),
-    start: usize,
-    v: usize,
-    (block, score): (&Matrix3x6, &Vector6<f64>),
-) {
-    match hpx[start..].iter().position(|(i, _)| *i == v) {
-        Some(k) => {
-            hpx[start + k].1 += block;
-            hgx[start + k] += score;
-        }
-        None => {
-            hpx.push((v, *block));
-            hgx.push(*score);
-        }
-    }
-}
-
-/// The reduced system at `poses` and `points`, over the poses after the first `fixed`
-/// (held fixed: 1 in the refinement, 0 to marginalise the first), into `sc.s` and `sc.g`;
-/// `None` if a point left a view or its block is singular.
-fn build(
-    model: &StereoModel,
-    k: f64,
-    (poses, fixed): (&[Pose], usize),
-    tracks: &Tracks,
-    points: &[Vector3<f64>],
-    sc: &mut Scratch,
-) -> Option<()> {
-    let n = poses.len();
-    let m = n.checked_sub(fixed)?;
-    relative_poses(poses, &mut sc.rel);
-    sc.elim.clear();
-    sc.hpx.clear();
-    sc.hgx.clear();
-    sc.blocks.clear();
-    sc.blocks.resize(m * m, Matrix6::zeros());
-    sc.gradient.clear();
-    sc.gradient.resize(m, Vector6::zeros());
-    sc.chi2 = 0.0;
-    sc.cost = 0.0;
-    sc.pose_calibration.clear();
-    sc.pose_calibration.resize(m, Matrix6xK::zeros());
-    // Variable of keyframe slot `i`: the first `fixed` slots have none.
-    let var = |slot: usize| slot.checked_sub(fixed);
-    for ((_, obs), p) in tracks.iter().zip(points) {
-        let anchor = obs[0].0;
-        let mut hpp = Matrix3::zeros();
-        let mut gp = Vector3::zeros();
-        let mut hpc = SMatrix::<f64, 3, CALIBRATION_TERMS>::zeros();
-        let start = sc.hpx.len();
-        for (slot, z) in obs {
-            let j = linearize(model, (&sc.rel, n), anchor, *slot, p, z)?;
-            let r2 = j.residual.norm_squared();
-            let (w, rho) = huber(r2, k);
-            sc.chi2 += w * r2;
-            sc.cost += rho;
-            let dpw = j.d_point.transpose() * w;
-            hpp += dpw * j.d_point;
-            gp += dpw * j.residual;
-            hpc += dpw * j.d_correction;
-            let Some((dj, da)) = j.poses else {
-                continue;
-            };
-            let pair = [(var(*slot), dj), (var(anchor), da)];
-            for (v1, b1) in &pair {
-                let Some(v1) = *v1 else { continue };
-                let b1w = b1.transpose() * w;
-                let score = b1w * j.residual;
-                add_hpx((&mut sc.hpx, &mut sc.hgx), start, v1, (&(dpw * b1), &score));
-                sc.gradient[v1] += score;
-                sc.pose_calibration[v1] += b1w * j.d_correction;
-                for (v2, b2) in &pair {
-                    let Some(v2) = *v2 else { continue };
-                    sc.blocks[v1 * m + v2] += b1w * b2;
-                }
-            }
-        }
-        let hpp_inv = hpp.try_inverse()?;
-        let end = sc.hpx.len();
-        for i1 in start..end {
-            let (v1, b1) = sc.hpx[i1];
-            let t1 = b1.transpose() * hpp_inv;
-            sc.gradient[v1] -= t1 * gp;
-            sc.pose_calibration[v1] -= t1 * hpc;
-            for i2 in start..end {
-                let (v2, b2) = &sc.hpx[i2];
-                sc.blocks[v1 * m + v2] -= t1 * b2;
-            }
-        }
-        sc.elim.push(Eliminated {
-            hpp_inv,
-            gp,
-            start,
-            end,
-        });
-    }
-    let size = 6 * m;
-    if sc.s.shape() != (size, size) {
-        sc.s = DMatrix::zeros(size, size);
-    }
-    if sc.g.len() != size {
-        sc.g = DVector::zeros(size);
-    }
-    for c in 0..size {
-        for r in 0..size {
-            sc.s[(r, c)] = sc.blocks[(r / 6) * m + c / 6][(r % 6, c % 6)];
-        }
-    }
-    for r in 0..size {
-        sc.g[r] = sc.gradient[r / 6][r % 6];
-    }
-    Some(())
 }
 
 /// `dst = src`, in `dst`'s buffer when it has the size.
@@ -293,26 +178,15 @@ pub(crate) fn refine_window(
         return None;
     }
     let k = config.huber_k;
-    let Workspace {
-        sc,
-        tracks,
-        poses,
-        trial,
-        points,
-        trial_points,
-        trial_rel,
-        damped,
-        dx,
-        columns,
-    } = ws;
-    poses.clear();
-    poses.extend(frames.iter().map(|f| Pose::of(&f.pose_cw)));
-    let n = poses.len();
-    tracks_of(model, k, frames, poses, |_| true, &mut sc.rel, tracks);
-    let observations = tracks.observations();
-    points.clear();
-    points.extend(tracks.list.iter().map(|t| t.point));
-    if tracks.is_empty() {
+    ws.poses.clear();
+    ws.poses.extend(frames.iter().map(|f| Pose::of(&f.pose_cw)));
+    let n = ws.poses.len();
+    let (sc, tracks) = (&mut ws.sc, &mut ws.tracks);
+    tracks_of(model, k, frames, &ws.poses, |_| true, &mut sc.rel, tracks);
+    let observations = ws.tracks.observations();
+    ws.points.clear();
+    ws.points.extend(ws.tracks.list.iter().map(|t| t.point));
+    if ws.tracks.is_empty() {
         return None;
     }
     // The prior of the keyframes marginalised before, on the slots of its keyframes.
@@ -323,94 +197,155 @@ pub(crate) fn refine_window(
             .as_ref()
             .map_or(0.0, |(p, slots)| p.energy(slots, poses, &terms))
     };
-    trial_points.clear();
-    trial_points.extend_from_slice(points);
+    ws.trial_points.clear();
+    ws.trial_points.extend_from_slice(&ws.points);
     let mut lambda = 1e-4;
     let mut iterations = 0;
     let mut covariance = None;
-    'outer: for _ in 0..config.max_iterations {
+    for _ in 0..config.max_iterations {
         iterations += 1;
         // The cost at the current state comes with its linearisation.
-        build(model, k, (poses, 1), tracks, points, sc)?;
+        let sc = &mut ws.sc;
+        build(model, k, (&ws.poses, 1), &ws.tracks, &ws.points, sc)?;
         if let Some((p, slots)) = &prior {
+            let system = (&mut sc.s, &mut sc.g);
             p.add_to(
-                (slots, poses, 1),
+                (slots, &ws.poses, 1),
                 &terms,
-                (&mut sc.s, &mut sc.g),
+                system,
                 &mut sc.pose_calibration,
             );
         }
-        let current = sc.cost + prior_energy(poses);
+        let current = sc.cost + prior_energy(&ws.poses);
         if !current.is_finite() {
             return None;
         }
         if iterations == 1 {
             covariance = newest_covariance(
                 sc,
-                (observations, tracks),
+                (observations, &ws.tracks),
                 calibration_covariance,
-                (damped, columns),
+                (&mut ws.damped, &mut ws.columns),
             );
         }
-        loop {
-            if lambda > 1e8 {
-                break 'outer;
-            }
-            assign(damped, &sc.s);
-            for d in 0..damped.nrows() {
-                damped[(d, d)] *= 1.0 + lambda;
-                damped[(d, d)] += 1e-12;
-            }
-            // Factorised in its own buffer, which is taken back after the solve.
-            let Some(chol) = std::mem::take(damped).cholesky() else {
-                lambda *= 10.0;
-                continue;
-            };
-            assign(dx, &sc.g);
-            chol.solve_mut(dx);
-            dx.neg_mut();
-            *damped = chol.unpack_dirty();
-            trial.clear();
-            trial.extend_from_slice(poses);
-            for (v, pose) in trial.iter_mut().enumerate().skip(1) {
-                let o = 6 * (v - 1);
-                let nu = Vector3::new(dx[o], dx[o + 1], dx[o + 2]);
-                let om = Vector3::new(dx[o + 3], dx[o + 4], dx[o + 5]);
-                *pose = pose.moved(&nu, &om);
-            }
-            for ((tp, p), e) in trial_points.iter_mut().zip(points.iter()).zip(&sc.elim) {
-                let mut rhs = e.gp;
-                for (v, b) in &sc.hpx[e.start..e.end] {
-                    rhs += b * dx.fixed_rows::<6>(6 * v);
-                }
-                *tp = p - e.hpp_inv * rhs;
-            }
-            relative_poses(trial, trial_rel);
-            let c = cost(model, k, (trial_rel, n), tracks, trial_points) + prior_energy(trial);
-            if c < current {
-                let done = current - c < 1e-6 * current;
-                std::mem::swap(poses, trial);
-                points.copy_from_slice(trial_points);
-                lambda = (lambda * 0.1).max(1e-9);
-                if done {
-                    break 'outer;
-                }
-                break;
-            }
-            lambda *= 10.0;
+        let step = ws.damped_steps((model, k, n), &mut lambda, current, &prior_energy);
+        if step != Step::Taken {
+            break;
         }
     }
-    for (f, p) in frames.iter_mut().zip(poses.iter()) {
+    for (f, p) in frames.iter_mut().zip(ws.poses.iter()) {
         f.pose_cw = p.isometry();
     }
     Some(WindowReport {
         keyframes: frames.len(),
-        tracks: tracks.len(),
+        tracks: ws.tracks.len(),
         observations,
         iterations,
         keyframe: frames.last().is_some_and(|f| f.keyframe),
         covariance,
     })
+}
+
+/// What one Levenberg-Marquardt iteration of the window did.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Step {
+    /// It took a step that lowered the cost: the next iteration may go on.
+    Taken,
+    /// It took a step that lowered the cost by less than a millionth: converged.
+    Converged,
+    /// The damping grew past its bound without a step that lowers the cost.
+    Stalled,
+}
+
+impl Workspace {
+    /// One iteration's damped steps from the linearised system in `sc` at the state
+    /// `poses`, `points` (of cost `current`, `prior_energy` the prior's part): the
+    /// damping `lambda` grows tenfold until a step lowers the cost, and that step is
+    /// taken (the damping then shrinks tenfold). `n` keyframes, Huber threshold `k`.
+    fn damped_steps(
+        &mut self,
+        (model, k, n): (&StereoModel, f64, usize),
+        lambda: &mut f64,
+        current: f64,
+        prior_energy: &impl Fn(&[Pose]) -> f64,
+    ) -> Step {
+        loop {
+            if *lambda > 1e8 {
+                return Step::Stalled;
+            }
+            if !self.solve_damped(*lambda) {
+                *lambda *= 10.0;
+                continue;
+            }
+            self.move_trial();
+            let c = cost(
+                model,
+                k,
+                (&self.trial_rel, n),
+                &self.tracks,
+                &self.trial_points,
+            ) + prior_energy(&self.trial);
+            if c < current {
+                let done = current - c < 1e-6 * current;
+                std::mem::swap(&mut self.poses, &mut self.trial);
+                self.points.copy_from_slice(&self.trial_points);
+                *lambda = (*lambda * 0.1).max(1e-9);
+                return if done { Step::Converged } else { Step::Taken };
+            }
+            *lambda *= 10.0;
+        }
+    }
+
+    /// The step `dx` of the reduced system damped by `lambda` (`S + λ diag(S)`, and a
+    /// tiny constant on the diagonal); false when that is not positive definite.
+    fn solve_damped(&mut self, lambda: f64) -> bool {
+        let Self { sc, damped, dx, .. } = self;
+        assign(damped, &sc.s);
+        for d in 0..damped.nrows() {
+            damped[(d, d)] *= 1.0 + lambda;
+            damped[(d, d)] += 1e-12;
+        }
+        // Factorised in its own buffer, which is taken back after the solve.
+        let Some(chol) = std::mem::take(damped).cholesky() else {
+            return false;
+        };
+        assign(dx, &sc.g);
+        chol.solve_mut(dx);
+        dx.neg_mut();
+        *damped = chol.unpack_dirty();
+        true
+    }
+
+    /// The state moved by the step `dx` into `trial` (every pose but the oldest),
+    /// `trial_points` (each point back-substituted) and `trial_rel`.
+    fn move_trial(&mut self) {
+        let Self {
+            sc,
+            poses,
+            trial,
+            points,
+            trial_points,
+            trial_rel,
+            dx,
+            ..
+        } = self;
+        trial.clear();
+        trial.extend_from_slice(poses);
+        for (v, pose) in trial.iter_mut().enumerate().skip(1) {
+            let o = 6 * (v - 1);
+            let nu = Vector3::new(dx[o], dx[o + 1], dx[o + 2]);
+            let om = Vector3::new(dx[o + 3], dx[o + 4], dx[o + 5]);
+            *pose = pose.moved(&nu, &om);
+        }
+        for ((tp, p), e) in trial_points.iter_mut().zip(points.iter()).zip(&sc.elim) {
+            let mut rhs = e.gp;
+            for (v, b) in &sc.hpx[e.start..e.end] {
+                rhs += b * dx.fixed_rows::<6>(6 * v);
+            }
+            *tp = p - e.hpp_inv * rhs;
+        }
+        relative_poses(trial, trial_rel);
+    }
 }
 
 /// The covariance of the newest keyframe's pose perturbation `ξ` (the oldest held fixed)
@@ -493,5 +428,4 @@ fn track_scores(sc: &Scratch, tracks: &Tracks, columns: &DMatrix<f64>) -> Vec<Sc
 }
 
 #[cfg(test)]
-#[path = "solve_tests.rs"]
 mod tests;
