@@ -32,6 +32,7 @@ use swarmpose_runs::synthetic::SyntheticSequence;
 use super::odometry_mcap::McapOutput;
 use super::odometry_output::{OutputDir, StreamFile};
 use super::odometry_split::SplitLog;
+use super::odometry_unpaired::Unpaired;
 use super::stereo_options::StereoOptions;
 use crate::error::{CliError, EXIT_NOT_USABLE};
 use crate::methods::{EstimatorOptions, Method, build};
@@ -264,11 +265,9 @@ fn config(args: &OdometryArgs) -> Result<OdometryConfig, CliError> {
 pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
     let config = config(args)?;
     let estimator = build(args.method, &args.options)?;
-    if !(args.stamp_tolerance.is_finite() && args.stamp_tolerance >= 0.0) {
-        return Err(CliError::usage(
-            "--stamp-tolerance must be a number of milliseconds, 0 or more",
-        ));
-    }
+    let bag_options =
+        BagOptions::with_tolerance_ms(args.left.clone(), args.right.clone(), args.stamp_tolerance)
+            .map_err(|e| CliError::usage(format!("--stamp-tolerance: {e}")))?;
     let mut bag: Option<BagInfo> = None;
     let source = match &args.sequence {
         None => {
@@ -291,12 +290,8 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
             Source::Rgbd(seq, format!("{} (TUM RGB-D)", dir.display()))
         }
         Some(dir) => {
-            let opts = BagOptions {
-                left: args.left.clone(),
-                right: args.right.clone(),
-                stamp_tolerance_ns: (args.stamp_tolerance * 1e6).round() as i64,
-            };
-            let opened = open_stereo(dir, &opts).map_err(|e| CliError::usage(e.to_string()))?;
+            let opened =
+                open_stereo(dir, &bag_options).map_err(|e| CliError::usage(e.to_string()))?;
             bag = opened.bag;
             let seq = opened.sequence;
             for note in seq.notes() {
@@ -352,7 +347,19 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
         names,
         bag.as_ref().map(|b| &b.camera_info),
         bag.as_ref().map(|b| b.stamps_ns.clone()),
+        match &source {
+            Source::Stereo(_, _, gt) => gt.as_deref(),
+            Source::Rgbd(s, _) => s.ground_truth(),
+        },
     )?;
+    let frame_stamps = bag
+        .as_ref()
+        .map(|b| b.stamps_ns.clone())
+        .unwrap_or_default();
+    let mut unpaired = bag.as_ref().map_or_else(
+        || Unpaired::new(&[], 0),
+        |b| Unpaired::new(&b.unpaired, frame_stamps.first().copied().unwrap_or(0)),
+    );
     let stop = StopRequest::install();
     let mut track = Track {
         poses: Vec::with_capacity(n),
@@ -369,6 +376,10 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
         let written = kitti
             .line(&kitti_line(&r.pose))
             .and_then(|()| tum.line(&tum_line(r.timestamp_s, &r.pose)))
+            .and_then(|()| {
+                let stamp = frame_stamps.get(r.index).copied().unwrap_or(i64::MIN);
+                unpaired.write_before(stamp, &mut frames)
+            })
             .and_then(|()| frames.line(&frames_row(r)))
             .and_then(|()| covariance_row(r).map_or(Ok(()), |row| cov.line(&row)))
             .and_then(|()| split.as_mut().map_or(Ok(()), |s| s.add(r)))
@@ -411,6 +422,7 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
     if let Some(e) = write_error {
         return Err(e);
     }
+    unpaired.write_before(i64::MAX, &mut frames)?;
     let (title, gt) = match &source {
         Source::Stereo(_, t, gt) => (t.clone(), gt.clone()),
         Source::Rgbd(s, t) => (t.clone(), s.ground_truth().map(<[_]>::to_vec)),
@@ -453,6 +465,9 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
     }
     if let Some(s) = &split {
         out(&s.summary())?;
+    }
+    if let Some(line) = unpaired.summary() {
+        out(&line)?;
     }
     out(&format!(
         "written: {} ({})",
