@@ -57,7 +57,7 @@ odometry.mcap (ROS 2 messages: nav_msgs/Odometry with covariance, PoseWithCovari
 time per stage in ms, the motion from the previous frame, the position, the disparity \
 correction, 1 for a keyframe of the sliding window, and 1 for an ambiguous motion: two distinct \
 motions with comparable support, such as a truck ahead keeping pace, of which the one nearer the \
-constant-velocity prediction was taken), motion_covariance.csv (each tracked frame's measured motion from its \
+constant-velocity prediction was taken; a bag's images without a partner have a row with no frame number and the status unpaired (TOPIC message I, stamp NS ns)), motion_covariance.csv (each tracked frame's measured motion from its \
 reference frame and the motion's 6x6 covariance, see its header). At the end: calibration.json (the self-calibration's decision and evidence), \
 trajectory.smoothed.kitti.txt/.tum.txt (each frame's last estimate by the sliding window: a fixed-lag smoother), \
 trajectory.png/.svg (top view against the ground truth: figure 17) and, with ground truth, \
