@@ -17,7 +17,7 @@ use crate::errors::odometry_error;
 use crate::evaluate::json_value;
 use crate::frame::Frame;
 use crate::options::OdometryConfig;
-use crate::sequence::{Sequence, camera_dict};
+use crate::sequence::{BagArgs, Sequence, camera_dict};
 
 /// A streaming stereo visual odometry: ``track`` takes one rectified stereo pair at a
 /// time and returns its pose at once (a ``Frame``). Its memory does not grow with the
@@ -78,7 +78,7 @@ impl Odometry {
         options: Option<&Bound<'py, PyDict>>,
     ) -> PyResult<Self> {
         let config = OdometryConfig::resolve(py, "Odometry.from_sequence", config, options)?;
-        let seq = Sequence::open(&sequence_dir)?;
+        let seq = Sequence::open(&sequence_dir, BagArgs::default())?;
         Ok(Self {
             inner: config.get().build(camera_of(seq.inner.as_ref()), None)?,
         })

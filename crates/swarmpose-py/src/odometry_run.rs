@@ -17,22 +17,28 @@ use crate::errors::run_error_then;
 use crate::evaluate::json_value;
 use crate::frame::Frame;
 use crate::options::OdometryConfig;
-use crate::sequence::Sequence;
+use crate::sequence::{BagArgs, Sequence};
 
 /// Runs the odometry over a whole stereo sequence directory (KITTI, Karlsruhe or
-/// EuRoC), frame ``i`` at ``i * frame_period`` seconds, exactly as ``swarmpose
-/// odometry`` does; settings as for ``Odometry(...)``: ``config`` (an
-/// ``OdometryConfig``) or its keywords. Returns an ``OdometryRun``. The GIL is released
+/// EuRoC) or ROS 2 bag, frame ``i`` at its timestamp (or ``i * frame_period`` seconds
+/// without one), exactly as ``swarmpose odometry`` does; a bag's ``left``, ``right`` and
+/// ``stamp_tolerance`` (milliseconds) as for ``Sequence``; settings as for
+/// ``Odometry(...)``: ``config`` (an ``OdometryConfig``) or its keywords. Returns an ``OdometryRun``. The GIL is released
 /// during the run; Ctrl-C stops it between frames. A frame that cannot be read stops the
 /// run, as on the command line: the exception names the frame and how many were done,
 /// and its ``run`` attribute is the ``OdometryRun`` of those frames (so is a
 /// ``KeyboardInterrupt``'s).
 #[pyfunction]
-#[pyo3(signature = (sequence_dir, *, frame_period = None, config = None, **options))]
+#[pyo3(signature = (sequence_dir, *, frame_period = None, left = None, right = None,
+                    stamp_tolerance = 0.0, config = None, **options))]
+#[allow(clippy::too_many_arguments)] // Python's keywords
 pub(crate) fn odometry<'py>(
     py: Python<'py>,
     sequence_dir: PathBuf,
     frame_period: Option<f64>,
+    left: Option<String>,
+    right: Option<String>,
+    stamp_tolerance: f64,
     config: Option<Bound<'py, OdometryConfig>>,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<OdometryRun> {
@@ -45,7 +51,14 @@ pub(crate) fn odometry<'py>(
             "frame_period must be a positive number of seconds",
         ));
     }
-    let seq = Sequence::open(&sequence_dir)?;
+    let seq = Sequence::open(
+        &sequence_dir,
+        BagArgs {
+            left,
+            right,
+            stamp_tolerance,
+        },
+    )?;
     let mut engine = config.get().build(camera_of(seq.inner.as_ref()), None)?;
     let mut frames: Vec<FrameResult> = Vec::with_capacity(seq.inner.len());
     let mut interrupted: Option<PyErr> = None;

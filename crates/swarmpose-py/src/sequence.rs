@@ -1,14 +1,17 @@
-//! `swarmpose.Sequence`: a recorded stereo sequence (KITTI, Karlsruhe, EuRoC) read by
-//! the workspace's loaders, frame by frame as numpy images.
+//! `swarmpose.Sequence`: a recorded stereo sequence (KITTI, Karlsruhe, EuRoC, or a ROS 2
+//! bag) read by the workspace's loaders, frame by frame as numpy images. It is opened by
+//! [`swarmpose_ros::open_stereo`], the front door of `swarmpose odometry`: the same
+//! inputs, the same errors.
 
 use std::path::PathBuf;
 
 use numpy::{PyArray2, PyArray3};
-use pyo3::exceptions::PyIndexError;
+use pyo3::exceptions::{PyIndexError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use swarmpose_datasets::StereoSequence;
 use swarmpose_odometry::StereoCamera;
+use swarmpose_ros::{BagInfo, StereoOptions, open_stereo};
 use swarmpose_runs::batch::camera_of;
 
 use crate::arrays::{gray_image, transforms};
@@ -17,11 +20,21 @@ use crate::errors::dataset_error;
 /// The left and right images of a frame.
 type ImagePair<'py> = (Bound<'py, PyArray2<u8>>, Bound<'py, PyArray2<u8>>);
 
-/// A stereo sequence directory: ``len(seq)`` frames, ``seq[i]`` the rectified
-/// ``(left, right)`` uint8 images of frame ``i``.
+/// A stereo sequence directory or ROS 2 bag: ``len(seq)`` frames, ``seq[i]`` the
+/// rectified ``(left, right)`` uint8 images of frame ``i``.
 #[pyclass(frozen, module = "swarmpose")]
 pub(crate) struct Sequence {
     pub(crate) inner: Box<dyn StereoSequence>,
+    /// What a bag adds (its topics, stamps, unpaired images), for a bag.
+    pub(crate) bag: Option<BagInfo>,
+}
+
+/// How to read a bag: the topics named or found, the stamp tolerance (milliseconds).
+#[derive(Debug, Clone, Default)]
+pub(crate) struct BagArgs {
+    pub(crate) left: Option<String>,
+    pub(crate) right: Option<String>,
+    pub(crate) stamp_tolerance: f64,
 }
 
 /// The camera as a dict: fx, fy, cx, cy (pixels), baseline (metres), width, height.
@@ -38,21 +51,44 @@ pub(crate) fn camera_dict<'py>(py: Python<'py>, c: &StereoCamera) -> PyResult<Bo
 }
 
 impl Sequence {
-    /// Opens `dir` (layout detected).
-    pub(crate) fn open(dir: &std::path::Path) -> PyResult<Self> {
-        let inner = swarmpose_datasets::open(dir).map_err(|e| dataset_error(&e))?;
-        Ok(Self { inner })
+    /// Opens `path` (a bag, or a folder whose layout is detected) as `swarmpose odometry`
+    /// does.
+    pub(crate) fn open(path: &std::path::Path, bag: BagArgs) -> PyResult<Self> {
+        let opts = StereoOptions::with_tolerance_ms(bag.left, bag.right, bag.stamp_tolerance)
+            .map_err(|e| PyValueError::new_err(format!("stamp_tolerance: {e}")))?;
+        let opened = open_stereo(path, &opts).map_err(|e| dataset_error(&e))?;
+        Ok(Self {
+            inner: opened.sequence,
+            bag: opened.bag,
+        })
     }
 }
 
 #[pymethods]
 impl Sequence {
     /// Opens a KITTI odometry, Karlsruhe or EuRoC MAV sequence directory (the layout is
-    /// detected). Raises ``FileNotFoundError`` for a missing directory, ``ValueError``
-    /// for an unknown layout or malformed files.
+    /// detected) or a ROS 2 bag (an ``.mcap`` or ``.db3`` file, or a rosbag2 folder with
+    /// ``metadata.yaml``), as ``swarmpose odometry`` does. For a bag: ``left`` and
+    /// ``right`` name the image topics (found when not given), ``stamp_tolerance`` is the
+    /// largest difference of a pair's header stamps (milliseconds). Raises
+    /// ``FileNotFoundError`` for a missing directory, ``ValueError`` for an unknown
+    /// layout, malformed files or an unusable bag (the command line's message).
     #[new]
-    fn new(path: PathBuf) -> PyResult<Self> {
-        Self::open(&path)
+    #[pyo3(signature = (path, *, left = None, right = None, stamp_tolerance = 0.0))]
+    fn new(
+        path: PathBuf,
+        left: Option<String>,
+        right: Option<String>,
+        stamp_tolerance: f64,
+    ) -> PyResult<Self> {
+        Self::open(
+            &path,
+            BagArgs {
+                left,
+                right,
+                stamp_tolerance,
+            },
+        )
     }
 
     fn __len__(&self) -> usize {
@@ -82,13 +118,35 @@ impl Sequence {
         ))
     }
 
-    /// The layout: ``"kitti"``, ``"karlsruhe"`` or ``"euroc"``.
+    /// The layout: ``"kitti"``, ``"karlsruhe"``, ``"euroc"`` or ``"ros2 bag"``.
     #[getter]
     fn layout(&self) -> &'static str {
         self.inner.layout()
     }
 
-    /// The directory.
+    /// The header stamp of each frame's left image (nanoseconds) for a bag, else
+    /// ``None``.
+    #[getter]
+    fn stamps_ns(&self) -> Option<Vec<i64>> {
+        self.bag.as_ref().map(|b| b.stamps_ns.clone())
+    }
+
+    /// The ``(left, right)`` image topics of a bag, else ``None``.
+    #[getter]
+    fn topics(&self) -> Option<(String, String)> {
+        self.bag.as_ref().map(|b| b.topics.clone())
+    }
+
+    /// The images of a bag that found no partner (one line each: topic, message,
+    /// stamp); empty for a folder.
+    #[getter]
+    fn unpaired(&self) -> Vec<String> {
+        self.bag.as_ref().map_or_else(Vec::new, |b| {
+            b.unpaired.iter().map(ToString::to_string).collect()
+        })
+    }
+
+    /// The directory (or bag).
     #[getter]
     fn root(&self) -> PathBuf {
         self.inner.root().to_owned()

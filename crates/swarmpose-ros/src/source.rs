@@ -6,6 +6,7 @@ use std::path::Path;
 use swarmpose_datasets::{DatasetError, StereoSequence};
 
 use crate::msg::CameraInfo;
+use crate::stereo::pairing::UnpairedImage;
 use crate::stereo::{BagSequence, StereoOptions, to_dataset};
 
 /// True when `path` is a ROS 2 bag: an `.mcap` or `.db3` file, or a folder with
@@ -30,8 +31,8 @@ pub struct BagInfo {
     pub stamps_ns: Vec<i64>,
     /// The left and right image topics.
     pub topics: (String, String),
-    /// The images left without a partner, one line each.
-    pub unpaired: Vec<String>,
+    /// The images left without a partner (in no frame), in stamp order.
+    pub unpaired: Vec<UnpairedImage>,
     /// Where reading stopped early (a cut bag), if it did.
     pub stopped: Option<String>,
 }

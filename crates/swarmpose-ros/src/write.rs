@@ -5,7 +5,9 @@
 //!
 //! Topics (names in [`Topics`]): `nav_msgs/Odometry`, `geometry_msgs/PoseWithCovarianceStamped`,
 //! `tf2_msgs/TFMessage` (`/tf`), `diagnostic_msgs/DiagnosticArray`, the left
-//! `sensor_msgs/CameraInfo`, and at the end `nav_msgs/Path` of the estimate and, when
+//! `sensor_msgs/CameraInfo`, the ground truth's `geometry_msgs/PoseStamped` when known
+//! (one per frame, so that `evo_ape bag2 odometry.mcap` compares the two topics), and at
+//! the end `nav_msgs/Path` of the estimate and, when
 //! known, of the ground truth; optionally `sensor_msgs/CompressedImage` (PNG) and
 //! `sensor_msgs/PointCloud2`.
 
@@ -42,6 +44,8 @@ impl Topics {
     pub const PATH: &'static str = "/swarmpose/path";
     /// `nav_msgs/Path` of the ground truth, at the end.
     pub const GROUND_TRUTH: &'static str = "/swarmpose/ground_truth";
+    /// `geometry_msgs/PoseStamped` of the ground truth, one per frame when known.
+    pub const GROUND_TRUTH_POSE: &'static str = "/swarmpose/ground_truth/pose";
     /// `sensor_msgs/CompressedImage` (PNG) of the left image with the inliers.
     pub const IMAGE: &'static str = "/swarmpose/image/compressed";
     /// `sensor_msgs/PointCloud2` of the inlier points.
@@ -59,6 +63,8 @@ pub struct FrameMessages {
     pub image: Option<CompressedImage>,
     /// The inlier points, when asked for.
     pub points: Option<PointCloud2>,
+    /// The ground-truth pose of the camera (in the estimate's frame), when known.
+    pub ground_truth: Option<Pose>,
 }
 
 /// The `odometry.mcap` writer.
@@ -89,6 +95,7 @@ const CHANNELS: &[(&str, &str)] = &[
     (Topics::CAMERA_INFO, CameraInfo::TYPE),
     (Topics::PATH, Path::TYPE),
     (Topics::GROUND_TRUTH, Path::TYPE),
+    (Topics::GROUND_TRUTH_POSE, PoseStamped::TYPE),
     (Topics::IMAGE, CompressedImage::TYPE),
     (Topics::POINTS, PointCloud2::TYPE),
 ];
@@ -177,8 +184,8 @@ impl OdometryMcap {
         self.write(Topics::CAMERA_INFO, info.header.stamp, info)
     }
 
-    /// Writes one frame (odometry, pose, tf, status, and the image and points when
-    /// given) and flushes it to the file as one chunk.
+    /// Writes one frame (odometry, pose, tf, status, and the image, points and ground
+    /// truth when given) and flushes it to the file as one chunk.
     ///
     /// # Errors
     /// [`RosError::Write`].
@@ -199,6 +206,13 @@ impl OdometryMcap {
         }
         if let Some(points) = &f.points {
             self.write(Topics::POINTS, stamp, points)?;
+        }
+        if let Some(truth) = f.ground_truth {
+            let truth = PoseStamped {
+                header: o.header.clone(),
+                pose: truth,
+            };
+            self.write(Topics::GROUND_TRUTH_POSE, stamp, &truth)?;
         }
         self.poses.push(PoseStamped {
             header: o.header.clone(),

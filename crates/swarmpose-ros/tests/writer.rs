@@ -8,7 +8,7 @@ mod common;
 use serde_json::Value;
 use swarmpose_ros::Bag;
 use swarmpose_ros::msg::{
-    CameraInfo, DiagnosticArray, DiagnosticStatus, Header, Odometry, Pose, Time,
+    CameraInfo, DiagnosticArray, DiagnosticStatus, Header, Odometry, Pose, PoseStamped, Time,
 };
 use swarmpose_ros::write::{FrameMessages, OdometryMcap, Topics};
 
@@ -47,6 +47,12 @@ fn frame(k: usize) -> FrameMessages {
         },
         image: None,
         points: None,
+        ground_truth: (k != 3).then(|| {
+            let mut g = Pose::default();
+            g.position.x = k as f64;
+            g.orientation.w = 1.0;
+            g
+        }),
     }
 }
 
@@ -83,10 +89,18 @@ fn written_odometry_reads_back_here_and_in_rosbags() {
         (Topics::STATUS, 5),
         (Topics::PATH, 1),
         (Topics::GROUND_TRUTH, 1),
+        (Topics::GROUND_TRUTH_POSE, 4),
         (Topics::CAMERA_INFO, 1),
     ] {
         assert_eq!(bag.topic(t).map(|t| t.entries.len()), Some(n), "{t}");
     }
+    // Frame 3 has no ground truth: the fourth ground-truth pose is frame 4's.
+    let truth = bag.topic(Topics::GROUND_TRUTH_POSE).expect("ground truth");
+    let p: PoseStamped = bag.decode(truth, 3).expect("decode");
+    assert_eq!(
+        (p.pose.position.x, p.header),
+        (4.0, frame(4).odometry.header)
+    );
     let Some(py) = common::python_with_rosbags() else {
         return;
     };

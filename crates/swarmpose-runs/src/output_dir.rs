@@ -304,6 +304,11 @@ impl FrameFiles {
         })
     }
 
+    /// `frames.csv`, for rows that are not frames (a bag's unpaired images).
+    pub fn frames_csv(&mut self) -> &mut StreamFile {
+        &mut self.frames
+    }
+
     /// Writes one frame's lines.
     ///
     /// # Errors

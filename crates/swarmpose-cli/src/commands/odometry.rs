@@ -32,6 +32,7 @@ use swarmpose_runs::synthetic::SyntheticSequence;
 use super::odometry_mcap::McapOutput;
 use super::odometry_output::OutputDir;
 use super::odometry_split::SplitLog;
+use super::odometry_unpaired::Unpaired;
 use super::stereo_options::StereoOptions;
 use crate::error::{CliError, EXIT_NOT_USABLE};
 use crate::methods::{EstimatorOptions, Method, configure};
@@ -56,7 +57,7 @@ odometry.mcap (ROS 2 messages: nav_msgs/Odometry with covariance, PoseWithCovari
 time per stage in ms, the motion from the previous frame, the position, the disparity \
 correction, 1 for a keyframe of the sliding window, and 1 for an ambiguous motion: two distinct \
 motions with comparable support, such as a truck ahead keeping pace, of which the one nearer the \
-constant-velocity prediction was taken), motion_covariance.csv (each tracked frame's measured motion from its \
+constant-velocity prediction was taken; a bag's images without a partner have a row with no frame number and the status unpaired (TOPIC message I, stamp NS ns)), motion_covariance.csv (each tracked frame's measured motion from its \
 reference frame and the motion's 6x6 covariance, see its header). At the end: calibration.json (the self-calibration's decision and evidence), \
 trajectory.smoothed.kitti.txt/.tum.txt (each frame's last estimate by the sliding window: a fixed-lag smoother), \
 trajectory.png/.svg (top view against the ground truth: figure 17) and, with ground truth, \
@@ -325,6 +326,12 @@ pub fn run_config(args: &OdometryArgs) -> Result<RunConfig, CliError> {
 pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
     let rc = run_config(args)?;
     let config = rc.odometry.clone();
+    let bag_options = BagOptions::with_tolerance_ms(
+        rc.input.left_topic.clone(),
+        rc.input.right_topic.clone(),
+        rc.input.stamp_tolerance_ms,
+    )
+    .map_err(|e| CliError::usage(format!("--stamp-tolerance: {e}")))?;
     let mut bag: Option<BagInfo> = None;
     let source = match &args.sequence {
         None => {
@@ -347,12 +354,8 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
             Source::Rgbd(seq, format!("{} (TUM RGB-D)", dir.display()))
         }
         Some(dir) => {
-            let opts = BagOptions {
-                left: rc.input.left_topic.clone(),
-                right: rc.input.right_topic.clone(),
-                stamp_tolerance_ns: (rc.input.stamp_tolerance_ms * 1e6).round() as i64,
-            };
-            let opened = open_stereo(dir, &opts).map_err(|e| CliError::usage(e.to_string()))?;
+            let opened =
+                open_stereo(dir, &bag_options).map_err(|e| CliError::usage(e.to_string()))?;
             bag = opened.bag;
             let seq = opened.sequence;
             for note in seq.notes() {
@@ -412,7 +415,19 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
         names,
         bag.as_ref().map(|b| &b.camera_info),
         bag.as_ref().map(|b| b.stamps_ns.clone()),
+        match &source {
+            Source::Stereo(_, _, gt) => gt.as_deref(),
+            Source::Rgbd(s, _) => s.ground_truth(),
+        },
     )?;
+    let frame_stamps = bag
+        .as_ref()
+        .map(|b| b.stamps_ns.clone())
+        .unwrap_or_default();
+    let mut unpaired = bag.as_ref().map_or_else(
+        || Unpaired::new(&[], 0),
+        |b| Unpaired::new(&b.unpaired, frame_stamps.first().copied().unwrap_or(0)),
+    );
     let stop = StopRequest::install();
     let mut track = Track {
         poses: Vec::with_capacity(n),
@@ -426,9 +441,10 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
     pb.set_prefix("odometry");
     let mut write_error: Option<CliError> = None;
     let mut on_frame = |r: &FrameResult| -> ControlFlow<()> {
-        let written = files
-            .frame(r)
-            .map_err(CliError::from)
+        let stamp = frame_stamps.get(r.index).copied().unwrap_or(i64::MIN);
+        let written = unpaired
+            .write_before(stamp, files.frames_csv())
+            .and_then(|()| files.frame(r).map_err(CliError::from))
             .and_then(|()| split.as_mut().map_or(Ok(()), |s| s.add(r)))
             .and_then(|()| mcap.frame(r));
         if let Err(e) = written {
@@ -469,6 +485,7 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
     if let Some(e) = write_error {
         return Err(e);
     }
+    unpaired.write_before(i64::MAX, files.frames_csv())?;
     let (title, gt) = match &source {
         Source::Stereo(_, t, gt) => (t.clone(), gt.clone()),
         Source::Rgbd(s, t) => (t.clone(), s.ground_truth().map(<[_]>::to_vec)),
@@ -511,6 +528,9 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
     }
     if let Some(s) = &split {
         out(&s.summary())?;
+    }
+    if let Some(line) = unpaired.summary() {
+        out(&line)?;
     }
     out(&format!(
         "written: {} ({})",

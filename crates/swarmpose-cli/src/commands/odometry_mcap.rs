@@ -5,7 +5,7 @@
 use nalgebra::Isometry3;
 use swarmpose_odometry::FrameResult;
 use swarmpose_ros::convert::{FrameNames, pose_in_odom, ros_pose};
-use swarmpose_ros::msg::{CameraInfo, Time};
+use swarmpose_ros::msg::{CameraInfo, Pose, Time};
 use swarmpose_ros::result::{OdometryMessages, status};
 use swarmpose_ros::write::{FrameMessages, OdometryMcap};
 
@@ -21,6 +21,13 @@ pub struct McapOutput {
     messages: OdometryMessages,
     /// The header stamps of a bag's frames, nanoseconds (`None`: the run's times).
     stamps_ns: Option<Vec<i64>>,
+    /// The ground-truth pose of each frame in `odom`, when known.
+    ground_truth: Option<Vec<Pose>>,
+}
+
+/// A camera pose (first camera's frame) as a ROS pose in `odom`.
+fn in_odom(p: &Isometry3<f64>) -> Pose {
+    ros_pose(&pose_in_odom(p))
 }
 
 fn failure(e: &swarmpose_ros::RosError) -> CliError {
@@ -29,7 +36,7 @@ fn failure(e: &swarmpose_ros::RosError) -> CliError {
 
 impl McapOutput {
     /// Starts `odometry.mcap` in `dir`; `camera_info` and `stamps_ns` when the input is a
-    /// bag.
+    /// bag, `ground_truth` (camera poses in the first camera's frame) when known.
     ///
     /// # Errors
     /// Exit status 1 when the file cannot be written.
@@ -38,6 +45,7 @@ impl McapOutput {
         names: FrameNames,
         camera_info: Option<&CameraInfo>,
         stamps_ns: Option<Vec<i64>>,
+        ground_truth: Option<&[Isometry3<f64>]>,
     ) -> Result<Self, CliError> {
         let (file, path) = dir.create(FILE)?;
         let mut writer = OdometryMcap::new(file, &path).map_err(|e| failure(&e))?;
@@ -48,6 +56,7 @@ impl McapOutput {
             writer,
             messages: OdometryMessages::new(names),
             stamps_ns,
+            ground_truth: ground_truth.map(|g| g.iter().map(in_odom).collect()),
         })
     }
 
@@ -70,6 +79,10 @@ impl McapOutput {
             status: status(r, Time::from_nanos(stamp_ns), Vec::new()),
             image: None,
             points: None,
+            ground_truth: self
+                .ground_truth
+                .as_ref()
+                .and_then(|g| g.get(r.index).copied()),
         };
         self.writer.frame(&msg).map_err(|e| failure(&e))
     }
@@ -80,8 +93,7 @@ impl McapOutput {
     /// # Errors
     /// Exit status 1 when the file cannot be written.
     pub fn finish(self, ground_truth: Option<&[Isometry3<f64>]>) -> Result<(), CliError> {
-        let gt: Option<Vec<_>> =
-            ground_truth.map(|g| g.iter().map(|p| ros_pose(&pose_in_odom(p))).collect());
+        let gt: Option<Vec<_>> = ground_truth.map(|g| g.iter().map(in_odom).collect());
         self.writer.finish(gt.as_deref()).map_err(|e| failure(&e))
     }
 }

@@ -319,21 +319,40 @@ def odometry(
     sequence_dir: _Path,
     *,
     frame_period: Optional[float] = None,
+    left: Optional[str] = None,
+    right: Optional[str] = None,
+    stamp_tolerance: float = 0.0,
     config: Optional[OdometryConfig] = None,
     **options: Unpack[_OdometryOptions],
 ) -> OdometryRun:
-    """Runs a whole KITTI, Karlsruhe or EuRoC sequence directory, as ``swarmpose odometry``.
+    """Runs a whole KITTI, Karlsruhe or EuRoC sequence directory or a ROS 2 bag (``.mcap``,
+    ``.db3`` or a rosbag2 folder; ``left``/``right`` topics found when not given,
+    ``stamp_tolerance`` in milliseconds), as ``swarmpose odometry``.
     Settings: ``config`` or ``OdometryConfig``'s keywords, not both. A frame that cannot be
     read (or Ctrl-C) stops the run: the exception's ``run`` attribute is the
     ``OdometryRun`` of the frames done."""
 
 class Sequence:
-    """A recorded stereo sequence: ``seq[i]`` is the (left, right) uint8 images of frame i."""
-    def __init__(self, path: _Path) -> None: ...
+    """A recorded stereo sequence or ROS 2 bag: ``seq[i]`` is the (left, right) uint8
+    images of frame i."""
+    def __init__(
+        self,
+        path: _Path,
+        *,
+        left: Optional[str] = None,
+        right: Optional[str] = None,
+        stamp_tolerance: float = 0.0,
+    ) -> None: ...
     def __len__(self) -> int: ...
     def __getitem__(self, i: int) -> Tuple[npt.NDArray[np.uint8], npt.NDArray[np.uint8]]: ...
     @property
     def layout(self) -> str: ...
+    @property
+    def stamps_ns(self) -> Optional[List[int]]: ...
+    @property
+    def topics(self) -> Optional[Tuple[str, str]]: ...
+    @property
+    def unpaired(self) -> List[str]: ...
     @property
     def root(self) -> pathlib.Path: ...
     @property

@@ -20,7 +20,7 @@ use crate::error::RosError;
 use crate::image::{compressed_to_gray, image_to_gray};
 use crate::msg::{CameraInfo, CompressedImage, Image, RosMessage, decode_header};
 use calib::{Rig, rig_from_camera_info};
-use pairing::pair_by_stamp;
+use pairing::{UnpairedImage, pair_by_stamp};
 use topics::{CameraTopics, cameras, info_topic_of, is_image_type};
 
 /// How to find the stereo input of a bag.
@@ -35,6 +35,30 @@ pub struct StereoOptions {
     pub stamp_tolerance_ns: i64,
 }
 
+impl StereoOptions {
+    /// The options with the stamp tolerance in milliseconds (the unit of the command
+    /// line and of Python).
+    ///
+    /// # Errors
+    /// A one-line message for a tolerance that is negative or not a number.
+    pub fn with_tolerance_ms(
+        left: Option<String>,
+        right: Option<String>,
+        tolerance_ms: f64,
+    ) -> Result<Self, String> {
+        if !(tolerance_ms.is_finite() && tolerance_ms >= 0.0) {
+            return Err(format!(
+                "the stamp tolerance must be a number of milliseconds, 0 or more (not {tolerance_ms})"
+            ));
+        }
+        Ok(Self {
+            left,
+            right,
+            stamp_tolerance_ns: (tolerance_ms * 1e6).round() as i64,
+        })
+    }
+}
+
 /// A stereo sequence read from a ROS 2 bag.
 #[derive(Debug)]
 pub struct BagSequence {
@@ -47,7 +71,7 @@ pub struct BagSequence {
     size: (usize, usize),
     left_info: CameraInfo,
     frame_id: String,
-    unpaired: Vec<String>,
+    unpaired: Vec<UnpairedImage>,
     notes: Vec<String>,
 }
 
@@ -281,16 +305,18 @@ impl BagSequence {
                 ),
             ));
         }
-        let mut unpaired: Vec<String> = p
+        let alone = |topic: &Topic, stamps: &[i64], i: usize| UnpairedImage {
+            topic: topic.name.clone(),
+            message: i,
+            stamp_ns: stamps[i],
+        };
+        let mut unpaired: Vec<UnpairedImage> = p
             .left_alone
             .iter()
-            .map(|&i| format!("{} message {i} (stamp {} ns)", left.name, ls[i]))
+            .map(|&i| alone(&left, &ls, i))
+            .chain(p.right_alone.iter().map(|&i| alone(&right, &rs, i)))
             .collect();
-        unpaired.extend(
-            p.right_alone
-                .iter()
-                .map(|&i| format!("{} message {i} (stamp {} ns)", right.name, rs[i])),
-        );
+        unpaired.sort_by_key(|u| u.stamp_ns);
         let (li, ri) = (camera_info(&bag, &lc.info)?, camera_info(&bag, &rc.info)?);
         let (l0, r0) = (
             gray(&bag, &left, p.pairs[0].0)?,
@@ -304,7 +330,11 @@ impl BagSequence {
                 "{} images without a partner within {:.3} ms, not used: {}",
                 unpaired.len(),
                 tol as f64 * 1e-6,
-                unpaired.join(", ")
+                unpaired
+                    .iter()
+                    .map(ToString::to_string)
+                    .collect::<Vec<_>>()
+                    .join(", ")
             ));
         }
         if let Some(s) = bag.stopped() {
@@ -355,9 +385,9 @@ impl BagSequence {
         &self.frame_id
     }
 
-    /// The images left without a partner, one line each.
+    /// The images left without a partner, in stamp order.
     #[must_use]
-    pub fn unpaired(&self) -> &[String] {
+    pub fn unpaired(&self) -> &[UnpairedImage] {
         &self.unpaired
     }
 

@@ -14,6 +14,27 @@ pub struct Pairing {
     pub right_alone: Vec<usize>,
 }
 
+/// An image that found no partner: it is in no frame.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct UnpairedImage {
+    /// Its topic.
+    pub topic: String,
+    /// 0-based index of the message on its topic.
+    pub message: usize,
+    /// Its header stamp, nanoseconds.
+    pub stamp_ns: i64,
+}
+
+impl std::fmt::Display for UnpairedImage {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} message {} (stamp {} ns)",
+            self.topic, self.message, self.stamp_ns
+        )
+    }
+}
+
 /// Pairs `left` and `right` stamps (nanoseconds) within `tolerance_ns`.
 #[must_use]
 pub fn pair_by_stamp(left: &[i64], right: &[i64], tolerance_ns: i64) -> Pairing {

@@ -9,11 +9,16 @@ or left_K.png and right_K.png with the `png` option. STORAGE: mcap (plain), mcap
 
 Options: png (CompressedImage PNG instead of Image mono8), no-info (no camera_info
 topics), right-stamp-offset=NS (shift the right images' stamps), rgb8 (the gray pixels
-as rgb8 images).
+as rgb8 images), drop=SIDE:K (leave out frame K's SIDE image, left or right; repeatable).
 
 Topics: /stereo/left/image_rect, /stereo/right/image_rect (or .../compressed), and
 /stereo/left/camera_info, /stereo/right/camera_info (plumb_bob, D = 0, R = I, K and P
 from the projections).
+
+Raw images: with "raw": {"left": {"k": [9], "d": [5], "r": [9]}, "right": {...}} in
+meta.json, the pixels are the raw (distorted, unrectified) images, the topics are
+/stereo/SIDE/image_raw, and each camera_info has that K, D (plumb_bob) and R (row-major),
+with P from "p_SIDE".
 """
 
 import json
@@ -39,16 +44,22 @@ def header(ns: int, frame: str):
     return Header(stamp=Time(sec=ns // 10**9, nanosec=ns % 10**9), frame_id=frame)
 
 
-def info(ns, frame, meta, p):
-    k = np.array([p[0], p[1], p[2], p[4], p[5], p[6], p[8], p[9], p[10]], dtype=np.float64)
+def info(ns, frame, meta, side):
+    p = meta["p_" + side]
+    raw = meta.get("raw", {}).get(side)
+    if raw:
+        k, d, r = raw["k"], raw["d"], raw["r"]
+    else:
+        k = [p[0], p[1], p[2], p[4], p[5], p[6], p[8], p[9], p[10]]
+        d, r = [0.0] * 5, np.eye(3).reshape(9)
     return CameraInfo(
         header=header(ns, frame),
         height=meta["height"],
         width=meta["width"],
         distortion_model="plumb_bob",
-        d=np.zeros(5, dtype=np.float64),
-        k=k,
-        r=np.eye(3, dtype=np.float64).reshape(9),
+        d=np.array(d, dtype=np.float64),
+        k=np.array(k, dtype=np.float64),
+        r=np.array(r, dtype=np.float64),
         p=np.array(p, dtype=np.float64),
         binning_x=0,
         binning_y=0,
@@ -78,6 +89,7 @@ def main() -> None:
     png = "png" in opts
     rgb = "rgb8" in opts
     shift = next((int(o.split("=")[1]) for o in opts if o.startswith("right-stamp-offset=")), 0)
+    dropped = {tuple(o.split("=")[1].split(":")) for o in opts if o.startswith("drop=")}
     meta = json.loads((frames / "meta.json").read_text())
     plugin = StoragePlugin.SQLITE3 if storage == "sqlite3" else StoragePlugin.MCAP
     writer = Writer(out, version=8, storage_plugin=plugin)
@@ -87,7 +99,8 @@ def main() -> None:
         conns = {}
         for side in ("left", "right"):
             ty = CompressedImage if png else Image
-            name = f"/stereo/{side}/image_rect" + ("/compressed" if png else "")
+            kind = "image_raw" if "raw" in meta else "image_rect"
+            name = f"/stereo/{side}/{kind}" + ("/compressed" if png else "")
             conns[side] = writer.add_connection(name, ty.__msgtype__, typestore=STORE)
             if "no-info" not in opts:
                 conns[side + "_info"] = writer.add_connection(
@@ -95,6 +108,8 @@ def main() -> None:
                 )
         for k, ns in enumerate(meta["stamps_ns"]):
             for side in ("left", "right"):
+                if (side, str(k)) in dropped:
+                    continue
                 stamp = ns + (shift if side == "right" else 0)
                 frame = f"camera_{side}_optical"
                 if png:
@@ -105,7 +120,7 @@ def main() -> None:
                     msg = image(stamp, frame, meta, pixels, rgb)
                 writer.write(conns[side], stamp, STORE.serialize_cdr(msg, msg.__msgtype__))
                 if "no-info" not in opts:
-                    ci = info(stamp, frame, meta, meta["p_" + side])
+                    ci = info(stamp, frame, meta, side)
                     writer.write(conns[side + "_info"], stamp, STORE.serialize_cdr(ci, ci.__msgtype__))
 
 

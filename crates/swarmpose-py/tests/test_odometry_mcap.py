@@ -1,0 +1,138 @@
+"""A run's odometry.mcap, decoded by two independent readers (Foxglove's
+mcap-ros2-support and rosbags): one nav_msgs/Odometry per frame whose pose is the frame's
+line of trajectory.kitti.txt and whose covariance is its row of motion_covariance.csv,
+both converted as crates/swarmpose-ros/src/convert.rs documents (odom has ROS body axes:
+x = optical z, y = -optical x, z = -optical y; covariance J C J^T, J = diag(R, R)); and
+evo_ape on the MCAP's topics gives the ATE of `swarmpose evaluate`."""
+
+import json
+import shutil
+import subprocess
+import zipfile
+
+import numpy as np
+import pytest
+
+from bags import kitti_clip
+from conftest import require
+
+FRAMES = 10
+ODOMETRY = "/swarmpose/odometry"
+TRUTH = "/swarmpose/ground_truth/pose"
+# Optical camera axes to ROS body axes (convert.rs, odom_from_optical).
+A = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
+UNKNOWN_VARIANCE = 1e6
+
+
+def rotation(q):
+    """The rotation matrix of a geometry_msgs Quaternion."""
+    x, y, z, w = q.x, q.y, q.z, q.w
+    return np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+    ])
+
+
+def as_arrays(msgs):
+    """(stamps ns, positions (N, 3), rotations (N, 3, 3), covariances (N, 6, 6))."""
+    stamps = [m.header.stamp.sec * 10**9 + m.header.stamp.nanosec for m in msgs]
+    pos = np.array([[m.pose.pose.position.x, m.pose.pose.position.y, m.pose.pose.position.z]
+                    for m in msgs])
+    rot = np.array([rotation(m.pose.pose.orientation) for m in msgs])
+    cov = np.array([np.asarray(m.pose.covariance, dtype=float).reshape(6, 6) for m in msgs])
+    return stamps, pos, rot, cov
+
+
+def read_mcap_ros2(path):
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+    with open(path, "rb") as f:
+        reader = make_reader(f, decoder_factories=[DecoderFactory()])
+        return [m for _, _, _, m in reader.iter_decoded_messages(topics=[ODOMETRY])]
+
+
+def read_rosbags(path):
+    from rosbags.highlevel import AnyReader
+    from rosbags.typesys import Stores, get_typestore
+    with AnyReader([path], default_typestore=get_typestore(Stores.ROS2_HUMBLE)) as reader:
+        conns = [c for c in reader.connections if c.topic == ODOMETRY]
+        return [reader.deserialize(raw, c.msgtype) for c, _, raw in reader.messages(conns)]
+
+
+def expected_covariances(out, rotations_odom):
+    """motion_covariance.csv converted: J C J^T per tracked frame; the first frame zero,
+    frames without a measured covariance UNKNOWN_VARIANCE on the diagonal."""
+    n = len(rotations_odom)
+    want = np.tile(np.eye(6) * UNKNOWN_VARIANCE, (n, 1, 1))
+    want[0] = 0.0
+    rows = [l for l in (out / "motion_covariance.csv").read_text().splitlines()
+            if l and not l.startswith("#") and not l.startswith("frame")]
+    iu = np.triu_indices(6)
+    for row in rows:
+        v = row.split(",")
+        c = np.zeros((6, 6))
+        c[iu] = [float(x) for x in v[9:]]
+        c = c + np.triu(c, 1).T
+        j = np.zeros((6, 6))
+        j[:3, :3] = j[3:, 3:] = rotations_odom[int(v[0])]
+        want[int(v[0])] = j @ c @ j.T
+    return want, len(rows)
+
+
+def evo_ate(mcap, out):
+    """evo_ape's ATE RMSE (translation, metres) of the MCAP's Odometry against its ground
+    truth, after SE(3) alignment."""
+    results = out / "evo.zip"
+    args = ["evo_ape", "bag2", str(mcap), TRUTH, ODOMETRY, "-a", "--save_results", str(results),
+            "--no_warnings"]
+    subprocess.run(args, check=True, capture_output=True, text=True)
+    with zipfile.ZipFile(results) as z:
+        return json.loads(z.read("stats.json"))["rmse"]
+
+
+def test_odometry_mcap_decodes_to_the_run(kitti_seq2, swarmpose_bin, tmp_path):
+    for module in ("rosbags", "mcap_ros2"):
+        try:
+            __import__(module)
+            found = True
+        except ImportError:
+            found = False
+        require(f"the Python package {module}", found,
+                "pip install rosbags==0.11.9 mcap-ros2-support==0.6.0")
+    folder = kitti_clip(kitti_seq2, tmp_path / "kitti", FRAMES, ground_truth=True)
+    out = tmp_path / "out"
+    subprocess.run([str(swarmpose_bin), "odometry", str(folder), "--out", str(out), "--quiet"],
+                   check=True, capture_output=True)
+    mcap = out / "odometry.mcap"
+    rows = np.loadtxt(out / "trajectory.kitti.txt").reshape(-1, 3, 4)
+    assert len(rows) == FRAMES
+    pos_want = rows[:, :, 3] @ A.T
+    rot_want = A @ rows[:, :, :3]
+    cov_want, measured = expected_covariances(out, rot_want)
+    assert measured >= FRAMES - 2, "most frames carry a measured covariance"
+    decoded = {"mcap-ros2-support": as_arrays(read_mcap_ros2(mcap)),
+               "rosbags": as_arrays(read_rosbags(mcap))}
+    for reader, (stamps, pos, rot, cov) in decoded.items():
+        assert len(stamps) == FRAMES, reader
+        assert stamps == [k * 100_000_000 for k in range(FRAMES)], reader
+        # x = optical z, y = -optical x, z = -optical y (applied as a quaternion: to
+        # rounding).
+        assert np.max(np.abs(pos - pos_want)) <= 1e-12 * max(1.0, np.max(np.abs(pos_want))), reader
+        assert np.max(np.abs(rot - rot_want)) < 1e-12, reader
+        for c, w in zip(cov, cov_want):
+            assert np.max(np.abs(c - w)) <= 1e-9 * np.max(np.abs(w)), reader
+            assert np.max(np.abs(c - c.T)) <= 1e-12 * np.max(np.abs(c)), reader
+            assert np.min(np.linalg.eigvalsh(c)) >= -1e-12 * np.max(np.abs(c)), reader
+    assert all(np.array_equal(a, b) for a, b in zip(*decoded.values()))
+
+    require("evo_ape", shutil.which("evo_ape") is not None, "pip install evo==1.38.1")
+    ours = json.loads(subprocess.run(
+        [str(swarmpose_bin), "evaluate", str(out / "trajectory.kitti.txt"),
+         str(out / "groundtruth.kitti.txt"), "--json"],
+        check=True, capture_output=True, text=True).stdout)
+    # evo_ape -a: after the SE(3) alignment of Umeyama, as ate_aligned (evo's start-up
+    # is most of this test's time: one call).
+    theirs = evo_ate(mcap, tmp_path)
+    assert theirs == pytest.approx(ours["ate_aligned"]["rmse"], rel=1e-6, abs=1e-9)
+    assert theirs > 0.0

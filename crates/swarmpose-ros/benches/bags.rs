@@ -1,0 +1,226 @@
+//! Speed of the ROS 2 input and output, one thread:
+//!
+//! - `read/*`: one stereo frame of the first KITTI frames (`kitti_vo_seq2`, 1241 x 376)
+//!   read from its folder (two PNGs decoded) and from an MCAP bag of the same frames
+//!   (`sensor_msgs/Image` mono8 with `camera_info`, as `ros2 bag record` writes them:
+//!   chunks uncompressed, and with zstd), frame after frame in a loop;
+//!   `open/*`: opening the bag (every image's header read once for its stamp), to be
+//!   shared among the bag's frames.
+//! - `write/odometry_mcap_frame`: one frame of `odometry.mcap` without images (Odometry,
+//!   PoseWithCovarianceStamped, /tf, DiagnosticArray, ground-truth pose; one zstd chunk
+//!   flushed to the file).
+//!
+//! Needs `kitti_vo_seq2` under the data root (`SWARMPOSE_DATA`); skipped with a message
+//! otherwise. `tools/ros_bench/results.py` runs it and writes RESULTS.md's table.
+//!
+//! `cargo bench -p swarmpose-ros --bench bags`
+
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::hint::black_box;
+use std::io::BufWriter;
+use std::path::{Path, PathBuf};
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use mcap::records::MessageHeader;
+use mcap::{Compression, WriteOptions};
+use nalgebra::{Isometry3, Matrix6, Translation3, UnitQuaternion};
+use swarmpose_datasets::{StereoSequence, open};
+use swarmpose_ros::convert::{FrameNames, Measurement, odometry};
+use swarmpose_ros::msg::{
+    CameraInfo, DiagnosticArray, DiagnosticStatus, Header, Image, Pose, RosMessage, Time, encode,
+    schema_text,
+};
+use swarmpose_ros::write::{FrameMessages, OdometryMcap};
+use swarmpose_ros::{BagSequence, StereoOptions};
+
+/// Frames of the clip.
+const FRAMES: usize = 10;
+
+fn scratch() -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("swarmpose-bench-bags-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("scratch dir");
+    dir
+}
+
+/// The `camera_info` of a side of the rectified rig.
+fn camera_info(seq: &dyn StereoSequence, right: bool, header: Header) -> CameraInfo {
+    let c = seq.calibration();
+    let (w, h) = seq.image_size();
+    let tx = if right { -c.fx * c.baseline_m } else { 0.0 };
+    CameraInfo {
+        header,
+        width: w as u32,
+        height: h as u32,
+        distortion_model: "plumb_bob".to_owned(),
+        d: vec![0.0; 5],
+        k: [c.fx, 0.0, c.cx, 0.0, c.fy, c.cy, 0.0, 0.0, 1.0],
+        r: [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
+        p: [
+            c.fx, 0.0, c.cx, tx, 0.0, c.fy, c.cy, 0.0, 0.0, 0.0, 1.0, 0.0,
+        ],
+        ..CameraInfo::default()
+    }
+}
+
+/// Writes the first [`FRAMES`] frames of `seq` as an MCAP bag at `path`.
+fn write_bag(seq: &dyn StereoSequence, path: &Path, compression: Option<Compression>) {
+    let file = BufWriter::new(File::create(path).expect("bag file"));
+    let mut w = WriteOptions::new()
+        .profile("ros2")
+        .compression(compression)
+        .create(file)
+        .expect("mcap writer");
+    let mut channel = |topic: &str, ty: &str| {
+        let text = schema_text(ty).expect("schema");
+        let schema = w
+            .add_schema(ty, "ros2msg", text.as_bytes())
+            .expect("schema");
+        w.add_channel(schema, topic, "cdr", &BTreeMap::new())
+            .expect("channel")
+    };
+    let sides: Vec<(u16, u16)> = ["left", "right"]
+        .iter()
+        .map(|s| {
+            (
+                channel(&format!("/stereo/{s}/image_rect"), Image::TYPE),
+                channel(&format!("/stereo/{s}/camera_info"), CameraInfo::TYPE),
+            )
+        })
+        .collect();
+    let mut sequence = 0;
+    for k in 0..FRAMES {
+        let pair = seq.frame(k).expect("frame");
+        let t = 1_317_000_000_000_000_000 + k as i64 * 100_000_000;
+        for (side, ((image_ch, info_ch), img)) in
+            sides.iter().zip([pair.left, pair.right]).enumerate()
+        {
+            let header = Header {
+                stamp: Time::from_nanos(t),
+                frame_id: format!("camera_{side}_optical"),
+            };
+            let image = Image {
+                header: header.clone(),
+                width: img.width as u32,
+                height: img.height as u32,
+                encoding: "mono8".to_owned(),
+                is_bigendian: 0,
+                step: img.width as u32,
+                data: img.data,
+            };
+            let info = camera_info(seq, side == 1, header);
+            for (ch, data) in [
+                (*image_ch, encode(&image).expect("cdr")),
+                (*info_ch, encode(&info).expect("cdr")),
+            ] {
+                sequence += 1;
+                let h = MessageHeader {
+                    channel_id: ch,
+                    sequence,
+                    log_time: t as u64,
+                    publish_time: t as u64,
+                };
+                w.write_to_known_channel(&h, &data).expect("write");
+            }
+        }
+    }
+    w.finish().expect("finish");
+}
+
+fn bench_read(c: &mut Criterion, seq: &dyn StereoSequence, dir: &Path) {
+    let mut g = c.benchmark_group("read");
+    g.sample_size(20);
+    let mut k = 0;
+    g.bench_function("folder", |b| {
+        b.iter(|| {
+            k = (k + 1) % FRAMES;
+            black_box(seq.frame(k).expect("frame"))
+        });
+    });
+    for (name, compression) in [("mcap", None), ("mcap_zstd", Some(Compression::Zstd))] {
+        let path = dir.join(format!("{name}.mcap"));
+        write_bag(seq, &path, compression);
+        let bag = BagSequence::open(&path, &StereoOptions::default()).expect("bag");
+        assert_eq!(bag.len(), FRAMES);
+        g.bench_function(format!("bag_{name}"), |b| {
+            b.iter(|| {
+                k = (k + 1) % FRAMES;
+                black_box(bag.frame(k).expect("bag frame"))
+            });
+        });
+    }
+    g.finish();
+    let mut g = c.benchmark_group("open");
+    g.sample_size(10);
+    for name in ["mcap", "mcap_zstd"] {
+        let path = dir.join(format!("{name}.mcap"));
+        g.bench_function(format!("bag_{name}"), |b| {
+            b.iter(|| black_box(BagSequence::open(&path, &StereoOptions::default()).expect("bag")));
+        });
+    }
+    g.finish();
+}
+
+/// A frame's messages as a run writes them: a tracked frame with a covariance.
+fn frame_messages(k: usize) -> FrameMessages {
+    let pose = Isometry3::from_parts(
+        Translation3::new(0.01 * k as f64, 0.0, 0.8 * k as f64),
+        UnitQuaternion::from_euler_angles(0.0, 0.002 * k as f64, 0.0),
+    );
+    let m = Measurement {
+        motion: Isometry3::translation(0.0, 0.0, 0.8),
+        covariance: Some(Matrix6::from_fn(|i, j| if i == j { 1e-4 } else { 1e-6 })),
+        dt_s: 0.1,
+    };
+    let stamp = 1_000_000_000 + k as i64 * 100_000_000;
+    let odom = odometry(stamp, &pose, k == 0, Some(&m), &FrameNames::default());
+    FrameMessages {
+        status: DiagnosticArray {
+            header: odom.header.clone(),
+            status: vec![DiagnosticStatus {
+                level: DiagnosticStatus::OK,
+                name: "swarmpose: tracking".to_owned(),
+                message: "tracked".to_owned(),
+                ..DiagnosticStatus::default()
+            }],
+        },
+        ground_truth: Some(odom.pose.pose),
+        odometry: odom,
+        image: None,
+        points: None,
+    }
+}
+
+fn bench_write(c: &mut Criterion, dir: &Path) {
+    let path = dir.join("odometry.mcap");
+    let mut w = OdometryMcap::new(File::create(&path).expect("file"), &path).expect("writer");
+    let mut g = c.benchmark_group("write");
+    g.sample_size(20);
+    let mut k = 0;
+    g.bench_function("odometry_mcap_frame", |b| {
+        b.iter(|| {
+            k += 1;
+            w.frame(black_box(&frame_messages(k))).expect("frame");
+        });
+    });
+    g.finish();
+    w.finish(Some(&vec![Pose::default(); k])).expect("finish");
+}
+
+fn bench_bags(c: &mut Criterion) {
+    let kitti = swarmpose_datasets::data_root().join("kitti_vo_seq2");
+    let Ok(seq) = open(&kitti) else {
+        eprintln!(
+            "SKIPPED: {} not found (set SWARMPOSE_DATA)",
+            kitti.display()
+        );
+        return;
+    };
+    let dir = scratch();
+    bench_read(c, seq.as_ref(), &dir);
+    bench_write(c, &dir);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+criterion_group!(benches, bench_bags);
+criterion_main!(benches);

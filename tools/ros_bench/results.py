@@ -1,0 +1,124 @@
+#!/usr/bin/env python3
+"""The speed of swarmpose's ROS 2 input and output (the criterion bench
+`crates/swarmpose-ros/benches/bags.rs`) and what the bag support adds to the default
+build (the crates only `swarmpose-ros` brings in, and their compile time), as one
+Markdown section: printed, or written into a RESULTS file with `--update FILE` (between
+the section's markers; see tools/generated).
+
+    python3 tools/ros_bench/results.py [--data DIR] [--timings HTML] [--update FILE]
+
+--timings: a `cargo build --timings` report (target/cargo-timings/cargo-timing.html) of a
+build from an empty target directory, whose unit times give the compile time of the
+crates the bag support adds; without it, that line is left out.
+"""
+
+import argparse
+import json
+import os
+import re
+import subprocess
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+sys.path.insert(0, os.path.join(ROOT, "tools", "generated"))
+from generated import common_arguments, provenance, publish  # noqa: E402
+
+COMMAND = "python3 tools/ros_bench/results.py --update crates/swarmpose-ros/RESULTS.md"
+# The bench's frames per clip (benches/bags.rs, FRAMES).
+FRAMES = 10
+READ_MORE_TARGET = 0.05
+WRITE_TARGET_MS = 1.0
+
+
+def bench(data):
+    env = dict(os.environ, SWARMPOSE_DATA=data)
+    subprocess.run(["cargo", "bench", "-p", "swarmpose-ros", "--bench", "bags"], cwd=ROOT,
+                   env=env, check=True)
+
+
+def median_ms(target, group, name):
+    path = os.path.join(target, "criterion", group, name, "new", "estimates.json")
+    with open(path, encoding="utf-8") as f:
+        return json.load(f)["median"]["point_estimate"] * 1e-6
+
+
+def crate_set(package):
+    """The crates (name version) a package depends on in a normal build."""
+    out = subprocess.run(["cargo", "tree", "-p", package, "-e", "normal,build", "--prefix", "none"],
+                         cwd=ROOT, capture_output=True, text=True, check=True).stdout
+    return {" ".join(line.split()[:2]) for line in out.splitlines() if line.strip()}
+
+
+def added_by_ros():
+    """The crates only swarmpose-ros brings into the CLI's build."""
+    meta = json.loads(subprocess.run(["cargo", "metadata", "--format-version", "1", "--no-deps"],
+                                     cwd=ROOT, capture_output=True, text=True, check=True).stdout)
+    cli = next(p for p in meta["packages"] if p["name"] == "swarmpose-cli")
+    others = set()
+    for dep in cli["dependencies"]:
+        if dep["kind"] is None and dep["name"] != "swarmpose-ros":
+            others |= crate_set(dep["name"])
+    added = crate_set("swarmpose-ros") - others
+    return sorted(c for c in added if not c.startswith("swarmpose-ros "))
+
+
+def compile_seconds(html, crates):
+    """The summed unit times (seconds) of `crates` in a cargo timings report."""
+    text = open(html, encoding="utf-8").read()
+    units = json.loads(re.search(r"const UNIT_DATA = (\[.*?\]);", text, re.S).group(1))
+    names = {c.split()[0].replace("-", "_") for c in crates}
+    return sum(u["duration"] for u in units if u["name"].replace("-", "_") in names)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    common_arguments(parser)
+    parser.add_argument("--target", default=os.environ.get("CARGO_TARGET_DIR", os.path.join(ROOT, "target")),
+                        help="the cargo target directory [$CARGO_TARGET_DIR or target]")
+    parser.add_argument("--timings", help="a cargo --timings report of a clean build")
+    parser.add_argument("--no-run", action="store_true", help="use the bench's last results")
+    a = parser.parse_args()
+    if not a.no_run:
+        bench(a.data)
+    m = lambda g, n: median_ms(a.target, g, n)  # noqa: E731
+    folder = m("read", "folder")
+    rows = [f"| folder (two PNGs) | {folder:.2f} | | |"]
+    verdicts = []
+    for name, label in (("bag_mcap", "MCAP, chunks uncompressed"), ("bag_mcap_zstd", "MCAP, zstd chunks")):
+        read, opened = m("read", name), m("open", name) / FRAMES
+        more = (read + opened) / folder - 1.0
+        rows.append(f"| {label} | {read:.2f} | {opened:.2f} | {100 * more:+.1f} % |")
+        verdicts.append(more <= READ_MORE_TARGET)
+    write = m("write", "odometry_mcap_frame")
+    added = added_by_ros()
+    lines = [
+        "Speed of the ROS 2 input and output (`cargo bench -p swarmpose-ros --bench bags`, "
+        f"medians, one thread; generated {provenance()}; the machine was shared with other "
+        "builds while it ran, so the times are not quiet).",
+        "",
+        f"Reading one stereo frame of the first {FRAMES} KITTI frames (1241 x 376, "
+        "`sensor_msgs/Image` mono8 with `camera_info`):",
+        "",
+        "| from | read, ms a frame | opening the bag, ms a frame | more than the folder |",
+        "|---|---:|---:|---:|",
+        *rows,
+        "",
+        f"Target: at most {100 * READ_MORE_TARGET:.0f} % more than the folder: "
+        + ("met" if all(verdicts) else "NOT met") + " (opening included).",
+        "",
+        f"Writing one frame of `odometry.mcap` without images: {write:.3f} ms "
+        f"(target at most {WRITE_TARGET_MS:.0f} ms: {'met' if write <= WRITE_TARGET_MS else 'NOT met'}).",
+        "",
+        f"The bag support adds {len(added)} crates to the default build of the CLI: "
+        + ", ".join(f"`{c}`" for c in added) + ".",
+    ]
+    if a.timings:
+        secs = compile_seconds(a.timings, added)
+        lines.append(f"Their compile time, summed over the units of `{os.path.basename(a.timings)}` "
+                     f"(a clean build, 2 cores shared with other builds): {secs:.0f} s.")
+    publish(a.update, "ros-bench", COMMAND, "\n".join(lines) + "\n")
+
+
+if __name__ == "__main__":
+    main()
