@@ -14,4 +14,5 @@ pub mod odometry_split;
 pub mod register;
 pub mod segments;
 pub mod simulate;
+pub mod simulate_shard;
 pub mod stereo_options;
