@@ -38,8 +38,8 @@ pub struct MergeArgs {
     pub out: Option<PathBuf>,
 }
 
-/// The summaries under `dir`, by item name, and the manifest's item names.
-fn read_dir(dir: &Path) -> Result<(Vec<(String, Row)>, Vec<String>), CliError> {
+/// The summaries under `dir` and the manifest's item names.
+fn read_dir(dir: &Path) -> Result<(Vec<Row>, Vec<String>), CliError> {
     let bad = |e: &dyn std::fmt::Display| CliError::usage(format!("{}: {e}", dir.display()));
     let mut expected = Vec::new();
     match std::fs::read_to_string(dir.join(ITEMS)) {
@@ -59,7 +59,7 @@ fn read_dir(dir: &Path) -> Result<(Vec<(String, Row)>, Vec<String>), CliError> {
         if entry.path().is_dir()
             && let Some(s) = read_summary(&entry.path())
         {
-            rows.push((s.item.clone(), Row::Done(Box::new(s))));
+            rows.push(Row::Done(Box::new(s)));
         }
     }
     if rows.is_empty() && expected.is_empty() {
@@ -88,7 +88,8 @@ pub fn collect(dirs: &[PathBuf]) -> Result<Vec<Row>, CliError> {
         seen.push(real);
         let (found, names) = read_dir(dir)?;
         expected.extend(names);
-        for (name, row) in found {
+        for row in found {
+            let name = row.name().to_owned();
             if let Some((_, other)) = rows.get(&name) {
                 return Err(CliError::usage(format!(
                     "item {name} is in both {} and {}: merge the folders of one batch",

@@ -141,7 +141,7 @@ pub fn aggregates(rows: &[Row]) -> Vec<String> {
             _ => None,
         })
         .collect();
-    let figures: [(&str, &str, usize, (Option<f64>, usize)); 4] = [
+    let figures = [
         (
             "mean final drift",
             "%",
