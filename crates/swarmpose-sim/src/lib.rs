@@ -47,6 +47,7 @@ pub use experiment::Experiment;
 pub use metrics::RunRecord;
 pub use runner::{Shard, run_experiment, run_experiment_shard, run_experiment_until};
 pub mod report;
+pub mod results;
 pub mod runs_csv;
 pub mod shard;
 pub mod simulate;

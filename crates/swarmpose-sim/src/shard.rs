@@ -13,9 +13,9 @@ use crate::experiment::Experiment;
 use crate::metrics::RunRecord;
 use crate::outliers::OutlierMode;
 use crate::output::write_file;
+use crate::results::write_results;
 use crate::runner::Shard;
 use crate::runs_csv::{parse_runs_csv, runs_csv};
-use crate::simulate::write_results;
 use crate::stats::Summary;
 
 /// Name of a shard's description in its folder.
