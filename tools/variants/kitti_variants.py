@@ -68,8 +68,10 @@ def frames_of(src):
 
 
 def write_sequence(dst, calib_lines, items):
-    """items: (left source, right source, flip) per frame, in order."""
-    import cv2
+    """items: (left source, right source, flip) per frame, in order. OpenCV is needed
+    only for flipped (mirrored) frames; the other variants are links."""
+    if any(flip for _, _, flip in items):
+        import cv2
 
     for cam in ("image_0", "image_1"):
         os.makedirs(os.path.join(dst, cam), exist_ok=True)

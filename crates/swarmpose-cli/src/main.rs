@@ -10,20 +10,12 @@
 #![forbid(unsafe_code)]
 #![warn(clippy::unwrap_used)]
 
-mod commands;
-mod error;
-mod input;
-mod methods;
-mod output_file;
-mod signals;
-mod streams;
-
 use std::process::ExitCode;
 
 use clap::error::ErrorKind;
 use clap::{CommandFactory, Parser, Subcommand};
-
-use crate::error::CliError;
+use swarmpose_cli::error::CliError;
+use swarmpose_cli::{batch, commands, error, streams};
 
 /// Rigid 3D-3D pose estimation by particle swarm.
 #[derive(Debug, Parser)]
@@ -56,6 +48,9 @@ enum Command {
     /// Stereo visual odometry over a sequence: trajectory (KITTI, TUM), per-frame log,
     /// plots (figure 17) and, with ground truth, its evaluation.
     Odometry(Box<commands::odometry::OdometryArgs>),
+    /// `odometry` over every sequence of a manifest, each into its own folder with a
+    /// summary.json; shards, resumes, and `batch merge` makes one table of them.
+    Batch(Box<batch::BatchArgs>),
 }
 
 fn run(cli: Cli) -> Result<(), CliError> {
@@ -67,6 +62,7 @@ fn run(cli: Cli) -> Result<(), CliError> {
         Command::Correspondences(args) => commands::correspondences::run(&args),
         Command::Evaluate(args) => commands::evaluate::run(&args),
         Command::Odometry(args) => commands::odometry::run_command(&args),
+        Command::Batch(args) => batch::run(&args),
     }
 }
 

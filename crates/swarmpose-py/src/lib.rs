@@ -14,6 +14,7 @@
 //! | `odometry` | [`swarmpose_runs::batch::run_sequence`] |
 //! | `Sequence` | [`swarmpose_datasets::open`] |
 //! | `evaluate` | [`swarmpose_eval::evaluate`] |
+//! | `batch.run`, `batch.merge` | [`swarmpose_cli::batch`] |
 //!
 //! Errors become Python exceptions carrying the Rust error's one-line message
 //! (`errors.rs`). Long computations release the GIL.
@@ -21,6 +22,7 @@
 #![warn(clippy::unwrap_used)]
 
 mod arrays;
+mod batch;
 mod errors;
 mod evaluate;
 mod frame;
@@ -43,6 +45,9 @@ fn _swarmpose(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(register::register_timing, m)?)?;
     m.add_function(wrap_pyfunction!(odometry_run::odometry, m)?)?;
     m.add_function(wrap_pyfunction!(evaluate::evaluate, m)?)?;
+    m.add_function(wrap_pyfunction!(batch::batch_prepare, m)?)?;
+    m.add_function(wrap_pyfunction!(batch::batch_item, m)?)?;
+    m.add_function(wrap_pyfunction!(batch::batch_merge, m)?)?;
     m.add_class::<register::Registration>()?;
     m.add_class::<register::RunnerUp>()?;
     m.add_class::<options::OdometryConfig>()?;

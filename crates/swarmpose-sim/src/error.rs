@@ -33,6 +33,9 @@ pub enum SimError {
     /// The core rejected generated data (a bug in the generator if it happens).
     #[error(transparent)]
     Pose(#[from] swarmpose_core::PoseError),
+    /// Folders of `simulate --shard` that do not make one whole simulation.
+    #[error("cannot merge: {0}")]
+    Merge(String),
     /// The worker thread pool could not be built.
     #[error("thread pool: {0}")]
     ThreadPool(String),

@@ -45,10 +45,12 @@ pub mod runner;
 pub use estimators::{EstimatorEntry, default_estimators, oracle_threshold};
 pub use experiment::Experiment;
 pub use metrics::RunRecord;
-pub use runner::{run_experiment, run_experiment_until};
+pub use runner::{Shard, run_experiment, run_experiment_shard, run_experiment_until};
 pub mod report;
+pub mod results;
 pub mod runs_csv;
+pub mod shard;
 pub mod simulate;
 pub mod stats;
 
-pub use simulate::{SimOptions, SimOutcome, simulate, simulate_until};
+pub use simulate::{SimOptions, SimOutcome, simulate, simulate_shard, simulate_until};

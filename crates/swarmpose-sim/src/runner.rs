@@ -50,7 +50,76 @@ pub fn run_experiment_until(
     progress: &(dyn Fn() + Sync),
     stop: &(dyn Fn() -> bool + Sync),
 ) -> Result<Vec<RunRecord>, SimError> {
+    run_experiment_shard(experiment, estimators, progress, stop, Shard::ALL)
+}
+
+/// A share `i/N` of a list of jobs: job `k` (from 0) belongs to shard `k mod N + 1`. An
+/// experiment's jobs are its scenarios in job order (noise, fraction, run); a batch's
+/// (`swarmpose batch --shard`) are its items.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Shard {
+    /// Which share, 1 to `count`.
+    pub index: usize,
+    /// How many shares.
+    pub count: usize,
+}
+
+impl Shard {
+    /// Every scenario.
+    pub const ALL: Self = Self { index: 1, count: 1 };
+
+    /// Whether scenario `k` belongs to this shard.
+    #[must_use]
+    pub fn holds(self, k: usize) -> bool {
+        self.count > 0 && k % self.count + 1 == self.index
+    }
+
+    /// Scenarios of this shard among `total`.
+    #[must_use]
+    pub fn len_of(self, total: usize) -> usize {
+        (0..self.count.min(total))
+            .filter(|&k| self.holds(k))
+            .map(|k| (total - k).div_ceil(self.count))
+            .sum()
+    }
+}
+
+impl std::str::FromStr for Shard {
+    type Err = String;
+
+    /// `i/N` with `1 <= i <= N`.
+    fn from_str(s: &str) -> Result<Self, String> {
+        let bad = || format!("'{s}' is not a shard i/N with 1 <= i <= N (for example 2/8)");
+        let (i, n) = s.split_once('/').ok_or_else(bad)?;
+        let index: usize = i.trim().parse().map_err(|_| bad())?;
+        let count: usize = n.trim().parse().map_err(|_| bad())?;
+        if index == 0 || index > count {
+            return Err(bad());
+        }
+        Ok(Self { index, count })
+    }
+}
+
+/// [`run_experiment_until`] on the scenarios of `shard` only: the rows of a whole run
+/// that belong to those scenarios, in the same order and with the same values (times
+/// excepted).
+///
+/// # Errors
+/// As [`run_experiment`]; a shard outside `1..=count` is an invalid setting.
+pub fn run_experiment_shard(
+    experiment: &Experiment,
+    estimators: &[EstimatorEntry],
+    progress: &(dyn Fn() + Sync),
+    stop: &(dyn Fn() -> bool + Sync),
+    shard: Shard,
+) -> Result<Vec<RunRecord>, SimError> {
     experiment.validate()?;
+    if shard.index == 0 || shard.index > shard.count {
+        return Err(SimError::InvalidConfig(format!(
+            "shard {}/{}: i/N needs 1 <= i <= N",
+            shard.index, shard.count
+        )));
+    }
     if estimators.is_empty() {
         return Err(SimError::InvalidConfig("no estimator to run".into()));
     }
@@ -68,6 +137,9 @@ pub fn run_experiment_until(
             (0..experiment.fractions.len())
                 .flat_map(move |j| (0..experiment.runs).map(move |r| (i, j, r)))
         })
+        .enumerate()
+        .filter(|(k, _)| shard.holds(*k))
+        .map(|(_, job)| job)
         .collect();
     let per_job: Vec<Vec<RunRecord>> = jobs
         .par_iter()

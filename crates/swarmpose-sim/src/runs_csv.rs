@@ -61,6 +61,82 @@ pub fn runs_csv(rows: &[RunRecord]) -> String {
     out
 }
 
+/// The fields of one CSV line: quoted fields (`"a, ""b"""`) unquoted.
+fn fields(line: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut cur = String::new();
+    let mut quoted = false;
+    let mut chars = line.chars().peekable();
+    while let Some(c) = chars.next() {
+        match (c, quoted) {
+            ('"', true) if chars.peek() == Some(&'"') => {
+                cur.push('"');
+                chars.next();
+            }
+            ('"', _) => quoted = !quoted,
+            (',', false) => out.push(std::mem::take(&mut cur)),
+            _ => cur.push(c),
+        }
+    }
+    out.push(cur);
+    out
+}
+
+/// Reads back the rows of a `runs.csv` ([`runs_csv`]): the same values (numbers are
+/// written in their shortest exact form; `elapsed_ms` at its four decimals).
+///
+/// # Errors
+/// The line and field that cannot be read.
+pub fn parse_runs_csv(text: &str) -> Result<Vec<RunRecord>, String> {
+    let mut lines = text.lines();
+    if lines.next() != Some(RUNS_HEADER) {
+        return Err("not a runs.csv: its first line is not the header".into());
+    }
+    lines
+        .enumerate()
+        .filter(|(_, l)| !l.is_empty())
+        .map(|(i, line)| parse_row(line).map_err(|e| format!("line {}: {e}", i + 2)))
+        .collect()
+}
+
+fn parse_row(line: &str) -> Result<RunRecord, String> {
+    let f = fields(line);
+    if f.len() != 18 {
+        return Err(format!("{} fields, 18 expected", f.len()));
+    }
+    fn p<T: std::str::FromStr>(f: &[String], k: usize) -> Result<T, String> {
+        f[k].parse()
+            .map_err(|_| format!("field {} '{}' is not a number", k + 1, f[k]))
+    }
+    let nan = |k: usize| -> Result<f64, String> {
+        if f[k].is_empty() {
+            Ok(f64::NAN)
+        } else {
+            p(&f, k)
+        }
+    };
+    Ok(RunRecord {
+        noise_sigma: p(&f, 0)?,
+        outlier_fraction: p(&f, 1)?,
+        run: p(&f, 2)?,
+        seed: p(&f, 3)?,
+        estimator: f[4].clone(),
+        threshold_m: p(&f, 5)?,
+        n: p(&f, 6)?,
+        n_outliers: p(&f, 7)?,
+        position_error_m: nan(8)?,
+        rotation_error_deg: nan(9)?,
+        rotation_error_frobenius: nan(10)?,
+        success: p(&f, 11)?,
+        n_inliers_estimated: p(&f, 12)?,
+        inlier_precision: nan(13)?,
+        inlier_recall: nan(14)?,
+        elapsed_ms: p(&f, 15)?,
+        iterations: p(&f, 16)?,
+        error: Some(f[17].clone()).filter(|e| !e.is_empty()),
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -87,7 +163,14 @@ mod tests {
             iterations: 0,
             error: Some("insufficient support: 1 features, at least 4".into()),
         };
-        let csv = runs_csv(&[rec]);
+        let csv = runs_csv(std::slice::from_ref(&rec));
+        let back = parse_runs_csv(&csv).expect("parse");
+        assert_eq!(
+            runs_csv(&back),
+            csv,
+            "read back, written again: the same bytes"
+        );
+        assert_eq!(back[0].error, rec.error);
         let lines: Vec<&str> = csv.lines().collect();
         assert_eq!(lines[0], RUNS_HEADER);
         assert!(lines[1].ends_with(",\"insufficient support: 1 features, at least 4\""));

@@ -13,11 +13,10 @@ use crate::estimators::EstimatorEntry;
 use crate::experiment::Experiment;
 use crate::export::{scenario_name, write_scenario};
 use crate::metrics::RunRecord;
-use crate::output::{ensure_writable_dir, write_file};
-use crate::plots::write_figures;
-use crate::report::{console_summary, summary_markdown};
-use crate::runner::run_experiment_until;
-use crate::runs_csv::runs_csv;
+use crate::output::ensure_writable_dir;
+use crate::report::console_summary;
+pub use crate::results::write_results;
+use crate::runner::{Shard, run_experiment_shard};
 use crate::stats::Summary;
 
 /// Default output folder.
@@ -163,7 +162,28 @@ pub fn simulate_until(
     estimators: &[EstimatorEntry],
     stop: &(dyn Fn() -> bool + Sync),
 ) -> Result<SimOutcome, SimError> {
+    simulate_shard(opts, estimators, stop, Shard::ALL)
+}
+
+/// [`simulate_until`] on the scenarios of `shard` only ([`Shard`]): with more than one
+/// shard, `runs.csv` holds the shard's rows and `simulate-shard.txt` describes it, for
+/// [`crate::shard::merge_shards`] to make the whole run's files from every shard (no
+/// summary or figures here).
+///
+/// # Errors
+/// As [`simulate`]; `export_dir` with more than one shard is an invalid setting.
+pub fn simulate_shard(
+    opts: &SimOptions,
+    estimators: &[EstimatorEntry],
+    stop: &(dyn Fn() -> bool + Sync),
+    shard: Shard,
+) -> Result<SimOutcome, SimError> {
     opts.check()?;
+    if shard != Shard::ALL && opts.export_dir.is_some() {
+        return Err(SimError::InvalidConfig(
+            "export the scenarios from a run without --shard".into(),
+        ));
+    }
     if estimators.is_empty() {
         return Err(SimError::InvalidConfig("no estimator to run".into()));
     }
@@ -179,39 +199,31 @@ pub fn simulate_until(
         if let Some(dir) = &opts.export_dir {
             export_all(exp, dir, opts.progress, stop)?;
         }
-        let pb = bar(exp.scenarios(), opts.progress, "simulate");
+        let pb = bar(shard.len_of(exp.scenarios()), opts.progress, "simulate");
         let start = Instant::now();
-        let rows = run_experiment_until(exp, estimators, &|| pb.inc(1), stop)?;
+        let rows = run_experiment_shard(exp, estimators, &|| pb.inc(1), stop, shard)?;
         pb.finish_and_clear();
         Ok::<_, SimError>((rows, start.elapsed()))
     })?;
     let threads = pool.current_num_threads();
-    let summary = Summary::new(exp, &rows);
     let scenarios_done = rows.len() / estimators.len();
-    let mut files = Vec::new();
-    let csv = opts.out_dir.join("runs.csv");
-    write_file(&csv, runs_csv(&rows))?;
-    files.push(csv);
-    let md = opts.out_dir.join("summary.md");
-    if scenarios_done < exp.scenarios() {
-        let note = format!(
-            "# Stopped\n\nThe simulation was stopped after {scenarios_done} of {} scenarios \
-             ({:.1} s): runs.csv holds their rows; no tables or figures were made.\n",
-            exp.scenarios(),
-            wall.as_secs_f64()
-        );
-        write_file(&md, note)?;
-        files.push(md);
+    let (summary, files, console) = if shard == Shard::ALL {
+        let (summary, files) =
+            write_results(exp, &rows, estimators.len(), wall, threads, &opts.out_dir)?;
+        let console = console_summary(&summary);
+        (summary, files, console)
     } else {
-        write_file(
-            &md,
-            summary_markdown(exp, &summary, wall.as_secs_f64(), threads),
-        )?;
-        files.push(md);
-        files.extend(write_figures(&summary, &opts.out_dir)?);
-    }
+        let part = crate::shard::ShardRun {
+            shard,
+            scenarios_done,
+            wall,
+            threads,
+        };
+        let files = crate::shard::write_shard(exp, &part, &rows, &opts.out_dir)?;
+        (Summary::new(exp, &rows), files, String::new())
+    };
     Ok(SimOutcome {
-        console: console_summary(&summary),
+        console,
         rows,
         summary,
         files,

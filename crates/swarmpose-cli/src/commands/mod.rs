@@ -15,4 +15,5 @@ pub mod odometry_unpaired;
 pub mod register;
 pub mod segments;
 pub mod simulate;
+pub mod simulate_shard;
 pub mod stereo_options;

@@ -8,7 +8,7 @@ use swarmpose_sim::experiment::{
     DEFAULT_FRACTIONS, DEFAULT_NOISE, DEFAULT_RUNS, DEFAULT_SEED, QUICK_FRACTIONS, QUICK_RUNS,
 };
 use swarmpose_sim::{
-    Experiment, OutlierMode, SimError, SimOptions, default_estimators, simulate_until,
+    Experiment, OutlierMode, Shard, SimError, SimOptions, default_estimators, simulate_shard,
 };
 
 use crate::error::CliError;
@@ -77,6 +77,12 @@ pub struct SimulateArgs {
     /// Also write every scenario as CSV + truth JSON (gen_scenarios.py's format) here.
     #[arg(long, value_name = "DIR")]
     pub export: Option<PathBuf>,
+
+    /// Run the i-th of N shares of the scenarios (from 1): runs.csv holds its rows and
+    /// simulate-shard.txt describes it; `swarmpose batch merge DIR... --out DIR` makes the
+    /// whole run's runs.csv, summary.md and figures from every share.
+    #[arg(long, value_name = "i/N")]
+    pub shard: Option<Shard>,
 }
 
 // Keep the help text's defaults in step with the library's.
@@ -127,8 +133,10 @@ pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
     };
     opts.check().map_err(sim_error)?;
     let stopped = || stop.exit_status().is_some();
-    let outcome = simulate_until(&opts, &default_estimators(), &stopped).map_err(sim_error)?;
-    let total = opts.experiment.scenarios();
+    let shard = args.shard.unwrap_or(Shard::ALL);
+    let outcome =
+        simulate_shard(&opts, &default_estimators(), &stopped, shard).map_err(sim_error)?;
+    let total = shard.len_of(opts.experiment.scenarios());
     let mut text = if outcome.scenarios_done < total {
         String::new()
     } else {

@@ -12,6 +12,8 @@ Built from the same Rust crates as the ``swarmpose`` command line:
 * ``odometry(dir)`` runs a whole KITTI, Karlsruhe or EuRoC sequence directory;
   ``Sequence(dir)`` reads its frames as numpy images.
 * ``evaluate(estimate, ground_truth)`` returns the trajectory metrics as a dict.
+* ``swarmpose.batch.run(manifest, out)`` runs the items of a ``swarmpose batch``
+  manifest in a process pool or on Ray; ``swarmpose.batch.merge`` makes their table.
 
 Units: metres, radians unless a name says otherwise.
 """
@@ -32,6 +34,7 @@ from ._swarmpose import (
     odometry,
     register,
 )
+from . import batch  # noqa: E402,F401  (the submodule swarmpose.batch)
 
 __all__ = [
     "METHODS",

@@ -1,0 +1,153 @@
+//! The hashes a batch item's summary records, so that a rerun knows whether the item is
+//! done: of the input (every file of the sequence folder, or the bag), of the effective
+//! options, and the version.
+
+use std::io::Read;
+use std::path::{Path, PathBuf};
+
+use clap::{Args, FromArgMatches};
+use sha2::{Digest, Sha256};
+
+use super::manifest::Item;
+use crate::commands::odometry::OdometryArgs;
+use crate::error::{CliError, from_clap};
+
+/// The version recorded in every summary.
+pub const VERSION: &str = env!("CARGO_PKG_VERSION");
+
+fn hex(digest: &[u8]) -> String {
+    use std::fmt::Write as _;
+    let mut s = String::with_capacity(7 + 2 * digest.len());
+    s.push_str("sha256:");
+    for b in digest {
+        let _ = write!(s, "{b:02x}");
+    }
+    s
+}
+
+/// Every regular file under `dir` (links followed), by path relative to `dir`.
+fn files_under(dir: &Path, rel: &Path, out: &mut Vec<PathBuf>) -> std::io::Result<()> {
+    for entry in std::fs::read_dir(dir.join(rel))? {
+        let entry = entry?;
+        let rel = rel.join(entry.file_name());
+        let meta = std::fs::metadata(dir.join(&rel))?;
+        if meta.is_dir() {
+            files_under(dir, &rel, out)?;
+        } else if meta.is_file() {
+            out.push(rel);
+        }
+    }
+    Ok(())
+}
+
+/// The SHA-256 of `input`: of a file, its bytes; of a folder, the relative path, length
+/// and bytes of every regular file under it (links followed), in the order of their
+/// paths. Every byte is read: a few seconds a gigabyte.
+///
+/// # Errors
+/// Exit status 2 naming the file that cannot be read.
+pub fn input_hash(input: &Path) -> Result<String, CliError> {
+    let bad = |p: &Path, e: std::io::Error| CliError::usage(format!("{}: {e}", p.display()));
+    let meta = std::fs::metadata(input).map_err(|e| bad(input, e))?;
+    let mut files = Vec::new();
+    if meta.is_dir() {
+        files_under(input, Path::new(""), &mut files).map_err(|e| bad(input, e))?;
+        files.sort();
+    } else {
+        files.push(PathBuf::new());
+    }
+    let mut h = Sha256::new();
+    let mut buf = vec![0u8; 1 << 16];
+    for rel in &files {
+        let path = input.join(rel);
+        let mut f = std::fs::File::open(&path).map_err(|e| bad(&path, e))?;
+        let len = f.metadata().map_err(|e| bad(&path, e))?.len();
+        h.update(rel.to_string_lossy().as_bytes());
+        h.update([0]);
+        h.update(len.to_le_bytes());
+        loop {
+            let n = f.read(&mut buf).map_err(|e| bad(&path, e))?;
+            if n == 0 {
+                break;
+            }
+            h.update(&buf[..n]);
+        }
+    }
+    Ok(hex(&h.finalize()))
+}
+
+/// `swarmpose odometry`'s options for `item`, parsed as the command parses them: `INPUT
+/// --out OUT --quiet` then the item's options, where a later option overrides an earlier
+/// one (an item's own over the shared ones).
+///
+/// # Errors
+/// Exit status 2 with clap's message for a bad option.
+pub fn odometry_args(item: &Item, out: &Path) -> Result<OdometryArgs, CliError> {
+    let mut argv: Vec<std::ffi::OsString> = vec!["odometry".into()];
+    if !item.input.as_os_str().is_empty() {
+        argv.push(item.input.clone().into_os_string());
+    }
+    argv.extend(["--out".into(), out.as_os_str().to_owned(), "--quiet".into()]);
+    argv.extend(item.args.iter().map(Into::into));
+    let cmd = OdometryArgs::augment_args(clap::Command::new("odometry")).args_override_self(true);
+    let matches = cmd.try_get_matches_from(argv).map_err(|e| from_clap(&e))?;
+    OdometryArgs::from_arg_matches(&matches).map_err(|e| from_clap(&e))
+}
+
+/// The hash of an item's effective options: every `swarmpose odometry` setting after
+/// parsing (defaults included; the input and output folders left out), and the bytes of
+/// the file of a `--config FILE`. The one place to change when runs record their
+/// configuration.
+///
+/// # Errors
+/// A bad option (exit status 2), or a `--config` file that cannot be read.
+pub fn config_hash(item: &Item) -> Result<String, CliError> {
+    let bare = Item {
+        input: PathBuf::new(),
+        ..item.clone()
+    };
+    let parsed = odometry_args(&bare, Path::new("."))?;
+    let mut h = Sha256::new();
+    h.update(format!("{parsed:?}").as_bytes());
+    if let Some(pos) = item.args.iter().position(|a| a == "--config")
+        && let Some(file) = item.args.get(pos + 1)
+    {
+        let bytes = std::fs::read(file)
+            .map_err(|e| CliError::usage(format!("{file}: cannot read: {e}")))?;
+        h.update([0]);
+        h.update(&bytes);
+    }
+    Ok(hex(&h.finalize()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn item(args: &[&str]) -> Item {
+        Item {
+            name: "a".into(),
+            input: PathBuf::from("/data/a"),
+            args: args.iter().map(|s| (*s).to_owned()).collect(),
+        }
+    }
+
+    #[test]
+    fn the_config_hash_follows_the_effective_options_only() {
+        let h = |a: &[&str]| config_hash(&item(a)).expect("hash");
+        assert_eq!(h(&[]), h(&["--seed", "0"]), "0 is the default seed");
+        assert_ne!(h(&[]), h(&["--seed", "1"]));
+        assert_eq!(
+            h(&["--seed", "0", "--seed", "1"]),
+            h(&["--seed", "1"]),
+            "the last wins"
+        );
+        let moved = Item {
+            input: PathBuf::from("/elsewhere"),
+            ..item(&[])
+        };
+        assert_eq!(config_hash(&moved).expect("hash"), h(&[]));
+        let e = config_hash(&item(&["--no-such-option"])).expect_err("bad option");
+        assert_eq!(e.code, 2);
+    }
+}
