@@ -8,7 +8,8 @@
 use std::fmt::Display;
 
 use clap::{Args, ValueEnum};
-use swarmpose_core::pso::{MAX_SWARM_SIZE, PsoConfig};
+use swarmpose_core::estimators::MAX_SAMPLES;
+use swarmpose_core::pso::{MAX_ITERATIONS, MAX_SWARM_SIZE, PsoConfig};
 use swarmpose_core::{
     Estimator, EstimatorConfig, MsacConfig, PsoEstimatorConfig, PsoPaperConfig, Threshold,
 };
@@ -74,7 +75,7 @@ pub struct EstimatorOptions {
     pub particles: Option<usize>,
 
     /// Iteration budget after the initial evaluation.
-    #[arg(long, value_name = "N", value_parser = count, help_heading = PSO_HEADING,
+    #[arg(long, value_name = "N", value_parser = iterations, help_heading = PSO_HEADING,
           allow_negative_numbers = true,
           help = pso_help("Iteration budget after the initial evaluation", |c| c.max_iterations))]
     pub iterations: Option<usize>,
@@ -113,7 +114,7 @@ pub struct EstimatorOptions {
     pub confidence: Option<f64>,
 
     /// Cap on the number of MSAC samples.
-    #[arg(long, value_name = "N", value_parser = at_least_one, help_heading = MSAC_HEADING,
+    #[arg(long, value_name = "N", value_parser = samples, help_heading = MSAC_HEADING,
           allow_negative_numbers = true, help = format!(
               "Cap on the number of samples [default: {}]",
               MsacConfig::default().max_iterations))]
@@ -193,10 +194,20 @@ fn probability(s: &str) -> Result<f64, String> {
     }
 }
 
-fn count(s: &str) -> Result<usize, String> {
-    s.trim()
-        .parse::<usize>()
-        .map_err(|_| "must be a whole number >= 0".into())
+/// `--iterations`: 0 to [`MAX_ITERATIONS`] (bounded work per estimate).
+fn iterations(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(n) if n <= MAX_ITERATIONS => Ok(n),
+        _ => Err(format!("must be a whole number from 0 to {MAX_ITERATIONS}")),
+    }
+}
+
+/// `--max-samples`: 1 to [`MAX_SAMPLES`] (bounded work per estimate).
+fn samples(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(n) if (1..=MAX_SAMPLES).contains(&n) => Ok(n),
+        _ => Err(format!("must be a whole number from 1 to {MAX_SAMPLES}")),
+    }
 }
 
 fn at_least_one(s: &str) -> Result<usize, String> {
@@ -376,7 +387,11 @@ mod tests {
         assert!(positive_metres("inf").is_err());
         assert_eq!(positive_metres("0.05"), Ok(0.05));
         assert!(at_least_one("0").is_err());
-        assert!(count("-1").is_err());
+        assert!(iterations("-1").is_err());
+        assert_eq!(iterations("100000"), Ok(100_000));
+        assert!(iterations("100001").is_err());
+        assert!(samples("0").is_err());
+        assert!(samples("1000000000000000000").is_err());
         assert!(probability("1").is_err());
         assert!(probability("NaN").is_err());
         assert!(non_negative("-1").is_err());

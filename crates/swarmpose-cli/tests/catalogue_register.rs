@@ -236,7 +236,11 @@ fn all_cases() -> Vec<Case> {
             "--seeded-particles",
             &["-1", "1000001", "1000000000000"][..],
         ),
-        ("--iterations", &["-3", "x", "1e3"][..]),
+        // 10^18 iterations with --stall none ran for ever (a signal stops between frames).
+        (
+            "--iterations",
+            &["-3", "x", "1e3", "100001", "1000000000000000000"][..],
+        ),
         ("--inertia", &["NaN", "inf", "x"][..]),
         ("--stall", &["0", "x", "-2"][..]),
         ("--seed", &["-1", "x", "1.5"][..]),

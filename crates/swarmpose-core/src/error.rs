@@ -64,6 +64,20 @@ pub enum PoseError {
         /// The minimum (4, after the paper).
         needed: usize,
     },
+    /// A coordinate so large that its square overflows (the spread of the set could not
+    /// be computed).
+    #[error(
+        "the {set} coordinates are too large: {magnitude:e} in magnitude, at most {max:e} \
+         can be computed with (change the unit)"
+    )]
+    TooLarge {
+        /// Which set: "source", "destination" or "inlier".
+        set: &'static str,
+        /// The largest coordinate's magnitude.
+        magnitude: f64,
+        /// The largest magnitude accepted ([`crate::geometry::MAX_COORDINATE`]).
+        max: f64,
+    },
     /// A configuration value is out of its valid range.
     #[error("invalid configuration: {0}")]
     InvalidConfig(String),

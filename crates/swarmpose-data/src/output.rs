@@ -7,8 +7,9 @@
 //! * A symbolic link: followed. The link stays; the regular file it leads to (or the
 //!   missing file it names) is replaced as above.
 //! * A FIFO (a named pipe, `/dev/stdout` of a pipeline) or a character device (a
-//!   terminal, `/dev/null`): written through, in place, never renamed over. Opening a
-//!   FIFO waits for its reader, as any writer of a pipe does.
+//!   terminal, `/dev/null`): written through, in place, never renamed over. A FIFO
+//!   with no reader is waited for [`FIFO_READER_WAIT`] at most, then refused (`open`
+//!   itself would wait forever: `--out` on a FIFO nobody reads hung the command).
 //! * A folder, a block device or a socket: refused, nothing written ([`ErrorKind`]
 //!   `InvalidInput`, the message says what the path is).
 
@@ -28,6 +29,9 @@ pub enum Target {
 
 /// The marker in the temporary names of files being written (`.NAME.partial-PID.EXT`).
 pub const TEMPORARY_MARKER: &str = ".partial-";
+
+/// How long an output that is a FIFO may wait for its reader before it is refused.
+pub const FIFO_READER_WAIT: std::time::Duration = std::time::Duration::from_secs(5);
 
 /// At most this many symbolic links are followed (Linux's own limit).
 const MAX_LINKS: usize = 40;
@@ -161,7 +165,7 @@ fn create_temporary(tmp: &Path) -> io::Result<File> {
 pub fn write_file(path: &Path, bytes: &[u8]) -> io::Result<()> {
     let dest = match target(path)? {
         Target::Through => {
-            let mut f = OpenOptions::new().write(true).open(path)?;
+            let mut f = open_through(path)?;
             return f.write_all(bytes).and_then(|()| f.flush());
         }
         Target::Replace(dest) => dest,
@@ -187,9 +191,50 @@ pub fn write_file(path: &Path, bytes: &[u8]) -> io::Result<()> {
 /// As [`target`], or the error of opening.
 pub fn create_stream(path: &Path) -> io::Result<File> {
     match target(path)? {
-        Target::Through => OpenOptions::new().write(true).open(path),
+        Target::Through => open_through(path),
         Target::Replace(dest) => File::create(dest),
     }
+}
+
+/// Opens a FIFO or a character device to be written through. A FIFO's reader is waited
+/// for at most [`FIFO_READER_WAIT`] (polled with non-blocking opens, which fail while
+/// there is none); then the file is opened for blocking writes.
+///
+/// # Errors
+/// `TimedOut` for a FIFO nobody opened for reading in time; the error of opening.
+fn open_through(path: &Path) -> io::Result<File> {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::OpenOptionsExt;
+        let start = std::time::Instant::now();
+        loop {
+            match OpenOptions::new()
+                .write(true)
+                .custom_flags(libc::O_NONBLOCK)
+                .open(path)
+            {
+                // A reader is there: the writes must wait for it, not fail, so open again
+                // without O_NONBLOCK (this open does not wait: the reader is there).
+                Ok(_probe) => return OpenOptions::new().write(true).open(path),
+                Err(e) if e.raw_os_error() == Some(libc::ENXIO) => {
+                    if start.elapsed() >= FIFO_READER_WAIT {
+                        return Err(io::Error::new(
+                            ErrorKind::TimedOut,
+                            format!(
+                                "a FIFO that nobody reads (no reader within {} s): refused \
+                                 (nothing written)",
+                                FIFO_READER_WAIT.as_secs()
+                            ),
+                        ));
+                    }
+                    std::thread::sleep(std::time::Duration::from_millis(20));
+                }
+                Err(e) => return Err(e),
+            }
+        }
+    }
+    #[cfg(not(unix))]
+    OpenOptions::new().write(true).open(path)
 }
 
 #[cfg(test)]
@@ -283,6 +328,29 @@ mod tests {
     fn is_char_device(path: &Path) -> bool {
         use std::os::unix::fs::FileTypeExt;
         std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_char_device())
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_fifo_nobody_reads_is_refused_in_bounded_time() {
+        use std::os::unix::fs::FileTypeExt;
+        let dir = TempDir::new("output-lonely-fifo");
+        let Some(fifo) = node(&dir.0, "pipe", &["mkfifo"]) else {
+            return;
+        };
+        let start = std::time::Instant::now();
+        let e = write_file(&fifo, b"nobody\n").unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::TimedOut, "{e}");
+        assert!(e.to_string().starts_with("a FIFO that nobody reads"), "{e}");
+        let e = create_stream(&fifo).unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::TimedOut, "{e}");
+        assert!(start.elapsed() < 4 * FIFO_READER_WAIT);
+        assert!(
+            std::fs::symlink_metadata(&fifo)
+                .unwrap()
+                .file_type()
+                .is_fifo()
+        );
     }
 
     #[cfg(unix)]

@@ -15,8 +15,6 @@
 //! Unknown keys are ignored on reading.
 
 use std::fmt;
-use std::fs::File;
-use std::io::BufReader;
 use std::path::{Path, PathBuf};
 
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
@@ -217,14 +215,11 @@ pub fn read(path: impl AsRef<Path>) -> Result<ScenarioTruth, TruthError> {
         path: path.display().to_string(),
         kind,
     };
-    let file = File::open(path).map_err(|e| err(TruthErrorKind::Read(e)))?;
-    let truth: ScenarioTruth = serde_json::from_reader(BufReader::new(file)).map_err(|e| {
-        if e.is_io() {
-            err(TruthErrorKind::Read(e.into()))
-        } else {
-            err(TruthErrorKind::Json(e))
-        }
-    })?;
+    let bytes = std::fs::read(path).map_err(|e| err(TruthErrorKind::Read(e)))?;
+    // A UTF-8 byte-order mark is accepted, as by every reader.
+    let json = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&bytes);
+    let truth: ScenarioTruth =
+        serde_json::from_slice(json).map_err(|e| err(TruthErrorKind::Json(e)))?;
     truth
         .validate()
         .map_err(|e| err(TruthErrorKind::Inconsistent(e)))?;

@@ -4,7 +4,7 @@ use std::path::Path;
 
 use crate::error::DatasetError;
 
-/// Reads a whole text file.
+/// Reads a whole text file, without a leading UTF-8 byte-order mark ([`strip_bom`]).
 pub(crate) fn read_text(path: &Path, what: &'static str) -> Result<String, DatasetError> {
     if !path.exists() {
         return Err(DatasetError::Missing {
@@ -12,10 +12,12 @@ pub(crate) fn read_text(path: &Path, what: &'static str) -> Result<String, Datas
             what,
         });
     }
-    std::fs::read_to_string(path).map_err(|source| DatasetError::Io {
-        path: path.to_owned(),
-        source,
-    })
+    std::fs::read_to_string(path)
+        .map(|text| strip_bom(&text).to_owned())
+        .map_err(|source| DatasetError::Io {
+            path: path.to_owned(),
+            source,
+        })
 }
 
 /// A parse error at `line` (1-based) of `path`.

@@ -102,6 +102,8 @@ impl Trajectory {
     /// # Errors
     /// As [`Trajectory::read`], without I/O.
     pub fn parse(text: &str, path: &Path, format: Format) -> Result<Self, EvalError> {
+        // A UTF-8 byte-order mark is accepted, as by every reader.
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         let mut stamps = Vec::new();
         let mut poses = Vec::new();
         for (k, line) in text.lines().enumerate() {
@@ -268,6 +270,28 @@ pub fn kitti_text(poses: &[Isometry3<f64>]) -> String {
     s
 }
 
+/// A timestamp in seconds as text: at least 6 decimals (microseconds, as TUM files have
+/// them), more where 6 would move the stamp by more than a few of its last bits, so
+/// frames microseconds or less apart never get the same stamp (`--frame-period 1e-7`
+/// wrote `0.000000` twice) and a stamp reads back as the value written.
+#[must_use]
+pub fn stamp_text(t: f64) -> String {
+    if !t.is_finite() {
+        return t.to_string();
+    }
+    let tolerance = 4.0 * f64::EPSILON * t.abs();
+    for decimals in 6..=40 {
+        let s = format!("{t:.decimals$}");
+        if s.parse::<f64>()
+            .is_ok_and(|back| (back - t).abs() <= tolerance)
+        {
+            return s;
+        }
+    }
+    // Shorter than 1e-40 s: the shortest text that reads back exactly.
+    t.to_string()
+}
+
 /// TUM text: `timestamp tx ty tz qx qy qz qw` per pose (`qw >= 0`).
 ///
 /// Pairs `stamps` and `poses` up to the shorter of the two.
@@ -279,8 +303,11 @@ pub fn tum_text(stamps: &[f64], poses: &[Isometry3<f64>]) -> String {
         let v = p.translation.vector;
         let _ = writeln!(
             s,
-            "{t:.6} {:e} {:e} {:e} {x:e} {y:e} {z:e} {w:e}",
-            v.x, v.y, v.z
+            "{} {:e} {:e} {:e} {x:e} {y:e} {z:e} {w:e}",
+            stamp_text(*t),
+            v.x,
+            v.y,
+            v.z
         );
     }
     s
@@ -301,6 +328,28 @@ mod tests {
                 )
             })
             .collect()
+    }
+
+    #[test]
+    fn stamps_of_short_frame_periods_stay_apart() {
+        // Microsecond stamps as TUM writes them stay as they were.
+        assert_eq!(stamp_text(0.1 * 3.0), "0.300000");
+        assert_eq!(stamp_text(1_403_636_579.763_555_5), "1403636579.763556");
+        assert_eq!(stamp_text(0.0), "0.000000");
+        // Frames 100 ns apart were written as 0.000000, 0.000000, ...
+        for period in [1e-7, 3.3e-9, 1.25e-12] {
+            let texts: Vec<String> = (0..50).map(|i| stamp_text(f64::from(i) * period)).collect();
+            for (i, t) in texts.iter().enumerate() {
+                let back: f64 = t.parse().expect("a number");
+                assert!(
+                    (back - f64::from(i as u32) * period).abs() <= 1e-3 * period,
+                    "{t}"
+                );
+            }
+            let mut unique = texts.clone();
+            unique.dedup();
+            assert_eq!(unique.len(), texts.len(), "{texts:?}");
+        }
     }
 
     #[test]

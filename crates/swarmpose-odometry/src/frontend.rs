@@ -58,6 +58,9 @@ pub(crate) fn stereo_frame<E: FeatureExtractor>(
             });
         }
     }
+    if (frame.len() as f64) < EXCHANGED_CHECK_SHARE * lf.len() as f64 {
+        crate::rectification::check_rows(frontend, &lf, &rf, left, right, frame.len())?;
+    }
     times.stereo_ms = ms(t);
     Ok(frame)
 }

@@ -35,6 +35,7 @@ mod estimate;
 pub mod frontend;
 pub mod intake;
 pub mod record;
+pub mod rectification;
 pub mod refine;
 pub mod selfcal;
 pub mod tracker;

@@ -19,6 +19,14 @@ create_exception!(
     "The estimator ran but found no pose with enough support (too many wrong matches)."
 );
 
+create_exception!(
+    swarmpose,
+    NotUsableError,
+    EstimationError,
+    "A run finished but fewer than half of its motions were tracked (the command line's \
+     exit status 3); the exception's ``run`` holds every frame."
+);
+
 /// The Python exception type of an error.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Kind {

@@ -21,6 +21,7 @@
 #![deny(missing_docs)]
 #![warn(clippy::unwrap_used)]
 
+mod args;
 mod arrays;
 mod batch;
 mod errors;
@@ -41,6 +42,7 @@ fn _swarmpose(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add("EstimationError", py.get_type::<errors::EstimationError>())?;
+    m.add("NotUsableError", py.get_type::<errors::NotUsableError>())?;
     m.add_function(wrap_pyfunction!(register::register, m)?)?;
     m.add_function(wrap_pyfunction!(register::register_timing, m)?)?;
     m.add_function(wrap_pyfunction!(odometry_run::odometry, m)?)?;

@@ -2,7 +2,9 @@
 //! RGB-D frames for an engine made by `Odometry.rgbd`).
 
 use std::path::PathBuf;
+use std::sync::{Mutex, MutexGuard};
 
+use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use swarmpose_odometry::frontend::RgbdNoise;
@@ -21,10 +23,30 @@ use crate::sequence::{BagArgs, Sequence, camera_dict};
 
 /// A streaming stereo visual odometry: ``track`` takes one rectified stereo pair at a
 /// time and returns its pose at once (a ``Frame``). Its memory does not grow with the
-/// number of frames.
-#[pyclass(module = "swarmpose")]
+/// number of frames. Threads may share one: its frames are taken one at a time, in the
+/// order the threads reach it.
+#[pyclass(frozen, module = "swarmpose")]
 pub(crate) struct Odometry {
-    inner: swarmpose_odometry::Odometry,
+    /// One frame at a time: a second thread's frame waits for the first (with the GIL
+    /// released), where pyo3's borrow check raised "Already borrowed".
+    inner: Mutex<swarmpose_odometry::Odometry>,
+}
+
+impl Odometry {
+    fn of(engine: swarmpose_odometry::Odometry) -> Self {
+        Self {
+            inner: Mutex::new(engine),
+        }
+    }
+
+    /// The engine, waited for while another thread's frame is in it.
+    fn engine(&self) -> PyResult<MutexGuard<'_, swarmpose_odometry::Odometry>> {
+        self.inner.lock().map_err(|_| {
+            PyRuntimeError::new_err(
+                "this Odometry stopped in the middle of a frame (a panic): make a new one",
+            )
+        })
+    }
 }
 
 #[pymethods]
@@ -61,9 +83,7 @@ impl Odometry {
             width,
             height,
         };
-        Ok(Self {
-            inner: config.get().build(camera, None)?,
-        })
+        Ok(Self::of(config.get().build(camera, None)?))
     }
 
     /// An engine for the camera of a sequence directory (its calibration and image
@@ -79,9 +99,9 @@ impl Odometry {
     ) -> PyResult<Self> {
         let config = OdometryConfig::resolve(py, "Odometry.from_sequence", config, options)?;
         let seq = Sequence::open(&sequence_dir, BagArgs::default())?;
-        Ok(Self {
-            inner: config.get().build(camera_of(seq.inner.as_ref()), None)?,
-        })
+        Ok(Self::of(
+            config.get().build(camera_of(seq.inner.as_ref()), None)?,
+        ))
     }
 
     /// Takes the next stereo pair (rectified, (height, width) uint8 arrays of the
@@ -90,7 +110,7 @@ impl Odometry {
     /// images that do not fit the camera or a timestamp that does not increase; the
     /// engine is then unchanged and the next frame can be given.
     fn track(
-        &mut self,
+        &self,
         py: Python<'_>,
         left: &Bound<'_, PyAny>,
         right: &Bound<'_, PyAny>,
@@ -113,10 +133,8 @@ impl Odometry {
             },
             timestamp_s: timestamp,
         };
-        let engine = &mut self.inner;
-        let result = py
-            .detach(move || engine.track(input))
-            .map_err(|e| odometry_error(&e))?;
+        let result =
+            py.detach(move || self.engine()?.track(input).map_err(|e| odometry_error(&e)))?;
         Ok(Frame { result })
     }
 
@@ -157,9 +175,7 @@ impl Odometry {
             width,
             height,
         };
-        Ok(Self {
-            inner: config.get().build(camera, Some(noise))?,
-        })
+        Ok(Self::of(config.get().build(camera, Some(noise))?))
     }
 
     /// Takes the next RGB-D frame of an engine made by ``Odometry.rgbd``: a
@@ -167,7 +183,7 @@ impl Odometry {
     /// float32 array in metres (0 or NaN: no depth), and the timestamp in seconds
     /// (strictly increasing). Returns its ``Frame``; errors as ``track``.
     fn track_rgbd(
-        &mut self,
+        &self,
         py: Python<'_>,
         gray: &Bound<'_, PyAny>,
         depth: &Bound<'_, PyAny>,
@@ -190,17 +206,18 @@ impl Odometry {
             },
             timestamp_s: timestamp,
         };
-        let engine = &mut self.inner;
-        let result = py
-            .detach(move || engine.track_rgbd(input))
-            .map_err(|e| odometry_error(&e))?;
+        let result = py.detach(move || {
+            self.engine()?
+                .track_rgbd(input)
+                .map_err(|e| odometry_error(&e))
+        })?;
         Ok(Frame { result })
     }
 
     /// The camera: fx, fy, cx, cy (pixels), baseline (metres), width, height.
     #[getter]
     fn camera<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        camera_dict(py, self.inner.camera())
+        camera_dict(py, self.engine()?.camera())
     }
 
     /// The camera of the images the engine works on: ``camera`` halved (2x2 means) while
@@ -209,39 +226,40 @@ impl Odometry {
     /// ``camera``.
     #[getter]
     fn working_camera<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        camera_dict(py, self.inner.working_camera())
+        camera_dict(py, self.engine()?.working_camera())
     }
 
     /// The detector's name.
     #[getter]
-    fn detector(&self) -> &'static str {
-        self.inner.detector()
+    fn detector(&self) -> PyResult<&'static str> {
+        Ok(self.engine()?.detector())
     }
 
     /// The estimator's name.
     #[getter]
-    fn method(&self) -> &'static str {
-        self.inner.estimator()
+    fn method(&self) -> PyResult<&'static str> {
+        Ok(self.engine()?.estimator())
     }
 
     /// The self-calibration's current decision and its evidence (as the CLI's
     /// ``calibration.json``).
     #[getter]
     fn calibration<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        json_value(py, &calibration_json(&self.inner.calibration()))
+        json_value(py, &calibration_json(&self.engine()?.calibration()))
     }
 
     /// Heap bytes of the engine's per-frame state (it does not grow with the frames).
     #[getter]
-    fn state_bytes(&self) -> usize {
-        self.inner.state_bytes()
+    fn state_bytes(&self) -> PyResult<usize> {
+        Ok(self.engine()?.state_bytes())
     }
 
-    fn __repr__(&self) -> String {
-        format!(
+    fn __repr__(&self) -> PyResult<String> {
+        let engine = self.engine()?;
+        Ok(format!(
             "Odometry(detector={:?}, method={:?})",
-            self.inner.detector(),
-            self.inner.estimator()
-        )
+            engine.detector(),
+            engine.estimator()
+        ))
     }
 }

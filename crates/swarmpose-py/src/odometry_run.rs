@@ -10,10 +10,11 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use swarmpose_odometry::FrameResult;
 use swarmpose_runs::batch::{camera_of, run_sequence};
-use swarmpose_runs::output::calibration_json;
+use swarmpose_runs::config::MAX_FRAME_PERIOD_S;
+use swarmpose_runs::output::{Summary, calibration_json};
 
 use crate::arrays::{transforms, vector};
-use crate::errors::run_error_then;
+use crate::errors::{NotUsableError, run_error_then};
 use crate::evaluate::json_value;
 use crate::frame::Frame;
 use crate::options::OdometryConfig;
@@ -27,7 +28,8 @@ use crate::sequence::{BagArgs, Sequence};
 /// during the run; Ctrl-C stops it between frames. A frame that cannot be read stops the
 /// run, as on the command line: the exception names the frame and how many were done,
 /// and its ``run`` attribute is the ``OdometryRun`` of those frames (so is a
-/// ``KeyboardInterrupt``'s).
+/// ``KeyboardInterrupt``'s). A run that ends with fewer than half of its motions tracked
+/// raises ``NotUsableError`` (the command line's exit status 3), its ``run`` the whole run.
 #[pyfunction]
 #[pyo3(signature = (sequence_dir, *, frame_period = None, left = None, right = None,
                     stamp_tolerance = 0.0, config = None, **options))]
@@ -46,10 +48,10 @@ pub(crate) fn odometry<'py>(
     let mut run_config = config.get().run_config()?;
     let frame_period = frame_period.unwrap_or(run_config.input.frame_period_s);
     run_config.input.frame_period_s = frame_period;
-    if !(frame_period.is_finite() && frame_period > 0.0) {
-        return Err(PyValueError::new_err(
-            "frame_period must be a positive number of seconds",
-        ));
+    if !(frame_period > 0.0 && frame_period <= MAX_FRAME_PERIOD_S) {
+        return Err(PyValueError::new_err(format!(
+            "frame_period must be a positive number of seconds, at most {MAX_FRAME_PERIOD_S:e}"
+        )));
     }
     let seq = Sequence::open(
         &sequence_dir,
@@ -83,7 +85,7 @@ pub(crate) fn odometry<'py>(
                 frames.len()
             ),
         )),
-        (None, Ok(_)) => None,
+        (None, Ok(_)) => not_usable(&frames),
     };
     let calibration = json_value(py, &calibration_json(&engine.calibration()))?.unbind();
     let run = OdometryRun {
@@ -102,6 +104,16 @@ pub(crate) fn odometry<'py>(
             Err(e)
         }
     }
+}
+
+/// [`NotUsableError`] for a run whose frames are mostly not tracked (the command line's
+/// exit status 3), as [`swarmpose_runs::output::Summary::not_usable`] says.
+fn not_usable(frames: &[FrameResult]) -> Option<PyErr> {
+    let mut summary = Summary::default();
+    frames.iter().for_each(|r| summary.add(r));
+    summary.not_usable().map(|why| {
+        NotUsableError::new_err(format!("{why}; the exception's `run` holds every frame"))
+    })
 }
 
 /// The result of ``swarmpose.odometry``: every frame, and the sequence's ground truth.

@@ -16,6 +16,7 @@ use swarmpose_odometry::working::check_band;
 use swarmpose_odometry::{CorrectionModel, StereoCamera};
 use swarmpose_runs::config::RunConfig;
 
+use crate::args::{FixedCorrection, Seed};
 use crate::errors::odometry_error;
 use crate::methods;
 
@@ -24,16 +25,6 @@ use crate::methods;
 /// borrows and the class keeps): its fields (read-only properties documented by the doc),
 /// its keyword-only constructor (the defaults), its `repr`, the class docstring (every
 /// keyword's doc) and [`OdometryConfig::KEYWORDS`] (the names `**options` accepts).
-/// A fixed disparity correction as Python gives it: `(offset, quadratic)` or
-/// `(offset, quadratic, linear)`, pixels; the same tuple back.
-#[derive(Debug, Clone, Copy, PartialEq, FromPyObject, IntoPyObject)]
-pub(crate) enum FixedCorrection {
-    /// Offset and the term in x².
-    Two((f64, f64)),
-    /// Offset, the term in x² and the term in x.
-    Three((f64, f64, f64)),
-}
-
 macro_rules! odometry_config {
     (
         $(#[doc = $class_doc:tt])*
@@ -101,7 +92,7 @@ odometry_config! {
             (the terms in 1, x² and x) instead of self-calibration",
         min_inliers: Option<usize> = None => "fewest inliers for a motion, at least 3 \
             (``None``: 12)",
-        seed: Option<u64> = None => "the estimator's seed; frame k uses seed + k (``None``: 0)",
+        seed: Option<Seed> = None => "the estimator's seed; frame k uses seed + k (``None``: 0)",
         window: Option<usize> = None => "keyframes of the sliding-window bundle adjustment; \
             0: frame to frame (``None``: as the command line, 10)",
         marginalise: Option<String> = None => "what happens to the window's oldest keyframe \
@@ -191,7 +182,7 @@ impl OdometryConfig {
         }
         c.refine = self.refine.unwrap_or(c.refine);
         c.split_check = self.split_check.unwrap_or(c.split_check);
-        c.seed = self.seed.unwrap_or(c.seed);
+        c.seed = self.seed.map_or(c.seed, |s| s.0);
         c.window.keyframes = self.window.unwrap_or(c.window.keyframes);
         if let Some(mode) = &self.marginalise {
             let mode: Marginalisation = mode

@@ -1,5 +1,6 @@
 //! `swarmpose.register`: the rigid motion `dst = R src + t` of two numpy point sets.
 
+use crate::args::Seed;
 use std::time::Instant;
 
 use nalgebra::Isometry3;
@@ -62,7 +63,7 @@ fn noise_model(method: &str, data: &Correspondences, estimate: &Estimate) -> &'s
 /// options, ``TypeError`` for a dtype that is not float, ``swarmpose.EstimationError``
 /// when no pose has enough support.
 #[pyfunction]
-#[pyo3(signature = (src, dst, *, method = "pso", threshold = None, seed = 0, src_cov = None, dst_cov = None))]
+#[pyo3(signature = (src, dst, *, method = "pso", threshold = None, seed = Seed(0), src_cov = None, dst_cov = None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn register(
     py: Python<'_>,
@@ -70,12 +71,20 @@ pub(crate) fn register(
     dst: &Bound<'_, PyAny>,
     method: &str,
     threshold: Option<f64>,
-    seed: u64,
+    seed: Seed,
     src_cov: Option<&Bound<'_, PyAny>>,
     dst_cov: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Registration> {
+    let Seed(seed) = seed;
     let estimator = methods::estimator(method, threshold)?;
     let data = correspondences(src, dst, src_cov, dst_cov)?;
+    if let Some(m) = swarmpose_core::arun::mirror_image(data.src(), data.dst()) {
+        return Err(pyo3::exceptions::PyValueError::new_err(format!(
+            "dst is a mirror image of src (a reflection fits it with an RMS of {:.3e}, the \
+             best rotation {:.3e}): a reflection is not a rigid motion; check the sign of an axis",
+            m.rms_reflection, m.rms_rotation
+        )));
+    }
     let estimate = py
         .detach(|| estimator.estimate_seeded(&data, seed))
         .map_err(|e| pose_error(&e))?;
@@ -95,15 +104,16 @@ pub(crate) fn register(
 /// # Errors
 /// As `register`.
 #[pyfunction]
-#[pyo3(name = "_register_timing", signature = (src, dst, *, method = "pso", seed = 0, repeats = 1))]
+#[pyo3(name = "_register_timing", signature = (src, dst, *, method = "pso", seed = Seed(0), repeats = 1))]
 pub(crate) fn register_timing(
     py: Python<'_>,
     src: &Bound<'_, PyAny>,
     dst: &Bound<'_, PyAny>,
     method: &str,
-    seed: u64,
+    seed: Seed,
     repeats: usize,
 ) -> PyResult<Vec<f64>> {
+    let Seed(seed) = seed;
     let estimator = methods::estimator(method, None)?;
     let data = correspondences(src, dst, None, None)?;
     py.detach(|| {

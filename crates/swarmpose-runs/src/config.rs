@@ -21,6 +21,10 @@ use swarmpose_odometry::OdometryConfig;
 
 use crate::error::RunError;
 
+/// The longest frame period, seconds (11.6 days): frame times are `i × period`, and a
+/// period of 1e308 made the second frame's time infinite ("timestamp inf").
+pub const MAX_FRAME_PERIOD_S: f64 = 1e6;
+
 /// The format tag of a configuration file (and its version).
 pub const FORMAT: &str = "swarmpose-config/1";
 
@@ -130,6 +134,8 @@ impl RunConfig {
             path: PathBuf::new(),
             message,
         };
+        // A UTF-8 byte-order mark is accepted, as by every reader.
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         let config: Self = serde_json::from_str(text).map_err(|e| error(e.to_string()))?;
         if config.format != FORMAT {
             return Err(error(format!(
@@ -174,8 +180,11 @@ impl RunConfig {
     pub fn check(&self) -> Result<(), String> {
         self.odometry.check().map_err(|e| e.to_string())?;
         let input = &self.input;
-        if !(input.frame_period_s.is_finite() && input.frame_period_s > 0.0) {
-            return Err("input.frame_period_s must be a positive number of seconds".into());
+        if !(input.frame_period_s > 0.0 && input.frame_period_s <= MAX_FRAME_PERIOD_S) {
+            return Err(format!(
+                "input.frame_period_s must be a positive number of seconds, at most \
+                 {MAX_FRAME_PERIOD_S:e} (a frame's time i x period overflowed to inf)"
+            ));
         }
         if !(input.stamp_tolerance_ms.is_finite() && input.stamp_tolerance_ms >= 0.0) {
             return Err(
@@ -234,6 +243,7 @@ mod tests {
             ),
             (r#"{"odometry": {"min_inliers": 2}}"#, "min_inliers 2"),
             (r#"{"input": {"frame_period_s": -1}}"#, "frame_period_s"),
+            (r#"{"input": {"frame_period_s": 1e308}}"#, "at most 1e6"),
             (r#"{"threads": 3}"#, "threads 3"),
             (
                 r#"{"odometry": {"estimator": {"method": "ransac"}}}"#,

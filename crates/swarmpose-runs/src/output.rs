@@ -15,7 +15,7 @@ use std::fmt::Write as _;
 
 use nalgebra::Isometry3;
 use swarmpose_core::geometry::quaternion_wxyz;
-use swarmpose_eval::trajectory::{kitti_text, tum_text};
+use swarmpose_eval::trajectory::{kitti_text, stamp_text, tum_text};
 
 use swarmpose_odometry::{Decision, FrameResult, Status};
 
@@ -44,10 +44,10 @@ pub fn frames_row(r: &FrameResult) -> String {
     let status = r.status.text().replace('"', "'");
     let reference = r.reference.map_or_else(String::new, |i| i.to_string());
     format!(
-        "{},{:.6},\"{status}\",{reference},{},{},{},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},\
+        "{},{},\"{status}\",{reference},{},{},{},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},\
          {:.6},{:.6},{:.6},{:.9},{:.9},{:.9},{:.9},{:.6},{:.6},{:.6},{},{:.4},{:.4},{:.4},{:.4},{},{}",
         r.index,
-        r.timestamp_s,
+        stamp_text(r.timestamp_s),
         c.left_features,
         c.right_features,
         c.stereo_points,
@@ -125,6 +125,10 @@ pub fn tum_line(timestamp_s: f64, pose: &Isometry3<f64>) -> String {
         .to_owned()
 }
 
+/// Smallest share of the motions (frames after the first) that must be tracked for a
+/// run to be usable ([`Summary::not_usable`]).
+pub const MIN_TRACKED_SHARE: f64 = 0.5;
+
 /// Counts of a run's frames by status, updated frame by frame.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Summary {
@@ -170,6 +174,25 @@ impl Summary {
         } else {
             self.tracked as f64 / self.motions() as f64
         }
+    }
+
+    /// Why the run is not usable, when fewer than [`MIN_TRACKED_SHARE`] of its motions
+    /// were tracked (the command line's exit status 3, Python's `NotUsableError`).
+    #[must_use]
+    pub fn not_usable(&self) -> Option<String> {
+        let share = self.tracked_share();
+        (share < MIN_TRACKED_SHARE).then(|| {
+            format!(
+                "not usable: {} motions of {} were tracked ({:.0} %, fewer than {:.0} %; {} at \
+                 constant velocity, {} lost)",
+                self.tracked,
+                self.motions(),
+                100.0 * share,
+                100.0 * MIN_TRACKED_SHARE,
+                self.constant_velocity,
+                self.lost
+            )
+        })
     }
 
     /// `N frames: T of M motions tracked, C at constant velocity, L lost, K keyframes`,

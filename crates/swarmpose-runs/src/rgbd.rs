@@ -73,10 +73,17 @@ fn rgbd_err(path: &Path, line: usize, message: impl Into<String>) -> RunError {
     }
 }
 
+/// A text file of the sequence, without a leading UTF-8 byte-order mark (accepted, as by
+/// every reader).
+fn read_text(path: &Path) -> Result<String, RunError> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| rgbd_err(path, 0, format!("cannot read: {e}")))?;
+    Ok(text.strip_prefix('\u{feff}').unwrap_or(&text).to_owned())
+}
+
 fn read_list(dir: &Path, name: &str) -> Result<Vec<(f64, PathBuf)>, RunError> {
     let path = dir.join(name);
-    let text = std::fs::read_to_string(&path)
-        .map_err(|e| rgbd_err(&path, 0, format!("cannot read: {e}")))?;
+    let text = read_text(&path)?;
     let mut out = Vec::new();
     for (k, line) in text.lines().enumerate() {
         let t = line.trim();
@@ -293,8 +300,7 @@ fn read_intrinsics(path: &Path) -> Result<Intrinsics, RunError> {
     if !path.is_file() {
         return Ok(Intrinsics::default());
     }
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| rgbd_err(path, 0, format!("cannot read: {e}")))?;
+    let text = read_text(path)?;
     // Numbers only, in the order fx fy cx cy: a labelled file ("cx 319.5 ...") had its
     // labels dropped and its numbers taken in the order written.
     let v: Vec<f64> = text

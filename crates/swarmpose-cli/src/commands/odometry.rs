@@ -39,10 +39,6 @@ use crate::methods::{EstimatorOptions, Method, configure};
 use crate::signals::StopRequest;
 use crate::streams::{err, out, warn};
 
-/// Smallest share of the frames after the first whose motion must be tracked for a run
-/// to be usable.
-pub const MIN_TRACKED_SHARE: f64 = 0.5;
-
 /// Arguments of `swarmpose odometry`.
 #[derive(Debug, Args)]
 #[command(after_help = "\
@@ -543,23 +539,13 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
             track.summary.frames
         )));
     }
-    let share = track.summary.tracked_share();
-    if share < MIN_TRACKED_SHARE {
-        return Err(CliError {
+    match track.summary.not_usable() {
+        Some(why) => Err(CliError {
             code: EXIT_NOT_USABLE,
-            message: format!(
-                "not usable: {} motions of {} were tracked ({:.0} %, fewer than {:.0} %; {} at \
-                 constant velocity, {} lost); the outputs are written",
-                track.summary.tracked,
-                track.summary.motions(),
-                100.0 * share,
-                100.0 * MIN_TRACKED_SHARE,
-                track.summary.constant_velocity,
-                track.summary.lost
-            ),
-        });
+            message: format!("{why}; the outputs are written"),
+        }),
+        None => Ok(()),
     }
-    Ok(())
 }
 
 /// `trajectory.smoothed.kitti.txt` and `.tum.txt`: each frame's last estimate by the

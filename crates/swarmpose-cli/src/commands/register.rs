@@ -150,9 +150,27 @@ pub fn estimation_error(name: &str, method: Method, e: &PoseError) -> CliError {
         PoseError::TooFewPoints { .. }
         | PoseError::Degenerate { .. }
         | PoseError::NonFinite { .. }
+        | PoseError::TooLarge { .. }
         | PoseError::LengthMismatch { .. } => {
             CliError::usage(format!("{name}: {}: {e}", method.name()))
         }
+    }
+}
+
+/// Exit status 2 for a destination that is a mirror image of the source: no rotation
+/// explains it (`dst = -src` answered exit 0 with an inlier RMS nine times its threshold).
+///
+/// # Errors
+/// The usage error naming the input and both fits.
+pub fn refuse_mirror_image(name: &str, data: &Correspondences) -> Result<(), CliError> {
+    match swarmpose_core::arun::mirror_image(data.src(), data.dst()) {
+        None => Ok(()),
+        Some(m) => Err(CliError::usage(format!(
+            "{name}: the destination points are a mirror image of the source (a reflection \
+             fits them with an RMS of {:.3e}, the best rotation {:.3e}): a reflection is not \
+             a rigid motion; check the sign of an axis",
+            m.rms_reflection, m.rms_rotation
+        ))),
     }
 }
 
@@ -166,6 +184,7 @@ pub fn run(args: &RegisterArgs) -> Result<(), CliError> {
     let estimator = build(args.method, &args.options)?;
     let name = display_name(&args.input);
     let data = read_correspondences(&args.input)?;
+    refuse_mirror_image(&name, &data)?;
     let estimate = estimator
         .estimate_seeded(&data, args.seed)
         .map_err(|e| estimation_error(&name, args.method, &e))?;

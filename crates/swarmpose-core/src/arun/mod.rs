@@ -12,6 +12,10 @@
 //! axis of the smallest singular value when the unconstrained optimum is a reflection
 //! (planar or noisy sets), so `det R = +1` always.
 
+mod mirror;
+
+pub use mirror::{MIRROR_RATIO, Mirror, mirror_image};
+
 use nalgebra::{Isometry3, Matrix3, Point3, Rotation3, Translation3, UnitQuaternion, Vector3};
 
 use crate::error::{DegeneracyKind, PoseError};

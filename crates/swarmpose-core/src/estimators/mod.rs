@@ -27,7 +27,7 @@ pub use consensus::{
     truncated_cost_within,
 };
 pub use mahalanobis::{CHI2_3_99, refine_mahalanobis};
-pub use msac::{MsacConfig, MsacEstimator};
+pub use msac::{MAX_SAMPLES, MsacConfig, MsacEstimator};
 pub use pso_paper::{PsoPaperConfig, PsoPaperEstimator};
 pub use pso_robust::{PsoEstimator, PsoEstimatorConfig, Threshold};
 pub use ray_noise::RangeNoise;

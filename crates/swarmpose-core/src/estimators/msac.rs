@@ -82,9 +82,18 @@ impl MsacConfig {
                 "max_iterations and refine_rounds must be at least 1".into(),
             ));
         }
+        if self.max_iterations > MAX_SAMPLES || self.refine_rounds > MAX_SAMPLES {
+            return Err(PoseError::InvalidConfig(format!(
+                "max_iterations and refine_rounds may be at most {MAX_SAMPLES}"
+            )));
+        }
         Ok(())
     }
 }
+
+/// Most samples (and refinement rounds) MSAC may draw: bounded work per estimate
+/// (`--max-samples 10^18` with a confidence near 1 ran for ever).
+pub const MAX_SAMPLES: usize = 10_000_000;
 
 /// `msac`: 3-point minimal samples solved by SVD, scored by the truncated quadratic cost
 /// `Σ min(r², δ²)`, with the adaptive sample count `k = log(1 - p) / log(1 - w³)` for

@@ -10,6 +10,9 @@ const RELATIVE_FLAT: f64 = 1e-6;
 /// Absolute spread (metres) below which a set counts as coincident, relative to the
 /// magnitude of its coordinates.
 const ABSOLUTE_COINCIDENT: f64 = 1e-9;
+/// The largest coordinate magnitude a point set may have: the scatter matrix squares
+/// differences of coordinates, which overflow beyond about 1e154.
+pub const MAX_COORDINATE: f64 = 1e150;
 
 /// Principal extents of a point set: the square roots of the eigenvalues of its
 /// mean-centred scatter matrix divided by the point count, in metres, sorted descending.
@@ -61,18 +64,23 @@ where
 ///
 /// # Errors
 /// [`PoseError::Degenerate`] with [`DegeneracyKind::Coincident`] or
-/// [`DegeneracyKind::Collinear`].
+/// [`DegeneracyKind::Collinear`]; [`PoseError::TooLarge`] for a coordinate beyond
+/// [`MAX_COORDINATE`] (its spread cannot be computed: it is not "coincident").
 pub fn check_spread<'a, I>(points: I, set: &'static str) -> Result<(), PoseError>
 where
     I: IntoIterator<Item = &'a Point3<f64>>,
     I::IntoIter: Clone,
 {
     let it = points.into_iter();
-    let scale = it
-        .clone()
-        .map(|p| p.coords.amax())
-        .fold(0.0_f64, f64::max)
-        .max(1.0);
+    let scale = it.clone().map(|p| p.coords.amax()).fold(0.0_f64, f64::max);
+    if scale > MAX_COORDINATE {
+        return Err(PoseError::TooLarge {
+            set,
+            magnitude: scale,
+            max: MAX_COORDINATE,
+        });
+    }
+    let scale = scale.max(1.0);
     let [s1, s2, _] = spread(it);
     if s1 <= ABSOLUTE_COINCIDENT * scale {
         return Err(PoseError::Degenerate {
@@ -119,5 +127,12 @@ mod tests {
         assert!(check_spread(&plane, "source").is_ok());
         let s = spread(&plane);
         assert!(s[2] < 1e-12 && s[1] > 0.1);
+        // Points 1e300 apart are not "coincident": their spread overflows.
+        let huge: Vec<_> = (0..6)
+            .map(|i| Point3::new(1e300 * (i % 3) as f64, 1e300 * (i / 3) as f64, 1.0))
+            .collect();
+        let e = check_spread(&huge, "source").expect_err("too large");
+        assert!(matches!(e, PoseError::TooLarge { .. }), "{e:?}");
+        assert!(e.to_string().contains("too large"), "{e}");
     }
 }

@@ -12,7 +12,7 @@ mod rotation_map;
 
 pub use correspondences::{Correspondences, CovariancePair, MIN_CORRESPONDENCES};
 pub use covariance::check_covariance;
-pub use degeneracy::{check_spread, spread};
+pub use degeneracy::{MAX_COORDINATE, check_spread, spread};
 pub use pose::{
     chain, frobenius_rotation_error, quaternion_wxyz, rodrigues_rotate, rotation_angle_between,
 };

@@ -16,4 +16,4 @@
 
 mod swarm;
 
-pub use swarm::{MAX_SWARM_SIZE, ParticleSwarm, PsoConfig, PsoOutcome};
+pub use swarm::{MAX_ITERATIONS, MAX_SWARM_SIZE, ParticleSwarm, PsoConfig, PsoOutcome};

@@ -10,6 +10,11 @@ use crate::rng::SeededRng;
 /// aborted the process.
 pub const MAX_SWARM_SIZE: usize = 1_000_000;
 
+/// Most iterations a swarm may run (a thousand times the default): an estimate is one
+/// step of a run that a signal stops only between frames, so its work is bounded
+/// (`--iterations 10^18 --stall none` ran for ever).
+pub const MAX_ITERATIONS: usize = 100_000;
+
 /// Settings of a [`ParticleSwarm`]. Defaults in brackets.
 #[derive(Debug, Clone, PartialEq)]
 #[cfg_attr(
@@ -68,7 +73,8 @@ impl PsoConfig {
         self
     }
 
-    /// Checks the ranges: 1 to [`MAX_SWARM_SIZE`] particles, finite non-negative
+    /// Checks the ranges: 1 to [`MAX_SWARM_SIZE`] particles, at most [`MAX_ITERATIONS`]
+    /// iterations, finite non-negative
     /// coefficients, a clamp in `(0, 1]`.
     ///
     /// # Errors
@@ -82,6 +88,12 @@ impl PsoConfig {
             return bad(&format!(
                 "swarm_size {} is more than the {MAX_SWARM_SIZE} a swarm may have",
                 self.swarm_size
+            ));
+        }
+        if self.max_iterations > MAX_ITERATIONS {
+            return bad(&format!(
+                "max_iterations {} is more than the {MAX_ITERATIONS} a swarm may run",
+                self.max_iterations
             ));
         }
         if !(self.inertia.is_finite() && self.inertia >= 0.0) {

@@ -20,6 +20,7 @@
 //!   write them (`swarmpose correspondences`).
 //! - Blank lines are allowed at the end of the file only.
 //! - Every value must be finite (no NaN, no infinity).
+//! - A UTF-8 byte-order mark at the start is allowed (as by every reader of swarmpose).
 //!
 //! The reader does not check the number of rows beyond "at least one": estimators report
 //! too few correspondences themselves.
@@ -216,6 +217,12 @@ pub fn read_from<R: Read>(reader: R, name: &str) -> Result<Correspondences, CsvE
         line_no += 1;
         let text =
             std::str::from_utf8(&buf).map_err(|_| err(Some(line_no), CsvErrorKind::NotUtf8))?;
+        // A UTF-8 byte-order mark before the header is accepted, as by every reader.
+        let text = if line_no == 1 {
+            text.strip_prefix('\u{feff}').unwrap_or(text)
+        } else {
+            text
+        };
         let text = text.trim();
         if !header_seen {
             if text.is_empty() {

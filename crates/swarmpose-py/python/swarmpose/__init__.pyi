@@ -19,6 +19,10 @@ _Poses = Union[npt.NDArray[np.float32], npt.NDArray[np.float64]]
 class EstimationError(RuntimeError):
     """The estimator ran but found no pose with enough support."""
 
+class NotUsableError(EstimationError):
+    """A run finished but fewer than half of its motions were tracked; ``run`` holds it."""
+    run: OdometryRun
+
 class RunnerUp:
     """A second rigid motion found among the correspondences the estimate left over."""
     @property

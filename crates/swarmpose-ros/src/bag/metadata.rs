@@ -54,6 +54,8 @@ fn scalar<'a>(text: &'a str, key: &str) -> Option<&'a str> {
 /// A message for a missing or empty `relative_file_paths`, a file name that leaves the
 /// folder, or a compressed bag.
 pub fn parse_metadata(text: &str) -> Result<Metadata, String> {
+    // A UTF-8 byte-order mark is accepted, as by every reader.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     if !text.contains("rosbag2_bagfile_information") {
         return Err("not a rosbag2 metadata.yaml (no rosbag2_bagfile_information)".to_owned());
     }

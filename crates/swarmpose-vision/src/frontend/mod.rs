@@ -241,6 +241,35 @@ impl<E: FeatureExtractor> Frontend<E> {
         match_stereo(right, left, right_img, left_img, &self.rig, &self.stereo).len()
     }
 
+    /// Stereo matches found when rows may differ by up to `row_tolerance_px` (wider than
+    /// [`StereoConfig::row_tolerance_px`]): their number and the median row of the right
+    /// keypoint minus the left one, pixels (`None` without a match). On a rig that is not
+    /// rectified (a right camera pitched or shifted vertically by a few pixels) the
+    /// matches within the normal tolerance collapse while these do not.
+    #[must_use]
+    pub fn wide_row_matches(
+        &self,
+        left: &Features<E::Descriptor>,
+        right: &Features<E::Descriptor>,
+        left_img: GrayView<'_>,
+        right_img: GrayView<'_>,
+        row_tolerance_px: f32,
+    ) -> (usize, Option<f32>) {
+        let config = StereoConfig {
+            row_tolerance_px,
+            subpixel_radius: 0,
+            row_offset_stride: 0,
+            ..self.stereo
+        };
+        let matches = match_stereo(left, right, left_img, right_img, &self.rig, &config);
+        let mut rows: Vec<f32> = matches
+            .iter()
+            .map(|m| right.keypoints[m.right].y - left.keypoints[m.left].y)
+            .collect();
+        rows.sort_by(f32::total_cmp);
+        (matches.len(), rows.get(rows.len() / 2).copied())
+    }
+
     /// One stereo frame: extract in both images, match, triangulate.
     #[must_use]
     pub fn stereo_frame(
