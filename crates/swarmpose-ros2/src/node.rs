@@ -93,6 +93,8 @@ impl Sink {
             odometry,
             image: None,
             points: None,
+            // A live camera has no ground truth.
+            ground_truth: None,
         };
         if let Err(e) = self.outputs.odometry.publish(msg.odometry.clone()) {
             eprintln!(
