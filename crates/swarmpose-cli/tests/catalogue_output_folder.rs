@@ -32,7 +32,10 @@ fn a_folder_in_use_is_refused_and_an_earlier_run_s_leftovers_removed() {
     expect(
         &out,
         1,
-        &format!("swarmpose: error: {}: in use by another run", s(&out_dir)),
+        &format!(
+            "swarmpose: error: {}: cannot write: in use by another run",
+            s(&out_dir)
+        ),
     );
     assert!(out.stdout.is_empty(), "no frame was run");
     assert!(!out_dir.join("frames.csv").exists());

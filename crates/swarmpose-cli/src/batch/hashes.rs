@@ -94,10 +94,9 @@ pub fn odometry_args(item: &Item, out: &Path) -> Result<OdometryArgs, CliError> 
     OdometryArgs::from_arg_matches(&matches).map_err(|e| from_clap(&e))
 }
 
-/// The hash of an item's effective options: every `swarmpose odometry` setting after
-/// parsing (defaults included; the input and output folders left out), and the bytes of
-/// the file of a `--config FILE`. The one place to change when runs record their
-/// configuration.
+/// The hash of an item's effective settings: the run configuration (`config.json`) its
+/// options give, a `--config FILE`'s settings included (the input and output folders
+/// left out).
 ///
 /// # Errors
 /// A bad option (exit status 2), or a `--config` file that cannot be read.
@@ -107,16 +106,14 @@ pub fn config_hash(item: &Item) -> Result<String, CliError> {
         ..item.clone()
     };
     let parsed = odometry_args(&bare, Path::new("."))?;
+    // The run configuration the item's options give (a --config file's settings with the
+    // options over them), as config.json records it: options that change nothing (the
+    // default seed given explicitly) do not change the hash.
+    let config = crate::commands::odometry::run_config(&parsed)?
+        .to_json()
+        .map_err(|e| CliError::usage(e.to_string()))?;
     let mut h = Sha256::new();
-    h.update(format!("{parsed:?}").as_bytes());
-    if let Some(pos) = item.args.iter().position(|a| a == "--config")
-        && let Some(file) = item.args.get(pos + 1)
-    {
-        let bytes = std::fs::read(file)
-            .map_err(|e| CliError::usage(format!("{file}: cannot read: {e}")))?;
-        h.update([0]);
-        h.update(&bytes);
-    }
+    h.update(config.as_bytes());
     Ok(hex(&h.finalize()))
 }
 
