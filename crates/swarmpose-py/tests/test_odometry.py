@@ -295,7 +295,7 @@ def test_fixed_correction_with_a_linear_term_matches_the_cli(kitti_seq2, swarmpo
     assert run.frames[5].correction["linear_x_px"] == 0.4
     with pytest.raises(ValueError, match="disparity_correction linear must be a finite number"):
         swarmpose.Odometry(**KITTI_CAMERA, disparity_correction=(0.0, 0.0, float("inf")))
-    with pytest.raises(TypeError):
+    with pytest.raises(ValueError, match="disparity_correction must be"):
         swarmpose.Odometry(**KITTI_CAMERA, disparity_correction=(0.0,))
 
 
