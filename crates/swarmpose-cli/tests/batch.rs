@@ -437,3 +437,66 @@ fn simulate_in_two_shards_merges_into_the_single_runs_csv() {
         assert!(merged.join(f).is_file(), "{f}");
     }
 }
+
+/// An item's `ground_truth` file stands in for the poses a sequence carries: the KITTI
+/// slice with its `poses.txt` moved away and named in the manifest gives the metrics of the
+/// slice that holds it; a ground truth of another length fails that item alone (exit 2).
+#[test]
+fn an_items_ground_truth_file_gives_the_metrics_of_the_sequences_own() {
+    let tmp = TempDir::new("batch-truth");
+    let Some(kitti) = shared_dataset("kitti_vo_seq2") else {
+        return;
+    };
+    let with = tmp.0.join("seq/with");
+    kitti_slice(&kitti, &with);
+    let without = tmp.0.join("seq/without");
+    kitti_slice(&kitti, &without);
+    let truth = tmp.0.join("truth.txt");
+    std::fs::rename(without.join("poses.txt"), &truth).expect("move poses");
+    let short = tmp.0.join("short.txt");
+    head(&truth, &short, FRAMES - 1);
+    let text = format!(
+        "[[item]]\nname = \"own\"\ninput = \"{}\"\n\
+         [[item]]\nname = \"given\"\ninput = \"{}\"\nground_truth = \"{}\"\n\
+         [[item]]\nname = \"short\"\ninput = \"{}\"\nground_truth = \"{}\"\n",
+        s(&with),
+        s(&without),
+        s(&truth),
+        s(&without),
+        s(&short)
+    );
+    let m = tmp.file("truth.toml", &text);
+    let out = tmp.0.join("out");
+    let run = swarmpose(&["batch", s(&m), "--out", s(&out)], None);
+    assert_ne!(run.status.code(), Some(0), "the short item fails");
+    let summary = |name: &str| -> serde_json::Value {
+        serde_json::from_str(&read(&out.join(name).join("summary.json"))).expect("json")
+    };
+    let own = summary("own");
+    let given = summary("given");
+    let (own, given) = (&own["metrics"], &given["metrics"]);
+    let figures = own
+        .as_object()
+        .expect("the sequence's own ground truth gives metrics");
+    // The same poses, read by two readers (the KITTI loader's and evaluate's, which
+    // projects each matrix onto the nearest rotation): equal to rounding.
+    for (key, value) in figures {
+        match (value.as_f64(), given[key].as_f64()) {
+            (Some(a), Some(b)) => {
+                assert!((a - b).abs() <= 1e-9 * a.abs().max(1e-3), "{key}: {a} {b}")
+            }
+            _ => assert_eq!(value, &given[key], "{key}"),
+        }
+    }
+    let short = summary("short");
+    assert_eq!(short["status"], "failed");
+    assert_eq!(short["exit_code"], 2);
+    let message = short["message"].as_str().expect("message");
+    assert!(
+        message.contains(&format!(
+            "{} KITTI pose(s) for a sequence of {FRAMES} frames",
+            FRAMES - 1
+        )),
+        "{message}"
+    );
+}

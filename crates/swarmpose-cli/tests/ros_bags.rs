@@ -148,6 +148,7 @@ fn a_kitti_bag_gives_the_folder_trajectory_byte_for_byte() {
             "{storage} {extra:?}: trajectory.kitti.txt identical to the folder's; {FRAMES} Odometry"
         );
     }
+    a_bag_file_is_a_batch_item_with_tum_ground_truth(&kitti, &dir, &want);
     // The same bag cut: its whole frames are run, exit 2 says where it stopped.
     let file = dir.join("bag_mcap_").join("bag_mcap_.mcap");
     let bytes = std::fs::read(&file).expect("bag");
@@ -168,6 +169,63 @@ fn a_kitti_bag_gives_the_folder_trajectory_byte_for_byte() {
         String::from_utf8_lossy(&want).starts_with(&got),
         "the cut run's poses are the folder's"
     );
+}
+
+/// `swarmpose batch` with the MCAP bag file as its item and the KITTI poses as TUM poses
+/// at the bag's header stamps (`ground_truth` in the manifest): the item runs (its input
+/// hash is of the file's bytes), its trajectory is the folder's, and its metrics come from
+/// the poses matched by time.
+fn a_bag_file_is_a_batch_item_with_tum_ground_truth(kitti: &Path, dir: &Path, want: &[u8]) {
+    use nalgebra::{Matrix3, Rotation3, UnitQuaternion};
+    let mut tum = String::new();
+    for (k, m) in kitti_poses(&kitti.join("poses.txt"))
+        .iter()
+        .take(FRAMES)
+        .enumerate()
+    {
+        let r: Matrix3<f64> = m.fixed_view::<3, 3>(0, 0).into_owned();
+        let q = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix(&r));
+        let stamp_ns = 1_317_000_000_000_000_000_i64 + k as i64 * 100_000_000;
+        tum.push_str(&format!(
+            "{}.{:09} {} {} {} {} {} {} {}\n",
+            stamp_ns / 1_000_000_000,
+            stamp_ns % 1_000_000_000,
+            m[(0, 3)],
+            m[(1, 3)],
+            m[(2, 3)],
+            q.i,
+            q.j,
+            q.k,
+            q.w
+        ));
+    }
+    std::fs::write(dir.join("truth.tum.txt"), tum).expect("tum");
+    let manifest = dir.join("batch.toml");
+    std::fs::write(
+        &manifest,
+        "[[item]]\nname = \"bag\"\ninput = \"bag_mcap_/bag_mcap_.mcap\"\nground_truth = \"truth.tum.txt\"\n",
+    )
+    .expect("manifest");
+    let out = dir.join("out_batch");
+    let o = Command::new(env!("CARGO_BIN_EXE_swarmpose"))
+        .arg("batch")
+        .args([&manifest, Path::new("--out"), &out])
+        .output()
+        .expect("swarmpose batch");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let got = std::fs::read(out.join("bag/trajectory.kitti.txt")).expect("trajectory");
+    assert!(
+        got == want,
+        "the batch item's trajectory differs from the folder's"
+    );
+    let summary: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(out.join("bag/summary.json")).expect("summary"),
+    )
+    .expect("json");
+    let path = summary["metrics"]["path_length_m"]
+        .as_f64()
+        .expect("metrics");
+    assert!(path > 1.0, "{summary}");
 }
 
 /// EuRoC frames put in the raw bag.

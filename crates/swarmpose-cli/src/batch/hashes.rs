@@ -59,7 +59,12 @@ pub fn input_hash(input: &Path) -> Result<String, CliError> {
     let mut h = Sha256::new();
     let mut buf = vec![0u8; 1 << 16];
     for rel in &files {
-        let path = input.join(rel);
+        // `input.join("")` would add a trailing '/', which a file's path cannot take.
+        let path = if rel.as_os_str().is_empty() {
+            input.to_owned()
+        } else {
+            input.join(rel)
+        };
         let mut f = std::fs::File::open(&path).map_err(|e| bad(&path, e))?;
         let len = f.metadata().map_err(|e| bad(&path, e))?.len();
         h.update(rel.to_string_lossy().as_bytes());
@@ -73,6 +78,23 @@ pub fn input_hash(input: &Path) -> Result<String, CliError> {
             h.update(&buf[..n]);
         }
     }
+    Ok(hex(&h.finalize()))
+}
+
+/// The hash of an item's inputs: its sequence's ([`input_hash`]), and with a ground-truth
+/// file, the SHA-256 of both hashes (a changed ground truth makes the item run again).
+///
+/// # Errors
+/// As [`input_hash`].
+pub fn item_input_hash(item: &Item) -> Result<String, CliError> {
+    let input = input_hash(&item.input)?;
+    let Some(truth) = &item.ground_truth else {
+        return Ok(input);
+    };
+    let mut h = Sha256::new();
+    h.update(input.as_bytes());
+    h.update([0]);
+    h.update(input_hash(truth)?.as_bytes());
     Ok(hex(&h.finalize()))
 }
 
@@ -121,11 +143,24 @@ pub fn config_hash(item: &Item) -> Result<String, CliError> {
 mod tests {
     use super::*;
 
+    /// A bag is one file: its hash is of its bytes (the folder walk's empty relative path
+    /// used to make `bag.mcap/`, which no file can be opened as).
+    #[test]
+    fn a_file_input_hashes_its_bytes() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let bag = dir.path().join("a.mcap");
+        std::fs::write(&bag, b"bytes").expect("write");
+        let first = input_hash(&bag).expect("hash of a file");
+        std::fs::write(&bag, b"other").expect("write");
+        assert_ne!(input_hash(&bag).expect("hash"), first);
+    }
+
     fn item(args: &[&str]) -> Item {
         Item {
             name: "a".into(),
             input: PathBuf::from("/data/a"),
             args: args.iter().map(|s| (*s).to_owned()).collect(),
+            ground_truth: None,
         }
     }
 

@@ -10,7 +10,7 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
-use super::hashes::{VERSION, config_hash, input_hash, odometry_args};
+use super::hashes::{VERSION, config_hash, item_input_hash, odometry_args};
 use super::manifest::Item;
 use crate::commands::odometry::run_command;
 use crate::error::{CliError, EXIT_NOT_USABLE};
@@ -258,7 +258,7 @@ pub fn run_item(item: &Item, out: &Path) -> Result<Outcome, CliError> {
     let prepared = odometry_args(item, &dir).and_then(|args| {
         let h = Hashes {
             config: config_hash(item)?,
-            input: input_hash(&item.input)?,
+            input: item_input_hash(item)?,
         };
         Ok((args, h))
     });

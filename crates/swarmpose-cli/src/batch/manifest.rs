@@ -10,6 +10,8 @@
 //! input = "data/kitti_vo_seq2"   # a sequence folder or a bag
 //! name = "kitti02"               # optional: the input's file name by default
 //! args = ["--frame-period", "0.2"]  # optional: this item's own options, after the shared
+//! ground_truth = "data/02.txt"   # optional: the left camera's true poses (KITTI, or TUM
+//!                                # for a bag), as `--ground-truth FILE`
 //! ```
 //!
 //! Paths are relative to the manifest's folder. Names are unique and made of letters,
@@ -39,6 +41,7 @@ struct ManifestFile {
 struct ItemFile {
     input: PathBuf,
     name: Option<String>,
+    ground_truth: Option<PathBuf>,
     #[serde(default)]
     args: Vec<String>,
 }
@@ -50,8 +53,11 @@ pub struct Item {
     pub name: String,
     /// The sequence folder or bag (resolved against the manifest's folder).
     pub input: PathBuf,
-    /// Its `swarmpose odometry` options: `--config FILE`, the shared options, its own.
+    /// Its `swarmpose odometry` options: `--config FILE`, the shared options, its own,
+    /// and `--ground-truth FILE` when it has one.
     pub args: Vec<String>,
+    /// Its ground-truth file, when the manifest gives one (resolved against its folder).
+    pub ground_truth: Option<PathBuf>,
 }
 
 /// A batch's items, in the manifest's order.
@@ -131,10 +137,16 @@ impl Manifest {
             }
             let mut args = shared.clone();
             args.extend(it.args);
+            let ground_truth = it.ground_truth.map(|g| base.join(g));
+            if let Some(g) = &ground_truth {
+                args.push("--ground-truth".to_owned());
+                args.push(g.to_string_lossy().into_owned());
+            }
             items.push(Item {
                 name,
                 input: base.join(it.input),
                 args,
+                ground_truth,
             });
         }
         Ok(Self { items })
@@ -170,6 +182,23 @@ mod tests {
         assert_eq!(
             m.items[1].args,
             ["--config", "/m/c.json", "--window", "4", "--seed", "3"]
+        );
+    }
+
+    #[test]
+    fn an_items_ground_truth_becomes_its_last_option() {
+        let m = Manifest::parse(
+            "args = [\"--window\", \"4\"]\n[[item]]\ninput = \"b.mcap\"\nground_truth = \"gt/b.tum.txt\"\n",
+            Path::new("/m"),
+        )
+        .expect("manifest");
+        assert_eq!(
+            m.items[0].ground_truth.as_deref(),
+            Some(Path::new("/m/gt/b.tum.txt"))
+        );
+        assert_eq!(
+            m.items[0].args,
+            ["--window", "4", "--ground-truth", "/m/gt/b.tum.txt"]
         );
     }
 

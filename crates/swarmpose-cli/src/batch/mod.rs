@@ -33,10 +33,13 @@ pub const ITEMS: &str = "batch.json";
     after_help = "\
 MANIFEST is a TOML file (see README \"Many sequences\"): optional shared `config` (given as \
 --config FILE) and `args` (more `swarmpose odometry` options), then one [[item]] per sequence \
-folder or bag with `input`, an optional `name` and optional `args`. Each item runs as \
+folder or bag with `input`, an optional `name`, optional `args` and an optional \
+`ground_truth` file (given as --ground-truth FILE: KITTI poses one a frame, or TUM poses \
+matched by a bag's stamps). Each item runs as \
 `swarmpose odometry INPUT --out DIR/<name> --quiet ARGS` would, in this process, and gets \
 DIR/<name>/summary.json (status, exit code, frames, the evaluation's figures when the \
-sequence has ground truth, time, and the hashes of the input, the options and the version) \
+sequence has ground truth, time, and the hashes of the input and ground truth, the options \
+and the version) \
 and log.txt (its console output). A rerun skips the items whose summary says they finished \
 with the same hashes and reruns the others (failed, stopped, missing). --shard i/N runs items \
 i, i+N, i+2N, ... (from 1, in the manifest's order): N machines or array tasks with the same \

@@ -11,6 +11,7 @@ pub mod odometry_ins;
 pub mod odometry_mcap;
 pub mod odometry_output;
 pub mod odometry_split;
+pub mod odometry_truth;
 pub mod odometry_unpaired;
 pub mod register;
 pub mod segments;

@@ -173,6 +173,12 @@ pub struct OdometryArgs {
     #[arg(long)]
     pub split_check: bool,
 
+    /// The left camera's true poses, in place of the sequence's own: KITTI poses (one a
+    /// frame, in order) or, for a bag, TUM poses matched by time (`*.tum.txt`, `*.tum`,
+    /// `groundtruth.txt`); the evaluation and plots use them.
+    #[arg(long, value_name = "FILE")]
+    pub ground_truth: Option<PathBuf>,
+
     /// ROS 2 bag: the left image topic (found when not given; give both or neither).
     #[arg(long, value_name = "TOPIC")]
     pub left: Option<String>,
@@ -372,6 +378,13 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
             root.display()
         )));
     }
+    let truth_file = match &args.ground_truth {
+        Some(path) => {
+            let stamps = bag.as_ref().map_or(&[][..], |b| &b.stamps_ns[..]);
+            Some(super::odometry_truth::read(path, n, stamps)?)
+        }
+        None => None,
+    };
     let mut odometry = match &source {
         Source::Stereo(seq, ..) => Odometry::builder(camera_of(seq.as_ref()))
             .config(config.clone())
@@ -411,10 +424,10 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
         names,
         bag.as_ref().map(|b| &b.camera_info),
         bag.as_ref().map(|b| b.stamps_ns.clone()),
-        match &source {
+        truth_file.as_deref().or(match &source {
             Source::Stereo(_, _, gt) => gt.as_deref(),
             Source::Rgbd(s, _) => s.ground_truth(),
-        },
+        }),
     )?;
     let frame_stamps = bag
         .as_ref()
@@ -486,6 +499,7 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
         Source::Stereo(_, t, gt) => (t.clone(), gt.clone()),
         Source::Rgbd(s, t) => (t.clone(), s.ground_truth().map(<[_]>::to_vec)),
     };
+    let gt = truth_file.or(gt);
     let done = track.summary.frames;
     mcap.finish(gt.as_deref().map(|g| &g[..done.min(g.len())]))?;
     let ended = ended.map_err(|e| {
