@@ -63,3 +63,46 @@ fn every_corpus_input_passes_its_check() {
         TARGETS.len()
     );
 }
+
+/// A UTF-8 byte-order mark changes nothing (issue 29, cause 11): each `NAME_bom` entry of
+/// the text corpora is entry `NAME` with the mark in front, and reads as it does.
+#[test]
+fn a_byte_order_mark_reads_as_the_text_without_it() {
+    use swarmpose_eval::{Format, Trajectory};
+    let corpus = fuzz_dir().join("corpus");
+    let read = |target: &str, name: &str| -> (String, String) {
+        let plain = std::fs::read_to_string(corpus.join(target).join(name)).expect("entry");
+        let bom = std::fs::read_to_string(corpus.join(target).join(format!("{name}_bom")))
+            .expect("BOM entry");
+        assert_eq!(
+            bom.strip_prefix('\u{feff}'),
+            Some(plain.as_str()),
+            "{target}/{name}_bom"
+        );
+        (plain, bom)
+    };
+    let path = Path::new("poses.txt");
+    for (name, format) in [("kitti", Format::Kitti), ("tum", Format::Tum)] {
+        let (plain, bom) = read("poses", name);
+        let a = Trajectory::parse(&plain, path, format).expect("poses");
+        let b = Trajectory::parse(&bom, path, format).expect("poses with a BOM");
+        assert_eq!(a.poses, b.poses, "{name}");
+        assert_eq!(a.stamps, b.stamps, "{name}");
+    }
+    let (plain, bom) = read("correspondence_csv", "plain");
+    let a = swarmpose_data::correspondence_csv::read_from(plain.as_bytes(), "a.csv").expect("csv");
+    let b = swarmpose_data::correspondence_csv::read_from(bom.as_bytes(), "b.csv")
+        .expect("csv with a BOM");
+    assert_eq!((a.src(), a.dst()), (b.src(), b.dst()));
+    let csv = Path::new("mav0/state_groundtruth_estimate0/data.csv");
+    let (plain, bom) = read("euroc_data_csv", "groundtruth");
+    let a = swarmpose_datasets::euroc::parse_groundtruth(&plain, csv).expect("states");
+    let b = swarmpose_datasets::euroc::parse_groundtruth(&bom, csv).expect("states with a BOM");
+    assert_eq!(a, b);
+    let csv = Path::new("mav0/cam0/data.csv");
+    let (plain, bom) = read("euroc_data_csv", "images");
+    let dir = Path::new("mav0/cam0");
+    let a = swarmpose_datasets::euroc::parse_image_list(&plain, csv, dir).expect("images");
+    let b = swarmpose_datasets::euroc::parse_image_list(&bom, csv, dir).expect("images with a BOM");
+    assert_eq!(a, b);
+}

@@ -18,7 +18,7 @@ use swarmpose_vision::rectify::{
 
 use crate::error::DatasetError;
 use crate::frames::check_pairs;
-use crate::text::{check_baseline, check_plausible, numbers, parse_error, read_text};
+use crate::text::{check_baseline, check_plausible, numbers, parse_error, read_text, strip_bom};
 use crate::{RectifiedStereo, StereoPair, StereoSequence, load_indexed_pair};
 
 pub use yaml::{SensorYaml, parse_sensor_yaml, read_sensor_yaml};
@@ -59,7 +59,7 @@ pub fn parse_image_list(
 ) -> Result<Vec<(i64, PathBuf)>, DatasetError> {
     let path = path.to_owned();
     let mut out = Vec::new();
-    for (k, line) in text.lines().enumerate() {
+    for (k, line) in strip_bom(text).lines().enumerate() {
         let line = line.trim();
         if line.is_empty() || line.starts_with('#') {
             continue;
@@ -136,7 +136,7 @@ pub fn parse_groundtruth(
     path: &Path,
 ) -> Result<Vec<(i64, Isometry3<f64>)>, DatasetError> {
     let mut out = Vec::new();
-    for (k, line) in text.lines().enumerate() {
+    for (k, line) in strip_bom(text).lines().enumerate() {
         let line = line.trim();
         if line.is_empty() || line.starts_with('#') {
             continue;
