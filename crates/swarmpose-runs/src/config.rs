@@ -207,6 +207,11 @@ mod tests {
         let c = RunConfig::default();
         let text = c.to_json().expect("json");
         assert_eq!(RunConfig::from_json(&text).expect("reads"), c);
+        let with_bom = format!("\u{feff}{text}");
+        assert_eq!(
+            RunConfig::from_json(&with_bom).expect("a BOM is accepted"),
+            c
+        );
     }
 
     #[test]

@@ -96,6 +96,8 @@ impl Manifest {
     /// # Errors
     /// As [`Manifest::load`], without the file's name.
     pub fn parse(text: &str, base: &Path) -> Result<Self, String> {
+        // A UTF-8 byte-order mark is accepted, as by every reader.
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         let file: ManifestFile = toml::from_str(text).map_err(|e| {
             format!(
                 "not a batch manifest: {}",
@@ -206,6 +208,8 @@ mod tests {
     fn bad_manifests_are_refused_with_the_reason() {
         let err = |t: &str| Manifest::parse(t, Path::new("")).expect_err(t);
         assert!(err("").contains("no [[item]]"));
+        let bom = Manifest::parse("\u{feff}[[item]]\ninput = \"a\"\n", Path::new(""));
+        assert_eq!(bom.expect("a BOM is accepted").items.len(), 1);
         assert!(err("[[item]]\ninput = \"a\"\n[[item]]\ninput = \"x/a\"\n").contains("twice"));
         assert!(err("[[item]]\ninput = \"a\"\nname = \"../x\"\n").contains("not a folder name"));
         assert!(err("[[item]]\ninput = \"a\"\nframes = 3\n").contains("not a batch manifest"));

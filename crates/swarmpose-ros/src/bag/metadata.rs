@@ -119,6 +119,11 @@ mod tests {
             parse_metadata(flow).expect("flow").files,
             ["x.db3", "y.db3"]
         );
+        let with_bom = format!("\u{feff}{block}");
+        assert_eq!(
+            parse_metadata(&with_bom).expect("a BOM is accepted").files,
+            m.files
+        );
     }
 
     #[test]
