@@ -5,7 +5,7 @@ use nalgebra::{Isometry3, Point3};
 use swarmpose_core::{Correspondences, Estimator};
 use swarmpose_vision::frontend::{DisparityCorrection, FrameMatches};
 
-use crate::record::Reason;
+use crate::record::{Inlier, Reason};
 use crate::refine::model::StereoObservation;
 use crate::window::Link;
 
@@ -89,13 +89,35 @@ pub(crate) fn window_links(m: &FrameMatches, obs: &Observations, inliers: &[usiz
         .collect()
 }
 
+/// The inliers `matches` (indices into `m`'s correspondences) as the engine reports
+/// them: each feature's pixel in the current frame B and the reference A, and its point
+/// in B (metres).
+pub(crate) fn inlier_features(
+    m: &FrameMatches,
+    matches: impl Iterator<Item = usize>,
+) -> Vec<Inlier> {
+    let points = m.correspondences.src();
+    matches
+        .filter_map(|s| {
+            let p = points.get(s)?;
+            Some(Inlier {
+                pixel: *m.src_pixels.get(s)?,
+                reference_pixel: *m.dst_pixels.get(s)?,
+                point_m: [p.x as f32, p.y as f32, p.z as f32],
+            })
+        })
+        .collect()
+}
+
 /// The estimator's motion from the reference A to the current frame B.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub(crate) struct Initial {
     /// The pose of B in A.
     pub motion: Isometry3<f64>,
     /// Its inliers.
     pub inliers: usize,
+    /// Their indices into the matches.
+    pub inlier_matches: Vec<usize>,
     /// The estimator found a second, distinct motion with comparable support (a moving
     /// object, or a scene that repeats); `motion` is the one with more support.
     pub ambiguous: bool,
@@ -154,6 +176,7 @@ pub(crate) fn initial_motion(
     let initial = Initial {
         motion: e.transform,
         inliers: e.inliers.len(),
+        inlier_matches: e.inliers,
         ambiguous: e.diagnostics.runner_up.is_some(),
     };
     if initial.inliers < min_inliers {

@@ -46,5 +46,5 @@ pub use config::{Calibration, MIN_INLIERS, OdometryConfig};
 pub use engine::{Odometry, OdometryBuilder, OwnedStereoFrame, RunEnd};
 pub use error::{OdometryError, RunFailure};
 pub use intake::{DepthView, RgbdInput, StereoCamera, StereoInput};
-pub use record::{Counts, FrameResult, Reason, StageTimes, Status};
+pub use record::{Counts, FrameResult, Inlier, Reason, StageTimes, Status};
 pub use selfcal::{CorrectionModel, Decision, SelfCalConfig};

@@ -167,6 +167,21 @@ pub struct Counts {
     pub inliers: usize,
 }
 
+/// One inlier of a tracked frame's motion: the feature in this frame and in the frame
+/// its motion was measured from, and its triangulated point.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Inlier {
+    /// The feature's pixel `(u, v)` in this frame's left image (pixels of the camera's
+    /// images, as given to the engine).
+    pub pixel: (f32, f32),
+    /// Its pixel in the left image of the frame the motion was measured from (the
+    /// matched frame: the previous frame, or an earlier one that had more points).
+    pub reference_pixel: (f32, f32),
+    /// Its point in this frame's left camera frame (x right, y down, z forward), metres,
+    /// as triangulated from this frame's images (stereo, or the depth image).
+    pub point_m: [f32; 3],
+}
+
 /// The engine's answer for one frame.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FrameResult {
@@ -235,6 +250,10 @@ pub struct FrameResult {
     /// inliers, and the normalised difference. `None` otherwise, or when a half had too
     /// few inliers.
     pub split: Option<SplitCheck>,
+    /// The inliers of the accepted motion from the frame it was matched to: the
+    /// refinement's when the motion was refined, the estimator's otherwise (as many as
+    /// [`Counts::inliers`]). Empty for a frame that was not tracked.
+    pub inliers: Vec<Inlier>,
 }
 
 #[cfg(test)]

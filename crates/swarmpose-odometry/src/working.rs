@@ -165,14 +165,24 @@ impl WorkingScale {
         d
     }
 
-    /// `r`'s pixel figures (its correction and focal length change) in pixels of the
-    /// camera's images.
+    /// `r`'s pixel figures (its correction, focal length change and inlier pixels) in
+    /// pixels of the camera's images.
     pub fn result_in_camera_pixels(self, mut r: FrameResult) -> FrameResult {
         if self.levels == 0 {
             return r;
         }
         r.correction = self.correction_in_camera_pixels(r.correction);
-        r.focal_px *= self.factor();
+        let s = self.factor();
+        r.focal_px *= s;
+        // Pixel centres line up: (u + 0.5) scales by the factor (`StereoCamera::halved`).
+        let px = |(u, v): (f32, f32)| {
+            let s = s as f32;
+            (s * (u + 0.5) - 0.5, s * (v + 0.5) - 0.5)
+        };
+        for i in &mut r.inliers {
+            i.pixel = px(i.pixel);
+            i.reference_pixel = px(i.reference_pixel);
+        }
         r
     }
 

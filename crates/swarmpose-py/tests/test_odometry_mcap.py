@@ -91,7 +91,8 @@ def evo_ate(mcap, out):
         return json.loads(z.read("stats.json"))["rmse"]
 
 
-def test_odometry_mcap_decodes_to_the_run(kitti_seq2, swarmpose_bin, tmp_path):
+def require_readers():
+    """Skips (fails under CI=true) without both independent readers."""
     for module in ("rosbags", "mcap_ros2"):
         try:
             __import__(module)
@@ -100,6 +101,10 @@ def test_odometry_mcap_decodes_to_the_run(kitti_seq2, swarmpose_bin, tmp_path):
             found = False
         require(f"the Python package {module}", found,
                 "pip install rosbags==0.11.9 mcap-ros2-support==0.6.0")
+
+
+def test_odometry_mcap_decodes_to_the_run(kitti_seq2, swarmpose_bin, tmp_path):
+    require_readers()
     folder = kitti_clip(kitti_seq2, tmp_path / "kitti", FRAMES, ground_truth=True)
     out = tmp_path / "out"
     subprocess.run([str(swarmpose_bin), "odometry", str(folder), "--out", str(out), "--quiet"],
@@ -136,3 +141,66 @@ def test_odometry_mcap_decodes_to_the_run(kitti_seq2, swarmpose_bin, tmp_path):
     theirs = evo_ate(mcap, tmp_path)
     assert theirs == pytest.approx(ours["ate_aligned"]["rmse"], rel=1e-6, abs=1e-9)
     assert theirs > 0.0
+
+
+IMAGE = "/swarmpose/image/compressed"
+POINTS = "/swarmpose/points"
+
+
+def png_size(data):
+    """(width, height, colour type) from a PNG file's IHDR."""
+    assert bytes(data[:8]) == b"\x89PNG\r\n\x1a\n"
+    assert bytes(data[12:16]) == b"IHDR"
+    return (int.from_bytes(bytes(data[16:20]), "big"), int.from_bytes(bytes(data[20:24]), "big"),
+            data[25])
+
+
+def test_mcap_images_every_nth_frame(kitti_seq2, swarmpose_bin, tmp_path):
+    """--mcap-images 3: frames 0, 3, 6 and 9 carry the left image with the inliers drawn
+    (PNG, the image's size) and the inliers' points (x, y, z float32, metres, in the
+    camera frame: in front of it), as many as frames.csv's inliers, the same as decoded
+    by both readers; and config.json records the setting."""
+    require_readers()
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+    from rosbags.highlevel import AnyReader
+    from rosbags.typesys import Stores, get_typestore
+
+    folder = kitti_clip(kitti_seq2, tmp_path / "kitti", FRAMES)
+    out = tmp_path / "out"
+    subprocess.run([str(swarmpose_bin), "odometry", str(folder), "--out", str(out), "--quiet",
+                    "--mcap-images", "3"], check=True, capture_output=True)
+    assert json.loads((out / "config.json").read_text())["output"]["mcap_images"] == 3
+    header = (out / "frames.csv").read_text().splitlines()[0].split(",")
+    rows = [l.split(",") for l in (out / "frames.csv").read_text().splitlines()[1:]]
+    inliers = [int(r[header.index("inliers")]) for r in rows]
+    assert all(n >= 20 for n in inliers[1:]), inliers
+    with open(out / "odometry.mcap", "rb") as f:
+        reader = make_reader(f, decoder_factories=[DecoderFactory()])
+        msgs = {IMAGE: [], POINTS: []}
+        for _, channel, message, decoded in reader.iter_decoded_messages(topics=list(msgs)):
+            msgs[channel.topic].append((message.log_time, decoded))
+    want_stamps = [k * 100_000_000 for k in range(0, FRAMES, 3)]
+    for topic in (IMAGE, POINTS):
+        assert [t for t, _ in msgs[topic]] == want_stamps, topic
+    width, height, _ = png_size((folder / "image_0" / "000000.png").read_bytes())
+    camera_frame = "camera_optical"
+    for (t, img), (_, cloud) in zip(msgs[IMAGE], msgs[POINTS]):
+        k = t // 100_000_000
+        assert img.format == "png" and img.header.frame_id == camera_frame
+        assert png_size(img.data) == (width, height, 2)  # RGB
+        assert cloud.header.frame_id == camera_frame
+        assert [(fl.name, fl.offset, fl.datatype, fl.count) for fl in cloud.fields] == \
+            [("x", 0, 7, 1), ("y", 4, 7, 1), ("z", 8, 7, 1)]
+        assert (cloud.height, cloud.width, cloud.point_step) == (1, inliers[k], 12)
+        assert cloud.row_step == 12 * inliers[k] and not cloud.is_bigendian
+        points = np.frombuffer(bytes(cloud.data), dtype="<f4").reshape(-1, 3)
+        assert len(points) == inliers[k]
+        if k > 0:
+            assert np.all(points[:, 2] > 0.5) and np.all(np.isfinite(points))
+    # rosbags decodes the same clouds.
+    with AnyReader([out / "odometry.mcap"],
+                   default_typestore=get_typestore(Stores.ROS2_HUMBLE)) as r:
+        conns = [c for c in r.connections if c.topic == POINTS]
+        clouds = [r.deserialize(raw, c.msgtype) for c, _, raw in r.messages(conns)]
+    assert [bytes(c.data) for c in clouds] == [bytes(c.data) for _, c in msgs[POINTS]]

@@ -4,7 +4,7 @@
 //! CDR through `cdr-encoding`), ROS 2 bags ([`bag`]: MCAP through the `mcap` crate,
 //! SQLite `.db3` through `rusqlite`, rosbag2 folders with split files), stereo frames
 //! from a bag ([`stereo`]), the `odometry.mcap` writer ([`write`]), and an engine's
-//! results as messages ([`result`]).
+//! results as messages ([`result`], and its inliers: [`inliers`]).
 #![deny(missing_docs)]
 #![forbid(unsafe_code)]
 #![warn(clippy::unwrap_used)]
@@ -13,6 +13,7 @@ pub mod bag;
 pub mod convert;
 pub mod error;
 pub mod image;
+pub mod inliers;
 pub mod msg;
 pub mod result;
 pub mod source;

@@ -83,6 +83,10 @@ pub struct OutputConfig {
     /// The camera frame of the ROS 2 messages (`None`: the images' `frame_id` from a
     /// bag, else `camera_optical`).
     pub camera_frame: Option<String>,
+    /// Every how many frames `odometry.mcap` carries the left image with the inliers
+    /// drawn (`sensor_msgs/CompressedImage`, PNG) and the inliers' points
+    /// (`sensor_msgs/PointCloud2`, metres, camera frame): frames 0, N, 2N, ... (0: none).
+    pub mcap_images: usize,
 }
 
 impl Default for OutputConfig {
@@ -90,6 +94,7 @@ impl Default for OutputConfig {
         Self {
             odom_frame: "odom".into(),
             camera_frame: None,
+            mcap_images: 0,
         }
     }
 }

@@ -233,3 +233,48 @@ fn a_larger_camera_is_halved_to_the_same_result() {
     let (_, _, levels) = run(large, Calibration::Auto, usize::MAX, true);
     assert_eq!(levels, 0);
 }
+
+/// Each tracked frame reports its inliers (as many as its count): each point lies in
+/// front of the camera and projects onto its pixel with the rig's pinhole, in pixels of
+/// the images given, also when the engine works on halved images; untracked frames
+/// report none.
+#[test]
+fn inliers_project_onto_their_pixels() {
+    use swarmpose_odometry::{Odometry, Status};
+    use swarmpose_runs::batch::{camera_of, collect};
+
+    let seq = SyntheticSequence::new(6, 0.8, 1f64.to_radians());
+    let camera = camera_of(&seq);
+    let pixels = camera.width * camera.height;
+    for (max_working_pixels, levels) in [
+        (OdometryConfig::default().max_working_pixels, 0),
+        (pixels - 1, 1),
+    ] {
+        let config = OdometryConfig {
+            max_working_pixels,
+            ..OdometryConfig::default()
+        };
+        let mut odo = Odometry::new(camera, config).expect("engine");
+        assert_eq!(odo.working_levels(), levels);
+        let results = collect(&seq, &mut odo, 0.1).expect("odometry");
+        let rig = camera.rig;
+        let mut worst = 0.0f32;
+        for r in &results {
+            if r.status != Status::Tracked {
+                assert!(r.inliers.is_empty(), "frame {}", r.index);
+                continue;
+            }
+            assert_eq!(r.inliers.len(), r.counts.inliers, "frame {}", r.index);
+            assert!(r.inliers.len() >= 20, "frame {}", r.index);
+            for i in &r.inliers {
+                let [x, y, z] = i.point_m;
+                assert!(z > 0.0, "frame {}: a point behind the camera", r.index);
+                let u = rig.fx as f32 * x / z + rig.cx as f32;
+                let v = rig.fy as f32 * y / z + rig.cy as f32;
+                worst = worst.max((u - i.pixel.0).hypot(v - i.pixel.1));
+            }
+        }
+        eprintln!("{levels} halving(s): inliers reproject within {worst:.2e} px");
+        assert!(worst < 0.01, "{levels} halving(s): {worst} px");
+    }
+}

@@ -28,6 +28,7 @@ use swarmpose_runs::output_dir::FrameFiles;
 use swarmpose_runs::plots::{PlotTrack, render_plots};
 use swarmpose_runs::rgbd::RgbdSequence;
 use swarmpose_runs::synthetic::SyntheticSequence;
+use swarmpose_vision::image::GrayImage;
 
 use super::odometry_mcap::McapOutput;
 use super::odometry_output::OutputDir;
@@ -204,6 +205,12 @@ pub struct OdometryArgs {
     #[arg(long, value_name = "NAME")]
     pub camera_frame: Option<String>,
 
+    /// odometry.mcap: every N-th frame (0, N, 2N, ...) also as its left image with the
+    /// inliers drawn (CompressedImage, PNG) and the inliers' points (PointCloud2) [default:
+    /// 0: none].
+    #[arg(long, value_name = "N")]
+    pub mcap_images: Option<usize>,
+
     #[command(flatten)]
     pub stereo: StereoOptions,
 
@@ -249,6 +256,15 @@ fn progress_bar(quiet: bool, total: usize) -> ProgressBar {
 enum Source {
     Stereo(Box<dyn StereoSequence>, String, Option<Vec<Isometry3<f64>>>),
     Rgbd(RgbdSequence, String),
+}
+
+/// The left image of frame `i` of `source` as the engine took it (read again, for
+/// `odometry.mcap`'s images).
+fn left_image(source: &Source, i: usize) -> Result<GrayImage, String> {
+    match source {
+        Source::Stereo(seq, ..) => seq.frame(i).map(|p| p.left).map_err(|e| e.to_string()),
+        Source::Rgbd(seq, _) => seq.frame(i).map(|f| f.0).map_err(|e| e.to_string()),
+    }
 }
 
 /// What a run keeps in memory for the end: the poses and whether each was tracked (a
@@ -307,6 +323,7 @@ pub fn run_config(args: &OdometryArgs) -> Result<RunConfig, CliError> {
     if args.camera_frame.is_some() {
         rc.output.camera_frame.clone_from(&args.camera_frame);
     }
+    rc.output.mcap_images = args.mcap_images.unwrap_or(rc.output.mcap_images);
     rc.threads = args.threads.unwrap_or(rc.threads);
     rc.check().map_err(|m| {
         CliError::usage(match m.strip_prefix("input.frame_period_s") {
@@ -421,7 +438,7 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
     };
     let mut mcap = McapOutput::create(
         &dir,
-        names,
+        (names, rc.output.mcap_images),
         bag.as_ref().map(|b| &b.camera_info),
         bag.as_ref().map(|b| b.stamps_ns.clone()),
         truth_file.as_deref().or(match &source {
@@ -455,7 +472,7 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
             .write_before(stamp, files.frames_csv())
             .and_then(|()| files.frame(r).map_err(CliError::from))
             .and_then(|()| split.as_mut().map_or(Ok(()), |s| s.add(r)))
-            .and_then(|()| mcap.frame(r));
+            .and_then(|()| mcap.frame(r, &|i| left_image(&source, i)));
         if let Err(e) = written {
             write_error = Some(e);
             return ControlFlow::Break(());

@@ -15,9 +15,11 @@ use swarmpose_vision::temporal::subpixel::align_patch;
 use super::calibrate::Best;
 use super::{Reference, Tracker, ambiguity};
 use crate::config::Calibration;
-use crate::estimate::{Initial, Observations, initial_motion, observations, window_links};
+use crate::estimate::{
+    Initial, Observations, initial_motion, inlier_features, observations, window_links,
+};
 use crate::frontend::ms;
-use crate::record::{Counts, Reason, StageTimes};
+use crate::record::{Counts, Inlier, Reason, StageTimes};
 use crate::refine::model::StereoObservation;
 use crate::refine::split::{SplitCheck, split_check};
 use crate::refine::{Refined, refine};
@@ -59,6 +61,8 @@ pub(super) struct Measured {
     /// The split-feature check ([`crate::OdometryConfig::split_check`]).
     pub(super) split: Option<SplitCheck>,
     pub(super) inliers: usize,
+    /// The inliers' features ([`crate::FrameResult::inliers`]).
+    pub(super) features: Vec<Inlier>,
     pub(super) correction: DisparityCorrection,
     pub(super) focal_px: f64,
     pub(super) model: CorrectionModel,
@@ -104,6 +108,7 @@ impl<D: Descriptor> Tracker<D> {
             ambiguous: initial.ambiguous,
             split: None,
             inliers: initial.inliers,
+            features: inlier_features(&matches, initial.inlier_matches.iter().copied()),
             correction,
             focal_px,
             model,
@@ -130,6 +135,12 @@ impl<D: Descriptor> Tracker<D> {
             // Otherwise the estimator alone: its motion, on the points corrected as
             // decided before this pair.
             self.take_refined(&mut measured, &best, &pair.obs);
+            let inliers = best
+                .0
+                .inliers
+                .iter()
+                .filter_map(|&k| pair.obs.source.get(k));
+            measured.features = inlier_features(&pair.matches, inliers.copied());
             if self.window.enabled() {
                 let t = Instant::now();
                 self.window_step(&mut measured, reference, now, &pair, &best);

@@ -284,6 +284,7 @@ impl<D: Descriptor> Tracker<D> {
             ambiguous: false,
             window_poses: Vec::new(),
             split: None,
+            inliers: Vec::new(),
         }
     }
 
@@ -328,6 +329,7 @@ impl<D: Descriptor> Tracker<D> {
         });
         self.last_tracked_s = Some(timestamp_s);
         counts.inliers = m.inliers;
+        result.inliers = m.features;
         result.pose = pose;
         result.motion = last.pose.inverse() * pose;
         match m.window {

@@ -1,6 +1,8 @@
 //! Drawing matches between two frames side by side (the paper's figure 9): frame I on
 //! the left, frame J on the right, a line per match; once an estimator has run, inliers
-//! in green and outliers in red (yellow when no classification is given).
+//! in green and outliers in red (yellow when no classification is given). And one
+//! frame's inliers on its own image ([`draw_tracks`]): a line from where each feature was
+//! in the frame it was matched to, a marker where it is now.
 
 use crate::features::GrayView;
 
@@ -23,6 +25,29 @@ pub struct Canvas {
 }
 
 impl Canvas {
+    /// A black canvas.
+    #[must_use]
+    pub fn black(width: usize, height: usize) -> Self {
+        Self {
+            width,
+            height,
+            rgb: vec![0; 3 * width * height],
+        }
+    }
+
+    /// Copies the gray image `img` in, its left column at column `x_off`; what does not
+    /// fit is cut.
+    pub fn paste(&mut self, img: GrayView<'_>, x_off: usize) {
+        let w = img.width.min(self.width.saturating_sub(x_off));
+        for y in 0..img.height.min(self.height) {
+            for x in 0..w {
+                let g = img.data[y * img.width + x];
+                let i = 3 * (y * self.width + x + x_off);
+                self.rgb[i..i + 3].copy_from_slice(&[g, g, g]);
+            }
+        }
+    }
+
     /// Sets one pixel; outside is ignored.
     pub fn put(&mut self, x: i64, y: i64, c: [u8; 3]) {
         if x >= 0 && y >= 0 && (x as usize) < self.width && (y as usize) < self.height {
@@ -99,20 +124,9 @@ pub fn draw_matches(
 ) -> Canvas {
     let width = dst_img.width + src_img.width;
     let height = dst_img.height.max(src_img.height);
-    let mut canvas = Canvas {
-        width,
-        height,
-        rgb: vec![0; 3 * width * height],
-    };
-    for (img, x_off) in [(dst_img, 0), (src_img, dst_img.width)] {
-        for y in 0..img.height {
-            for x in 0..img.width {
-                let g = img.data[y * img.width + x];
-                let i = 3 * (y * width + x + x_off);
-                canvas.rgb[i..i + 3].copy_from_slice(&[g, g, g]);
-            }
-        }
-    }
+    let mut canvas = Canvas::black(width, height);
+    canvas.paste(dst_img, 0);
+    canvas.paste(src_img, dst_img.width);
     let off = dst_img.width as f32;
     // Outliers first so inliers stay visible on top.
     let colour = |k: usize| match inlier {
@@ -129,6 +143,24 @@ pub fn draw_matches(
         canvas.line(a, b, c);
         canvas.marker(a, c);
         canvas.marker(b, c);
+    }
+    canvas
+}
+
+/// The image `img` with its tracked features: for each `k`, a line from
+/// `reference_pixels[k]` (where the feature was in the frame it was matched to) to
+/// `pixels[k]` and a marker at `pixels[k]`, in the inlier colour.
+#[must_use]
+pub fn draw_tracks(
+    img: GrayView<'_>,
+    pixels: &[(f32, f32)],
+    reference_pixels: &[(f32, f32)],
+) -> Canvas {
+    let mut canvas = Canvas::black(img.width, img.height);
+    canvas.paste(img, 0);
+    for (&b, &a) in pixels.iter().zip(reference_pixels) {
+        canvas.line(a, b, INLIER);
+        canvas.marker(b, INLIER);
     }
     canvas
 }
@@ -163,5 +195,24 @@ mod tests {
         assert_eq!(px(10, 0), &[10, 10, 10]);
         assert_eq!(px(35, 0), &[200, 200, 200]);
         assert!(c.rgb.chunks(3).any(|p| p == OUTLIER));
+    }
+
+    #[test]
+    fn draws_tracks_on_the_image() {
+        let a: Vec<u8> = (0..200).map(|i| i as u8).collect();
+        let img = GrayView {
+            width: 20,
+            height: 10,
+            data: &a,
+        };
+        let c = draw_tracks(img, &[(15.0, 5.0)], &[(5.0, 5.0)]);
+        assert_eq!((c.width, c.height), (20, 10));
+        let px = |x: usize, y: usize| &c.rgb[3 * (y * 20 + x)..3 * (y * 20 + x) + 3];
+        // The track along row 5 and the marker's corner at (13, 3).
+        assert_eq!(px(10, 5), &INLIER);
+        assert_eq!(px(13, 3), &INLIER);
+        // Elsewhere the image's gray level.
+        assert_eq!(px(1, 0), &[1, 1, 1]);
+        assert_eq!(px(19, 9), &[199, 199, 199]);
     }
 }
