@@ -268,8 +268,9 @@ def machine():
 def commit():
     p = subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"],
                        capture_output=True, text=True)
-    dirty = subprocess.run(["git", "-C", ROOT, "status", "--porcelain", "--untracked-files=no"],
-                           capture_output=True, text=True).stdout.strip()
+    # Changes to documentation (the file being regenerated) do not change a figure.
+    dirty = subprocess.run(["git", "-C", ROOT, "status", "--porcelain", "--untracked-files=no",
+                            "--", ".", ":!*.md"], capture_output=True, text=True).stdout.strip()
     return p.stdout.strip() + (" (with uncommitted changes)" if dirty else "")
 
 
