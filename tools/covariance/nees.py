@@ -28,6 +28,10 @@ import statistics
 import subprocess
 import sys
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
+                                "generated"))
+from generated import publish  # noqa: E402
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 # (name, truth of the measured motions). None: the built-in synthetic street.
@@ -223,17 +227,21 @@ def split_figures(out):
     path = os.path.join(out, "split_check.csv")
     if not os.path.exists(path):
         return None
-    values = []
+    values, model = [], []
     with open(path) as f:
         for line in f:
             v = line.strip().split(",")
             if len(v) < 2 or not v[0].isdigit():
                 continue
             values.append(float(v[1]))
+            # model_nees (the model's covariance without the systematic floor), when the
+            # binary writes it.
+            if len(v) > 10:
+                model.append(float(v[10]))
     if not values:
         return None
     return {"mean": statistics.fmean(values), "median": statistics.median(values),
-            "n": len(values)}
+            "n": len(values), "model_mean": statistics.fmean(model) if model else None}
 
 
 def run(binary, seq_dir, out, extra):
@@ -260,8 +268,9 @@ def machine():
 def commit():
     p = subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"],
                        capture_output=True, text=True)
-    dirty = subprocess.run(["git", "-C", ROOT, "status", "--porcelain", "--untracked-files=no"],
-                           capture_output=True, text=True).stdout.strip()
+    # Changes to documentation (the file being regenerated) do not change a figure.
+    dirty = subprocess.run(["git", "-C", ROOT, "status", "--porcelain", "--untracked-files=no",
+                            "--", ".", ":!*.md"], capture_output=True, text=True).stdout.strip()
     return p.stdout.strip() + (" (with uncommitted changes)" if dirty else "")
 
 
@@ -270,7 +279,7 @@ def fmt(x):
 
 
 def row(name, label, truth, c, s):
-    """One line of the table."""
+    """One line of the table (text)."""
     cells = [name, label, truth or "none (INS positions only)"]
     if c:
         cells += [str(c["n"]), fmt(c["mean"]), fmt(c["median"]),
@@ -279,10 +288,10 @@ def row(name, label, truth, c, s):
     else:
         cells += ["—"] * 5
     if s:
-        cells += [str(s["n"]), fmt(s["mean"]), fmt(s["median"])]
+        cells += [str(s["n"]), fmt(s["mean"]), fmt(s["median"]), fmt(s.get("model_mean"))]
     else:
-        cells += ["—"] * 3
-    print("| " + " | ".join(cells) + " |")
+        cells += ["—"] * 4
+    return "| " + " | ".join(cells) + " |"
 
 
 def main():
@@ -295,19 +304,25 @@ def main():
                     help="output directory of the runs")
     ap.add_argument("--reuse", action="store_true",
                     help="read the outputs already in --out instead of running")
+    ap.add_argument("--update", metavar="FILE",
+                    help="write the table as the generated section --name of FILE")
+    ap.add_argument("--name", default="covariance-nees",
+                    help="the generated section's name (with --update)")
     a = ap.parse_args()
     chosen = [s for s in SEQUENCES if not a.sequences or s[0] in a.sequences]
     unknown = set(a.sequences) - {s for s, _ in SEQUENCES}
     if unknown:
         sys.exit(f"nees.py: unknown sequence(s) {', '.join(sorted(unknown))}")
+    lines = []
     if a.reuse:
-        print(f"Runs read from {a.out} (made earlier: their binary's commit is not recorded; "
-              f"this tree: {commit()}); {machine()}.\n")
+        lines.append(f"Runs read from {a.out} (made earlier: their binary's commit is not "
+                     f"recorded; this tree: {commit()}); {machine()}.\n")
     else:
-        print(f"Commit {commit()}; {machine()}; `python3 tools/covariance/nees.py`.\n")
-    print("| sequence | mode | truth | motions | mean NEES | median NEES | claimed sd, mm "
-          "| claimed sd, mdeg | split frames | split mean NEES | split median NEES |")
-    print("|---|---|---|---:|---:|---:|---|---|---:|---:|---:|")
+        lines.append(f"Commit {commit()}; {machine()}; `python3 tools/covariance/nees.py`.\n")
+    lines.append("| sequence | mode | truth | motions | mean NEES | median NEES | claimed sd, mm "
+                 "| claimed sd, mdeg | split frames | split mean NEES | split median NEES "
+                 "| split mean NEES, model alone |")
+    lines.append("|---|---|---|---:|---:|---:|---|---|---:|---:|---:|---:|")
     notes = []
     for name, truths in chosen:
         seq_dir = None if name == "synthetic" else os.path.join(a.data, name)
@@ -320,7 +335,8 @@ def main():
                 run(a.binary, seq_dir, out, extra)
             s = split_figures(out)
             for truth in truths:
-                row(name, label, truth, covariance_figures(out, truth) if truth else None, s)
+                lines.append(row(name, label, truth,
+                                 covariance_figures(out, truth) if truth else None, s))
             if "zero" in truths:
                 corr = motion_correlation(out)
                 if corr:
@@ -328,7 +344,13 @@ def main():
                                  "ground truth's, nu x y z, omega x y z: "
                                  + ", ".join(f"{c:.2f}" for c in corr))
     for n in notes:
-        print(f"\n{n}")
+        lines.append(f"\n{n}")
+    text = "\n".join(lines) + "\n"
+    if a.update:
+        command = " ".join(["python3 tools/covariance/nees.py", *sys.argv[1:]])
+        publish(a.update, a.name, command, text)
+    else:
+        print(text, end="")
 
 
 if __name__ == "__main__":

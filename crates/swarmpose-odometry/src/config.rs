@@ -7,6 +7,7 @@ use swarmpose_vision::frontend::{
 };
 
 use crate::refine::RefineConfig;
+use crate::refine::floor::FloorConfig;
 use crate::refine::model::PixelNoise;
 use crate::selfcal::{CorrectionModel, SelfCalConfig};
 use crate::window::WindowConfig;
@@ -164,8 +165,14 @@ pub struct OdometryConfig {
     pub min_working_pixels: usize,
     /// Run the split-feature check of each pair's covariance (default false: it costs two
     /// more refinements a frame): [`FrameResult::split`](crate::FrameResult::split),
-    /// [`crate::refine::split`].
+    /// [`crate::refine::split`]. Its NEES is judged with the systematic floor when that is
+    /// on ([`crate::refine::split::SplitCheck::model_nees`] is the model's alone).
     pub split_check: bool,
+    /// The systematic floor added to every reported covariance: errors shared at the
+    /// scale of half the image, learned online from the split-feature check of the
+    /// frames before ([`crate::refine::floor`]; default on, which runs that check on
+    /// every refined pair).
+    pub covariance_floor: FloorConfig,
 }
 
 impl OdometryConfig {
@@ -199,6 +206,18 @@ impl OdometryConfig {
                 ),
             });
         }
+        let floor = &self.covariance_floor;
+        if floor.memory_frames == 0
+            || !(floor.significance.is_finite() && floor.significance >= 0.0)
+        {
+            return Err(crate::OdometryError::Config {
+                message: format!(
+                    "covariance_floor: memory_frames {} (at least 1) and significance {} \
+                     (finite, at least 0)",
+                    floor.memory_frames, floor.significance
+                ),
+            });
+        }
         Ok(())
     }
 }
@@ -222,6 +241,7 @@ impl Default for OdometryConfig {
             max_working_pixels: 1_500_000,
             min_working_pixels: 0,
             split_check: false,
+            covariance_floor: FloorConfig::default(),
         }
     }
 }

@@ -210,7 +210,9 @@ pub struct FrameResult {
     /// `ξ = (ν, ω)` (metres, radians, in this camera's frame) in `T_true = T ∘ E(ξ)`,
     /// `E(ξ): P ↦ Exp(ω) P + ν`; see [`crate::refine`] and
     /// [`crate::window::WindowMotion::covariance`]. It includes the uncertainty of the
-    /// self-calibrated disparity correction (none for a calibration taken as given).
+    /// self-calibrated disparity correction (none for a calibration taken as given) and,
+    /// with [`crate::OdometryConfig::covariance_floor`] (the default), the systematic
+    /// floor learned from the frames before this one ([`crate::refine::floor`]).
     pub covariance: Option<Matrix6<f64>>,
     /// What happened.
     pub status: Status,
@@ -247,8 +249,9 @@ pub struct FrameResult {
     pub window_poses: Vec<(usize, Isometry3<f64>)>,
     /// With [`crate::OdometryConfig::split_check`], the split-feature check of the pair's
     /// covariance ([`crate::refine::split`]): the motion refined on each half of the
-    /// inliers, and the normalised difference. `None` otherwise, or when a half had too
-    /// few inliers.
+    /// inliers, and the normalised difference, judged with the systematic floor learned
+    /// from the frames before this one. `None` otherwise, or when a half had too few
+    /// inliers.
     pub split: Option<SplitCheck>,
     /// The inliers of the accepted motion from the frame it was matched to: the
     /// refinement's when the motion was refined, the estimator's otherwise (as many as

@@ -175,9 +175,11 @@ impl Frame {
     /// The split-feature check of ``covariance`` (``split_check=True``; ``None`` without
     /// it, or when a half of the inliers was too small): a dict with ``difference`` (6,),
     /// the motion from the second half of the features minus the first's (metres,
-    /// radians), ``covariance`` (6, 6), its covariance under the model, ``nees``, the
-    /// normalised squared difference (6 on average when the covariance is honest), and
-    /// ``inliers``, each half's inlier count. See docs/covariance.md.
+    /// radians), ``covariance`` (6, 6), its covariance (the model's, with the systematic
+    /// floor learned from the frames before added), ``nees``, the normalised squared
+    /// difference under it (6 on average when the covariance is honest), ``model_nees``,
+    /// the same under the model's covariance alone, and ``inliers``, each half's inlier
+    /// count. See docs/covariance.md.
     #[getter]
     fn split<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
         let Some(s) = &self.result.split else {
@@ -187,6 +189,7 @@ impl Frame {
         d.set_item("difference", vector(py, s.difference.as_slice()))?;
         d.set_item("covariance", matrix(py, &s.covariance))?;
         d.set_item("nees", s.nees)?;
+        d.set_item("model_nees", s.model_nees)?;
         d.set_item("inliers", (s.inliers[0], s.inliers[1]))?;
         Ok(Some(d))
     }

@@ -20,6 +20,7 @@
 //! vectors in the frame of the current camera B.
 
 pub mod evidence;
+pub mod floor;
 pub mod model;
 pub mod noise;
 pub mod split;
@@ -577,5 +578,7 @@ impl Problem<'_> {
     }
 }
 
+#[cfg(test)]
+mod floor_tests;
 #[cfg(test)]
 mod tests;

@@ -26,11 +26,14 @@ pub struct SplitCheck {
     /// `ξ₁ − ξ₂`: the error of the second half's motion from the first's, metres and
     /// radians in the current camera (`T₂ = T₁ ∘ E(d)`).
     pub difference: Vector6<f64>,
-    /// Its covariance under the model: `C₁ + C₂` plus the calibration's part that does
-    /// not cancel.
+    /// Its covariance: under the model, `C₁ + C₂` plus the calibration's part that does
+    /// not cancel; in a frame's result, with the systematic floor learned from the frames
+    /// before it added ([`super::floor`]).
     pub covariance: Matrix6<f64>,
-    /// `dᵀ (C₁ + C₂)⁻¹ d` (6 on average when the covariance is honest).
+    /// `dᵀ C⁻¹ d` for that covariance `C` (6 on average when it is honest).
     pub nees: f64,
+    /// `dᵀ C⁻¹ d` for the model's covariance, without the systematic floor.
+    pub model_nees: f64,
     /// Inliers of each half's refinement.
     pub inliers: [usize; 2],
 }
@@ -109,6 +112,7 @@ pub fn split_check(
         difference,
         covariance,
         nees,
+        model_nees: nees,
         inliers: [one.inliers.len(), two.inliers.len()],
     })
 }

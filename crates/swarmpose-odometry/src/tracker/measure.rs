@@ -60,6 +60,9 @@ pub(super) struct Measured {
     pub(super) ambiguous: bool,
     /// The split-feature check ([`crate::OdometryConfig::split_check`]).
     pub(super) split: Option<SplitCheck>,
+    /// The pair's split-feature check under the model, for the systematic floor to learn
+    /// from once the frame's covariances have been given theirs.
+    pub(super) floor_sample: Option<SplitCheck>,
     pub(super) inliers: usize,
     /// The inliers' features ([`crate::FrameResult::inliers`]).
     pub(super) features: Vec<Inlier>,
@@ -107,6 +110,7 @@ impl<D: Descriptor> Tracker<D> {
             keyframe: true,
             ambiguous: initial.ambiguous,
             split: None,
+            floor_sample: None,
             inliers: initial.inliers,
             features: inlier_features(&matches, initial.inlier_matches.iter().copied()),
             correction,
@@ -146,6 +150,10 @@ impl<D: Descriptor> Tracker<D> {
                 self.window_step(&mut measured, reference, now, &pair, &best);
                 times.window_ms = ms(t);
             }
+        }
+        // Learned after it was used: a frame's floor comes from the frames before it.
+        if let Some(sample) = &measured.floor_sample {
+            self.floor.learn(sample);
         }
         Ok(measured)
     }
@@ -343,15 +351,17 @@ impl<D: Descriptor> Tracker<D> {
     }
 
     /// The refined motion `best` (with the correction it was refined under) as the
-    /// frame's measurement: its covariance with the calibration's uncertainty added, and
-    /// the split-feature check when it is asked for.
+    /// frame's measurement: its covariance with the calibration's uncertainty and the
+    /// systematic floor added, and the split-feature check when it is asked for or the
+    /// floor learns from it.
     fn take_refined(&self, measured: &mut Measured, best: &Best, obs: &Observations) {
         let (refined, correction, focal_px, model) = best;
         let calibration_covariance = self.calibration_covariance();
         measured.motion = refined.motion;
-        measured.covariance = Some(refined.covariance_with_calibration(&calibration_covariance));
-        if self.config.split_check {
-            measured.split = split_check(
+        let covariance = refined.covariance_with_calibration(&calibration_covariance);
+        measured.covariance = Some(self.floor.widen(&covariance));
+        if self.config.split_check || self.floor.enabled() {
+            let raw = split_check(
                 (&self.model(*correction, *focal_px), &calibration_covariance),
                 &self.config.refinement,
                 (&obs.reference, &obs.current),
@@ -360,6 +370,9 @@ impl<D: Descriptor> Tracker<D> {
                 self.min_inliers(),
             )
             .ok();
+            let asked = self.config.split_check;
+            measured.split = raw.filter(|_| asked).map(|s| self.floor.judge(&s));
+            measured.floor_sample = raw.filter(|_| self.floor.enabled());
         }
         measured.inliers = refined.inliers.len();
         measured.correction = *correction;
@@ -410,7 +423,11 @@ impl<D: Descriptor> Tracker<D> {
             // measured, with its covariance, is the window's motion from its
             // oldest keyframe.
             measured.covariance = None;
-            measured.window = Some(window);
+            let covariance = window.covariance.map(|c| self.floor.widen(&c));
+            measured.window = Some(WindowMotion {
+                covariance,
+                ..window
+            });
         }
         measured.keyframe = self.window.newest_is_keyframe();
     }

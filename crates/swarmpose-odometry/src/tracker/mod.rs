@@ -28,6 +28,7 @@ use crate::error::OdometryError;
 use crate::intake::{StereoCamera, check_timestamp};
 use crate::record::{Counts, FrameResult, Reason, StageTimes, Status};
 use crate::refine::evidence::MatrixK;
+use crate::refine::floor::SystematicFloor;
 use crate::refine::model::{PixelNoise, StereoModel};
 use crate::selfcal::{CorrectionModel, Decision, SelfCalibration};
 use crate::window::Window;
@@ -75,6 +76,8 @@ pub struct Tracker<D: Descriptor> {
     estimator: Box<dyn Estimator>,
     selfcal: SelfCalibration,
     window: Window,
+    /// The systematic floor of the covariance, learned from past frames.
+    floor: SystematicFloor,
     reference: Option<Reference<D>>,
     last: Option<Last>,
     velocity: Option<Velocity>,
@@ -101,6 +104,7 @@ impl<D: Descriptor> Tracker<D> {
         let window = Window::new(config.window);
         Self {
             window,
+            floor: SystematicFloor::new(config.covariance_floor),
             camera,
             noise,
             temporal,
