@@ -14,7 +14,7 @@ fn euroc_ground_truth_with_a_zero_quaternion_or_missing_frames() {
     let Some(seq) = euroc(&tmp.0, "e", 6) else {
         return;
     };
-    let Some(shared) = swarmpose_datasets::dataset_for_test("euroc_v1_01_easy_micro") else {
+    let Some(shared) = swarmpose_testdata::dataset_for_test("euroc_v1_01_easy_micro") else {
         return;
     };
     let rel = "mav0/state_groundtruth_estimate0/data.csv";

@@ -17,7 +17,8 @@ mod common;
 
 use common::{TempDir, json_of, swarmpose};
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
-use swarmpose_datasets::{dataset_for_test, open};
+use swarmpose_datasets::open;
+use swarmpose_testdata::dataset_for_test;
 
 /// The motion in a `register` report.
 fn pose_of(report: &serde_json::Value) -> Isometry3<f64> {

@@ -86,7 +86,7 @@ fn inputs(kitti: &Path, dir: &Path) -> (PathBuf, PathBuf) {
 /// The data set `dataset`, the Python with rosbags and a fresh scratch folder `name`;
 /// `None` (after saying why) without the data or rosbags.
 fn prepare(dataset: &str, name: &str) -> Option<(PathBuf, String, PathBuf)> {
-    let data = swarmpose_datasets::dataset_for_test(dataset)?;
+    let data = swarmpose_testdata::dataset_for_test(dataset)?;
     let py = python()?;
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
     let _ = std::fs::remove_dir_all(&dir);

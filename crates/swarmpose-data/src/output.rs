@@ -241,7 +241,7 @@ fn open_through(path: &Path) -> io::Result<File> {
 #[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
-    use crate::test_util::TempDir;
+    use swarmpose_testdata::TempDir;
 
     #[test]
     fn a_file_is_replaced_and_a_link_keeps_pointing_at_it() {

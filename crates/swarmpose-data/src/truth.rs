@@ -248,7 +248,7 @@ pub fn write(path: impl AsRef<Path>, truth: &ScenarioTruth) -> Result<(), TruthE
 #[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
-    use crate::test_util::TempDir;
+    use swarmpose_testdata::TempDir;
 
     /// Written by gen_scenarios.py (`make_scenario(1000, 0.02, 0.3, "structured", n_target=5)`).
     const GENERATED: &str = r#"{"rotation_wxyz":[0.9958624493740758,-0.01675119826227682,0.05794774356936882,0.06796644980181756],"translation":[0.13673865983756053,-1.108268486648121,0.1764206200104044],"inlier":[true,true,false,false,true],"noise_sigma":0.02,"outlier_fraction":0.3,"seed":1000,"mode":"structured","n":5,"n_outliers":2,"n_scene_points_drawn":400,"rotation_angle_deg":10.427714759501251,"outlier_rotation_wxyz":[0.9701978607333821,0.0059216544039218996,0.11453942944809434,0.21345201835352767],"outlier_translation":[-3.2844914262257414,-1.2572112506197608,-0.5931856117635804]}"#;

@@ -14,7 +14,7 @@ use swarmpose_vision::features::{FeatureExtractor, Features};
 use swarmpose_vision::frontend::Frontend;
 
 fn bench_frontend(c: &mut Criterion) {
-    let dir = swarmpose_datasets::data_root().join("kitti_vo_seq2");
+    let dir = swarmpose_testdata::data_root().join("kitti_vo_seq2");
     let Ok(seq) = open(&dir) else {
         eprintln!("SKIPPED: {} not found (set SWARMPOSE_DATA)", dir.display());
         return;

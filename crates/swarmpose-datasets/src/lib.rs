@@ -127,40 +127,6 @@ pub fn open(dir: &Path) -> Result<Box<dyn StereoSequence>, DatasetError> {
     })
 }
 
-/// The shared data set `name` for a test, or `None` after printing why it is skipped.
-///
-/// The project's policy for data-dependent tests: a missing data set is skipped with a
-/// printed reason, except under `CI=true`, where it is a failure.
-///
-/// # Panics
-/// Under `CI=true` when the data set is absent (meant for tests and benchmarks only).
-#[must_use]
-pub fn dataset_for_test(name: &str) -> Option<PathBuf> {
-    let dir = data_root().join(name);
-    if dir.is_dir() {
-        return Some(dir);
-    }
-    let msg = format!(
-        "data set {} not found (set SWARMPOSE_DATA to the data root)",
-        dir.display()
-    );
-    assert!(
-        std::env::var("CI").map_or(true, |v| v != "true"),
-        "CI=true: {msg}"
-    );
-    eprintln!("SKIPPED: {msg}");
-    None
-}
-
-/// The data root: `$SWARMPOSE_DATA`, or `../shared/data` next to the repository.
-#[must_use]
-pub fn data_root() -> PathBuf {
-    match std::env::var_os("SWARMPOSE_DATA") {
-        Some(p) if !p.is_empty() => PathBuf::from(p),
-        _ => Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data"),
-    }
-}
-
 /// Loads a left/right pair of PNGs and checks that both have `expected` size (when
 /// given) and the same size.
 ///

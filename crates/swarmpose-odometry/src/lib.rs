@@ -11,6 +11,7 @@
 //! | front end (features, stereo matching, RGB-D depth) | [`frontend`] |
 //! | estimate (matching, robust estimator) | `estimate` (private) |
 //! | reprojection refinement and covariance | [`refine`] |
+//! | the solvers' base: pose update, Huber loss, damping loop, Schur elimination | `nls` (private) |
 //! | self-calibration of the disparity correction | [`selfcal`] |
 //! | the state machine from frames to poses | [`tracker`] |
 //! | the engine | [`engine`] |
@@ -34,6 +35,7 @@ pub mod error;
 mod estimate;
 pub mod frontend;
 pub mod intake;
+mod nls;
 pub mod record;
 pub mod rectification;
 pub mod refine;

@@ -208,7 +208,7 @@ fn bench_write(c: &mut Criterion, dir: &Path) {
 }
 
 fn bench_bags(c: &mut Criterion) {
-    let kitti = swarmpose_datasets::data_root().join("kitti_vo_seq2");
+    let kitti = swarmpose_testdata::data_root().join("kitti_vo_seq2");
     let Ok(seq) = open(&kitti) else {
         eprintln!(
             "SKIPPED: {} not found (set SWARMPOSE_DATA)",

@@ -87,7 +87,7 @@ fn file_in(dir: &Path, ext: &str) -> PathBuf {
 /// What a test needs: the Python with rosbags, the KITTI sequence, a scratch folder and
 /// the frames folder in it; `None` (after saying why) without the data or rosbags.
 fn prepare(name: &str) -> Option<(String, KittiSequence, PathBuf, PathBuf)> {
-    let kitti = swarmpose_datasets::dataset_for_test("kitti_vo_seq2")?;
+    let kitti = swarmpose_testdata::dataset_for_test("kitti_vo_seq2")?;
     let py = common::python_with_rosbags()?;
     let seq = KittiSequence::open(&kitti).expect("kitti");
     let dir = common::scratch(name);

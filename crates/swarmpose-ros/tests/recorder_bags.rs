@@ -203,7 +203,7 @@ fn compare(py: &str, bag_path: &Path, reader: &str, raw: bool, scratch: &Path) -
 
 #[test]
 fn every_message_of_the_recorder_bags_matches_independent_readers() {
-    let Some(root) = swarmpose_datasets::dataset_for_test("ros2_bags") else {
+    let Some(root) = swarmpose_testdata::dataset_for_test("ros2_bags") else {
         return;
     };
     let Some(py) = common::python_with_rosbags() else {

@@ -23,15 +23,11 @@ use swarmpose_datasets::open;
 
 use swarmpose_odometry::{Odometry, OdometryConfig, StageTimes, StereoInput};
 use swarmpose_runs::batch::{camera_of, collect, run_sequence_two_threads};
+use swarmpose_sim::stats::quantile;
 use swarmpose_vision::image::{GrayImage, double};
 
-fn percentile(sorted: &[f64], p: f64) -> f64 {
-    let i = ((sorted.len() as f64 - 1.0) * p).round() as usize;
-    sorted[i.min(sorted.len() - 1)]
-}
-
 fn bench_pipeline(c: &mut Criterion) {
-    let dir = swarmpose_datasets::data_root().join("kitti_vo_seq2");
+    let dir = swarmpose_testdata::data_root().join("kitti_vo_seq2");
     let Ok(seq) = open(&dir) else {
         eprintln!("SKIPPED: {} not found (set SWARMPOSE_DATA)", dir.display());
         return;
@@ -66,8 +62,8 @@ fn bench_pipeline(c: &mut Criterion) {
             "kitti_vo_seq2, orb + pso{label}, engine per frame (images in memory): p50 {:.1} ms, \
              p99 {:.1} ms; mean features {:.2}, stereo {:.2}, match {:.2}, estimate {:.2}, \
              refine {:.2}, calibrate {:.2}, window {:.2} ms",
-            percentile(&latency, 0.5),
-            percentile(&latency, 0.99),
+            quantile(&latency, 0.5),
+            quantile(&latency, 0.99),
             sum.features_ms / n,
             sum.stereo_ms / n,
             sum.match_ms / n,
@@ -122,7 +118,7 @@ fn bench_pipeline(c: &mut Criterion) {
 /// The engine (images in memory) on kitti_vo_seq2 doubled: halved back by the engine
 /// (default) and at full size (`max_working_pixels = usize::MAX`).
 fn bench_working_size(c: &mut Criterion) {
-    let dir = swarmpose_datasets::data_root().join("kitti_vo_seq2");
+    let dir = swarmpose_testdata::data_root().join("kitti_vo_seq2");
     let Ok(seq) = open(&dir) else {
         eprintln!("SKIPPED: {} not found (set SWARMPOSE_DATA)", dir.display());
         return;

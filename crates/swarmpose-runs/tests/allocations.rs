@@ -132,7 +132,7 @@ const MAX_CALLS: u64 = 250;
 /// at most with the focal length among the self-calibration's default causes).
 #[test]
 fn kitti_allocations_per_frame() {
-    let Some(dir) = swarmpose_datasets::dataset_for_test("kitti_vo_seq2") else {
+    let Some(dir) = swarmpose_testdata::dataset_for_test("kitti_vo_seq2") else {
         return;
     };
     let seq = swarmpose_datasets::open(&dir).expect("open");

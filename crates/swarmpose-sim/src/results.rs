@@ -31,7 +31,8 @@ pub fn write_results(
     let scenarios_done = rows.len() / per_scenario.max(1);
     let mut files = Vec::new();
     let csv = dir.join("runs.csv");
-    write_file(&csv, runs_csv(rows))?;
+    let text = runs_csv(rows).map_err(|e| SimError::io(&csv, e.into()))?;
+    write_file(&csv, text)?;
     files.push(csv);
     let md = dir.join("summary.md");
     if scenarios_done < exp.scenarios() {

@@ -1,7 +1,5 @@
 //! `runs.csv`: one row per run and estimator, with a header.
 
-use std::fmt::Write as _;
-
 use crate::metrics::RunRecord;
 
 /// The header of `runs.csv`.
@@ -18,68 +16,45 @@ fn num(v: f64) -> String {
     }
 }
 
-/// A text field, quoted when it holds a comma, a quote or a line break.
-fn text(s: &str) -> String {
-    if s.contains([',', '"', '\n', '\r']) {
-        format!("\"{}\"", s.replace('"', "\"\""))
-    } else {
-        s.to_owned()
-    }
+/// The fields of one row, in the order of [`RUNS_HEADER`].
+fn fields(r: &RunRecord) -> [String; 18] {
+    [
+        r.noise_sigma.to_string(),
+        r.outlier_fraction.to_string(),
+        r.run.to_string(),
+        r.seed.to_string(),
+        r.estimator.clone(),
+        r.threshold_m.to_string(),
+        r.n.to_string(),
+        r.n_outliers.to_string(),
+        num(r.position_error_m),
+        num(r.rotation_error_deg),
+        num(r.rotation_error_frobenius),
+        r.success.to_string(),
+        r.n_inliers_estimated.to_string(),
+        num(r.inlier_precision),
+        num(r.inlier_recall),
+        format!("{:.4}", r.elapsed_ms),
+        r.iterations.to_string(),
+        r.error.clone().unwrap_or_default(),
+    ]
 }
 
-/// The whole `runs.csv` text.
-#[must_use]
-pub fn runs_csv(rows: &[RunRecord]) -> String {
-    let mut out = String::with_capacity(rows.len() * 160);
-    out.push_str(RUNS_HEADER);
-    out.push('\n');
+/// The whole `runs.csv` text (written by the `csv` crate: a field is quoted when it holds
+/// a comma, a quote or a line break).
+///
+/// # Errors
+/// The `csv` crate's (none is expected: the text is built in memory).
+pub fn runs_csv(rows: &[RunRecord]) -> Result<String, csv::Error> {
+    let mut w = csv::Writer::from_writer(Vec::with_capacity(rows.len() * 160));
+    w.write_record(RUNS_HEADER.split(','))?;
     for r in rows {
-        // Writing into a String cannot fail.
-        let _ = writeln!(
-            out,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.4},{},{}",
-            r.noise_sigma,
-            r.outlier_fraction,
-            r.run,
-            r.seed,
-            text(&r.estimator),
-            r.threshold_m,
-            r.n,
-            r.n_outliers,
-            num(r.position_error_m),
-            num(r.rotation_error_deg),
-            num(r.rotation_error_frobenius),
-            r.success,
-            r.n_inliers_estimated,
-            num(r.inlier_precision),
-            num(r.inlier_recall),
-            r.elapsed_ms,
-            r.iterations,
-            text(r.error.as_deref().unwrap_or("")),
-        );
+        w.write_record(fields(r))?;
     }
-    out
-}
-
-/// The fields of one CSV line: quoted fields (`"a, ""b"""`) unquoted.
-fn fields(line: &str) -> Vec<String> {
-    let mut out = Vec::new();
-    let mut cur = String::new();
-    let mut quoted = false;
-    let mut chars = line.chars().peekable();
-    while let Some(c) = chars.next() {
-        match (c, quoted) {
-            ('"', true) if chars.peek() == Some(&'"') => {
-                cur.push('"');
-                chars.next();
-            }
-            ('"', _) => quoted = !quoted,
-            (',', false) => out.push(std::mem::take(&mut cur)),
-            _ => cur.push(c),
-        }
-    }
-    out.push(cur);
-    out
+    let bytes = w
+        .into_inner()
+        .map_err(|e| csv::Error::from(e.into_error()))?;
+    String::from_utf8(bytes).map_err(|e| csv::Error::from(std::io::Error::other(e)))
 }
 
 /// Reads back the rows of a `runs.csv` ([`runs_csv`]): the same values (numbers are
@@ -88,19 +63,27 @@ fn fields(line: &str) -> Vec<String> {
 /// # Errors
 /// The line and field that cannot be read.
 pub fn parse_runs_csv(text: &str) -> Result<Vec<RunRecord>, String> {
-    let mut lines = text.lines();
-    if lines.next() != Some(RUNS_HEADER) {
+    let mut reader = csv::ReaderBuilder::new()
+        .flexible(true)
+        .from_reader(text.as_bytes());
+    let header = reader
+        .headers()
+        .map_err(|e| format!("not a runs.csv: {e}"))?;
+    if header.iter().ne(RUNS_HEADER.split(',')) {
         return Err("not a runs.csv: its first line is not the header".into());
     }
-    lines
-        .enumerate()
-        .filter(|(_, l)| !l.is_empty())
-        .map(|(i, line)| parse_row(line).map_err(|e| format!("line {}: {e}", i + 2)))
+    reader
+        .records()
+        .map(|record| {
+            let record = record.map_err(|e| e.to_string())?;
+            let line = record.position().map_or(0, csv::Position::line);
+            let f: Vec<String> = record.iter().map(str::to_owned).collect();
+            parse_row(&f).map_err(|e| format!("line {line}: {e}"))
+        })
         .collect()
 }
 
-fn parse_row(line: &str) -> Result<RunRecord, String> {
-    let f = fields(line);
+fn parse_row(f: &[String]) -> Result<RunRecord, String> {
     if f.len() != 18 {
         return Err(format!("{} fields, 18 expected", f.len()));
     }
@@ -112,27 +95,27 @@ fn parse_row(line: &str) -> Result<RunRecord, String> {
         if f[k].is_empty() {
             Ok(f64::NAN)
         } else {
-            p(&f, k)
+            p(f, k)
         }
     };
     Ok(RunRecord {
-        noise_sigma: p(&f, 0)?,
-        outlier_fraction: p(&f, 1)?,
-        run: p(&f, 2)?,
-        seed: p(&f, 3)?,
+        noise_sigma: p(f, 0)?,
+        outlier_fraction: p(f, 1)?,
+        run: p(f, 2)?,
+        seed: p(f, 3)?,
         estimator: f[4].clone(),
-        threshold_m: p(&f, 5)?,
-        n: p(&f, 6)?,
-        n_outliers: p(&f, 7)?,
+        threshold_m: p(f, 5)?,
+        n: p(f, 6)?,
+        n_outliers: p(f, 7)?,
         position_error_m: nan(8)?,
         rotation_error_deg: nan(9)?,
         rotation_error_frobenius: nan(10)?,
-        success: p(&f, 11)?,
-        n_inliers_estimated: p(&f, 12)?,
+        success: p(f, 11)?,
+        n_inliers_estimated: p(f, 12)?,
         inlier_precision: nan(13)?,
         inlier_recall: nan(14)?,
-        elapsed_ms: p(&f, 15)?,
-        iterations: p(&f, 16)?,
+        elapsed_ms: p(f, 15)?,
+        iterations: p(f, 16)?,
         error: Some(f[17].clone()).filter(|e| !e.is_empty()),
     })
 }
@@ -163,10 +146,10 @@ mod tests {
             iterations: 0,
             error: Some("insufficient support: 1 features, at least 4".into()),
         };
-        let csv = runs_csv(std::slice::from_ref(&rec));
+        let csv = runs_csv(std::slice::from_ref(&rec)).expect("written");
         let back = parse_runs_csv(&csv).expect("parse");
         assert_eq!(
-            runs_csv(&back),
+            runs_csv(&back).expect("written"),
             csv,
             "read back, written again: the same bytes"
         );

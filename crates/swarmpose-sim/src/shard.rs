@@ -66,7 +66,8 @@ pub fn write_shard(
     dir: &Path,
 ) -> Result<Vec<PathBuf>, SimError> {
     let csv = dir.join("runs.csv");
-    write_file(&csv, runs_csv(rows))?;
+    let text = runs_csv(rows).map_err(|e| SimError::io(&csv, e.into()))?;
+    write_file(&csv, text)?;
     let mut text = String::from(
         "# swarmpose simulate --shard: one share of a simulation (swarmpose batch merge)\n",
     );

@@ -16,8 +16,17 @@ pub struct Quartiles {
     pub q3: f64,
 }
 
-/// The `p`-quantile (`p ∈ [0, 1]`) of sorted values, `NaN` for none.
-fn quantile(sorted: &[f64], p: f64) -> f64 {
+/// The `p`-quantile (`p ∈ [0, 1]`) of values sorted in ascending order, `NaN` for none:
+/// the project's one quantile definition, used by the simulation's quartiles, `swarmpose
+/// bench`'s tables and the pipeline benchmark's latencies.
+///
+/// Linear interpolation between order statistics (type 7 of Hyndman and Fan, 1996; the
+/// default of R and NumPy): with `n` values, the position `h = p (n − 1)` (0-based), and
+/// the quantile `x[⌊h⌋] + (h − ⌊h⌋) (x[⌈h⌉] − x[⌊h⌋])`; the median of an even count is
+/// the mean of the middle two. An interpolation towards `+∞` is `+∞` (a run without a
+/// pose counts as `+∞`).
+#[must_use]
+pub fn quantile(sorted: &[f64], p: f64) -> f64 {
     if sorted.is_empty() {
         return f64::NAN;
     }

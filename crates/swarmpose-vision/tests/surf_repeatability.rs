@@ -17,7 +17,6 @@
 //! keypoints of `A`, several of which may share one of `B`, so it can exceed 100 % when
 //! `B` has far fewer keypoints).
 
-use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use swarmpose_vision::features::{Descriptor, FeatureExtractor, GrayView, Keypoint};
@@ -29,13 +28,6 @@ const MARGIN: f32 = 24.0;
 
 /// Localisation tolerance, pixels.
 const TOLERANCE: f32 = 2.0;
-
-fn data_root() -> PathBuf {
-    std::env::var_os("SWARMPOSE_DATA").map_or_else(
-        || Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data"),
-        PathBuf::from,
-    )
-}
 
 /// An owned 8-bit grayscale image.
 struct Frame {
@@ -56,20 +48,7 @@ impl Frame {
 
 /// The KITTI frame, or `None` (skip) when it is absent outside CI.
 fn load_kitti() -> Option<Frame> {
-    let path = data_root().join("kitti_vo_seq2/image_0/000000.png");
-    if !path.exists() {
-        let ci = std::env::var("CI").is_ok_and(|v| v == "true");
-        assert!(
-            !ci,
-            "CI=true but the test image {} is missing",
-            path.display()
-        );
-        eprintln!(
-            "SKIPPED: {} not found (set SWARMPOSE_DATA to the data root)",
-            path.display()
-        );
-        return None;
-    }
+    let path = swarmpose_testdata::dataset_for_test("kitti_vo_seq2")?.join("image_0/000000.png");
     let img = match image::open(&path) {
         Ok(img) => img.to_luma8(),
         Err(e) => panic!("cannot read {}: {e}", path.display()),
@@ -289,25 +268,21 @@ fn surf_detects_repeatably_under_a_known_similarity() {
     );
 }
 
-/// The measured repeatability, with floors a few points under the measured values, and
-/// an exact 90° rotation (about a pixel, so no resampling) as a correctness check.
+/// Each part of the similarity alone (scale 0.8 without rotation, rotation 30° without
+/// scaling) under the bar of 60 % (a detector that repeats under both together
+/// must repeat under each alone: each is the combined warp with one distortion taken
+/// away), and an exact 90° rotation (about a pixel, so no resampling) as a correctness
+/// check. Measured when written: 64.6 % (scale only), 70.4 % (rotation only).
 #[test]
-fn surf_repeatability_regression() {
+fn surf_repeats_under_each_part_and_an_exact_rotation() {
     let Some(setup) = Setup::kitti() else {
         return;
     };
-    let both = setup.run("rotation and scale", 0.8, 30.0);
     let scale_only = setup.run("scale only", 0.8, 0.0);
     let rotation_only = setup.run("rotation only", 1.0, 30.0);
-    // Measured 64.5 %, 64.6 % and 70.4 %.
-    assert!(both >= 0.62, "rotation and scale: {:.1} %", 100.0 * both);
+    assert!(scale_only >= 0.6, "scale only: {:.1} %", 100.0 * scale_only);
     assert!(
-        scale_only >= 0.62,
-        "scale only: {:.1} %",
-        100.0 * scale_only
-    );
-    assert!(
-        rotation_only >= 0.68,
+        rotation_only >= 0.6,
         "rotation only: {:.1} %",
         100.0 * rotation_only
     );

@@ -93,10 +93,22 @@ fn stable_hash(text: &str) -> u64 {
     })
 }
 
-/// One CSV row per (scenario, method), in table order.
-fn runs_csv(results: &Results) -> String {
-    let mut out =
-        String::from("scenario,method,success,rotation_deg,translation_m,time_ms,inliers\n");
+/// One CSV row per (scenario, method), in table order (written by the `csv` crate: a
+/// scenario name with a comma or a quote is quoted).
+///
+/// # Errors
+/// The `csv` crate's (none is expected: the text is built in memory).
+fn runs_csv(results: &Results) -> Result<Vec<u8>, csv::Error> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    w.write_record([
+        "scenario",
+        "method",
+        "success",
+        "rotation_deg",
+        "translation_m",
+        "time_ms",
+        "inliers",
+    ])?;
     let opt = |v: f64| {
         if v.is_finite() {
             format!("{v:.6}")
@@ -108,20 +120,20 @@ fn runs_csv(results: &Results) -> String {
         for methods in fractions.values() {
             for (method, outcomes) in methods {
                 for o in outcomes {
-                    out.push_str(&format!(
-                        "{},{method},{},{},{},{:.4},{}\n",
-                        o.scenario,
-                        u8::from(o.success),
+                    w.write_record([
+                        o.scenario.clone(),
+                        method.clone(),
+                        u8::from(o.success).to_string(),
                         opt(o.rotation_deg),
                         opt(o.translation_m),
-                        o.elapsed_ms,
+                        format!("{:.4}", o.elapsed_ms),
                         o.inliers.map_or_else(String::new, |n| n.to_string()),
-                    ));
+                    ])?;
                 }
             }
         }
     }
-    out
+    w.into_inner().map_err(|e| csv::Error::from(e.into_error()))
 }
 
 /// The peers' oracle threshold for noise σ (metres).
@@ -166,14 +178,11 @@ fn scenario_files(dir: &Path, filter: &str) -> Result<Vec<PathBuf>, CliError> {
     Ok(files)
 }
 
-/// The `q`-quantile (nearest rank) of `v`, NaN when empty.
+/// The `q`-quantile of `v` ([`swarmpose_sim::stats::quantile`]: interpolated between
+/// order statistics), NaN when empty.
 fn quantile(v: &mut [f64], q: f64) -> f64 {
-    if v.is_empty() {
-        return f64::NAN;
-    }
     v.sort_by(f64::total_cmp);
-    let k = ((q * v.len() as f64).ceil() as usize).clamp(1, v.len()) - 1;
-    v[k]
+    swarmpose_sim::stats::quantile(v, q)
 }
 
 type CellKey = (String, u64); // (mode, noise in µm)
@@ -235,7 +244,9 @@ pub fn run(args: &BenchArgs) -> Result<(), CliError> {
         (None, None) => return Err(CliError::usage("give SUITE_DIR or --stereo N")),
     };
     if let Some(path) = &args.runs_csv {
-        crate::output_file::write_bytes(path, runs_csv(&results).as_bytes())?;
+        let text = runs_csv(&results)
+            .map_err(|e| CliError::failure(format!("cannot write {}: {e}", path.display())))?;
+        crate::output_file::write_bytes(path, &text)?;
     }
     crate::streams::out_text(&tables(&results, &args.methods))?;
     crate::streams::out(&format!(
@@ -455,7 +466,9 @@ mod tests {
     fn quantiles_and_format() {
         let mut v = vec![5.0, 1.0, 3.0, 2.0, 4.0];
         assert_eq!(quantile(&mut v, 0.5), 3.0);
-        assert_eq!(quantile(&mut v, 0.9), 5.0);
+        // Position 0.9 (5 − 1) = 3.6 between the sorted 4 and 5.
+        assert!((quantile(&mut v, 0.9) - 4.6).abs() < 1e-12);
+        assert_eq!(quantile(&mut [2.0, 1.0], 0.5), 1.5);
         assert!(quantile(&mut [], 0.5).is_nan());
         assert_eq!(fmt(0.12345), "0.123");
         assert_eq!(fmt(1234.0), "1234");

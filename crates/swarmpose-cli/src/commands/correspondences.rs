@@ -342,7 +342,7 @@ mod tests {
 
     #[test]
     fn kitti_frames_to_csv_and_drawing() {
-        let root = swarmpose_datasets::data_root().join("kitti_vo_seq2");
+        let root = swarmpose_testdata::data_root().join("kitti_vo_seq2");
         if !root.is_dir() {
             assert!(
                 std::env::var("CI").map_or(true, |v| v != "true"),

@@ -69,7 +69,7 @@ fn copy(from: &Path, to: &Path) {
 /// The first `n` frames of the shared KITTI sequence in `dir/name` (images, calib.txt
 /// and the first `n` ground-truth poses), or `None` when the data is absent (skipped).
 pub fn kitti(dir: &Path, name: &str, n: usize) -> Option<PathBuf> {
-    let root = swarmpose_datasets::dataset_for_test("kitti_vo_seq2")?;
+    let root = swarmpose_testdata::dataset_for_test("kitti_vo_seq2")?;
     let seq = dir.join(name);
     for side in ["image_0", "image_1"] {
         for i in 0..n {
@@ -87,7 +87,7 @@ pub fn kitti(dir: &Path, name: &str, n: usize) -> Option<PathBuf> {
 /// The first `n` frames of the shared EuRoC sequence in `dir/name` (both cameras' lists,
 /// images and sensor.yaml; no ground truth), or `None` when the data is absent.
 pub fn euroc(dir: &Path, name: &str, n: usize) -> Option<PathBuf> {
-    let root = swarmpose_datasets::dataset_for_test("euroc_v1_01_easy_micro")?;
+    let root = swarmpose_testdata::dataset_for_test("euroc_v1_01_easy_micro")?;
     let seq = dir.join(name);
     for cam in ["cam0", "cam1"] {
         let from = root.join("mav0").join(cam);
@@ -114,7 +114,7 @@ pub fn euroc(dir: &Path, name: &str, n: usize) -> Option<PathBuf> {
 
 /// The first `n` frames of the shared Karlsruhe sequence in `dir/name`, or `None`.
 pub fn karlsruhe(dir: &Path, name: &str, n: usize) -> Option<PathBuf> {
-    let root = swarmpose_datasets::dataset_for_test("karlsruhe_2010_03_09_drive_0023")?;
+    let root = swarmpose_testdata::dataset_for_test("karlsruhe_2010_03_09_drive_0023")?;
     let seq = dir.join(name);
     let images = root.join("2010_03_09_drive_0023_Images");
     for i in 0..n {

@@ -3,9 +3,7 @@
 #![allow(dead_code)] // each test crate uses its own subset
 
 use std::io::Write;
-use std::path::PathBuf;
 use std::process::{Command, Output, Stdio};
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 use nalgebra::Point3;
 use serde_json::Value;
@@ -13,37 +11,7 @@ use serde_json::Value;
 /// The correspondence CSV header.
 pub const HEADER: &str = "src_x,src_y,src_z,dst_x,dst_y,dst_z";
 
-/// A fresh directory under the system temp dir, removed on drop.
-pub struct TempDir(pub PathBuf);
-
-impl TempDir {
-    pub fn new(tag: &str) -> Self {
-        static COUNTER: AtomicUsize = AtomicUsize::new(0);
-        let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-        let nanos = std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .map_or(0, |d| d.subsec_nanos());
-        let dir = std::env::temp_dir().join(format!(
-            "swarmpose-cli-{tag}-{}-{n}-{nanos}",
-            std::process::id()
-        ));
-        std::fs::create_dir_all(&dir).expect("create temp dir");
-        Self(dir)
-    }
-
-    /// Writes `text` to `name` in the directory; returns its path.
-    pub fn file(&self, name: &str, text: &str) -> PathBuf {
-        let path = self.0.join(name);
-        std::fs::write(&path, text).expect("write test file");
-        path
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
+pub use swarmpose_testdata::TempDir;
 
 /// Runs the binary with `args`, feeding `stdin` if given; backtraces are switched on so
 /// that one would show if anything panicked.
@@ -70,7 +38,7 @@ pub fn swarmpose(args: &[&str], stdin: Option<&str>) -> Output {
 /// The directory of the shared data set `name`, or `None` (printed as skipped) when it
 /// is absent; under `CI=true` an absent data set fails the test.
 pub fn shared_dataset(name: &str) -> Option<std::path::PathBuf> {
-    let dir = swarmpose_datasets::data_root().join(name);
+    let dir = swarmpose_testdata::data_root().join(name);
     if dir.is_dir() {
         return Some(dir);
     }

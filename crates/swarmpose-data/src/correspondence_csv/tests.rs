@@ -1,7 +1,7 @@
 //! Tests of the correspondence CSV reader and writer.
 
 use super::*;
-use crate::test_util::TempDir;
+use swarmpose_testdata::TempDir;
 
 fn read_str(text: &str) -> Result<Correspondences, CsvError> {
     read_from(text.as_bytes(), "test.csv")

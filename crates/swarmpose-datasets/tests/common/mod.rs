@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-/// The directory of a shared data set (see [`swarmpose_datasets::dataset_for_test`]).
+/// The directory of a shared data set (see [`swarmpose_testdata::dataset_for_test`]).
 pub fn dataset(name: &str) -> Option<PathBuf> {
-    swarmpose_datasets::dataset_for_test(name)
+    swarmpose_testdata::dataset_for_test(name)
 }

@@ -25,12 +25,15 @@ pub mod model;
 pub mod noise;
 pub mod split;
 
-use nalgebra::{
-    Isometry3, Matrix3, Matrix6, Rotation3, Translation3, UnitQuaternion, Vector3, Vector6,
-};
+use nalgebra::{Isometry3, Matrix6, Vector3, Vector6};
 
 use evidence::{PointBlocks, Reduced};
 use model::{Linearized, Matrix3xK, Parts, StereoModel, StereoObservation};
+
+use crate::nls::lm::{Damping, LeastSquares};
+use crate::nls::pose::Pose;
+use crate::nls::robust::{huber_cost, huber_weight};
+use crate::nls::schur::{back_substitute, point_inverse};
 
 /// Settings of the refinement.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -150,58 +153,12 @@ impl Refined {
     }
 }
 
-/// Huber weight of a squared whitened norm `s2`.
-fn huber_weight(s2: f64, k: f64) -> f64 {
-    if s2 <= k * k { 1.0 } else { k / s2.sqrt() }
-}
-
-/// Huber cost `ρ(s²)` (equal to `s²` inside the threshold).
-fn huber_cost(s2: f64, k: f64) -> f64 {
-    if s2 <= k * k {
-        s2
-    } else {
-        2.0 * k * s2.sqrt() - k * k
-    }
-}
-
-/// The pose `T_BA` as a rotation matrix and translation.
-#[derive(Debug, Clone, Copy)]
-struct Pose {
-    rot: Matrix3<f64>,
-    trans: Vector3<f64>,
-}
-
-impl Pose {
-    fn from_motion(t_ab: &Isometry3<f64>) -> Self {
-        let inv = t_ab.inverse();
-        Self {
-            rot: *inv.rotation.to_rotation_matrix().matrix(),
-            trans: inv.translation.vector,
-        }
-    }
-
-    /// `P_B ← Exp(ω) P_B + ν`.
-    fn moved(&self, xi: &Vector6<f64>) -> Self {
-        let e = UnitQuaternion::from_scaled_axis(Vector3::new(xi[3], xi[4], xi[5]));
-        let e = *e.to_rotation_matrix().matrix();
-        Self {
-            rot: e * self.rot,
-            trans: e * self.trans + Vector3::new(xi[0], xi[1], xi[2]),
-        }
-    }
-
-    fn motion(&self) -> Isometry3<f64> {
-        let r = unit_quaternion(&self.rot);
-        Isometry3::from_parts(Translation3::from(self.trans), r).inverse()
-    }
-}
-
-/// The unit quaternion of a rotation matrix, for any angle (nalgebra's iterative
-/// `from_matrix` starts from the identity and is inaccurate far from it), normalised
-/// against rounding.
-pub(crate) fn unit_quaternion(rot: &Matrix3<f64>) -> UnitQuaternion<f64> {
-    let q = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(*rot));
-    UnitQuaternion::new_normalize(q.into_inner())
+/// `T_BA` moved by the step `ξ = (ν, ω)` of the pose block: `P_B ← Exp(ω) P_B + ν`.
+fn moved(pose: &Pose, xi: &Vector6<f64>) -> Pose {
+    pose.moved(
+        &Vector3::new(xi[0], xi[1], xi[2]),
+        &Vector3::new(xi[3], xi[4], xi[5]),
+    )
 }
 
 /// The two measurements of one point, linearised (the Jacobians of `parts`), or `None`
@@ -297,7 +254,7 @@ impl Problem<'_> {
             let hpp =
                 la.d_point.transpose() * la.d_point * wa + lb.d_point.transpose() * lb.d_point * wb;
             let b = PointBlocks {
-                pp_inv: hpp.try_inverse()?,
+                pp_inv: point_inverse(&hpp)?,
                 pose: lb.d_point.transpose() * lb.d_pose * wb,
                 correction: if all {
                     la.d_point.transpose() * la.d_correction * wa
@@ -326,50 +283,103 @@ impl Problem<'_> {
 
     /// Levenberg-Marquardt from `pose` and `points`; returns the iterations done.
     fn solve(&self, pose: &mut Pose, points: &mut [Vector3<f64>]) -> Result<usize, RefineError> {
-        let mut blocks = Vec::with_capacity(points.len());
-        let mut cost = self.cost(pose, points);
-        let mut lambda = 1e-4;
-        let mut trial = points.to_vec();
-        for it in 0..self.config.max_iterations {
-            let [r, _] = self
-                .build(pose, points, None, &mut blocks, Parts::PointPose)
-                .ok_or(RefineError::Singular)?;
-            let (s, g) = (r.pose_pose, r.pose_gradient);
-            let mut improved = false;
-            while lambda < 1e8 {
-                let mut damped = s;
-                for d in 0..6 {
-                    damped[(d, d)] *= 1.0 + lambda;
-                }
-                let Some(chol) = damped.cholesky() else {
-                    lambda *= 10.0;
-                    continue;
-                };
-                let dxi = -chol.solve(&g);
-                let next = pose.moved(&dxi);
-                for ((t, p), b) in trial.iter_mut().zip(points.iter()).zip(&blocks) {
-                    *t = p - b.pp_inv * (b.gradient + b.pose * dxi);
-                }
-                let c = self.cost(&next, &trial);
-                if c < cost {
-                    let done = (cost - c) < 1e-7 * cost.max(1e-300) || dxi.norm() < 1e-10;
-                    *pose = next;
-                    points.copy_from_slice(&trial);
-                    cost = c;
-                    lambda = (lambda * 0.1).max(1e-9);
-                    improved = true;
-                    if done {
-                        return Ok(it + 1);
-                    }
-                    break;
-                }
-                lambda *= 10.0;
-            }
-            if !improved {
-                return Ok(it + 1);
-            }
+        let cost = self.cost(pose, points);
+        let mut lm = PairLm {
+            problem: self,
+            blocks: Vec::with_capacity(points.len()),
+            trial: points.to_vec(),
+            pose,
+            points,
+            cost,
+            system: (Matrix6::zeros(), Vector6::zeros()),
+            step: (Vector6::zeros(), None),
+        };
+        PAIR_DAMPING.minimise(&mut lm, self.config.max_iterations)
+    }
+}
+
+/// The damping of the pair refinement: from 10⁻⁴, stalled at 10⁸.
+const PAIR_DAMPING: Damping = Damping {
+    start: 1e-4,
+    ceiling: 1e8,
+    ceiling_tried: false,
+};
+
+/// One round's Levenberg-Marquardt state: the pose and the active points, moved in
+/// place, with the reduced pose system of the last linearisation.
+struct PairLm<'p, 'a> {
+    problem: &'p Problem<'a>,
+    pose: &'p mut Pose,
+    points: &'p mut [Vector3<f64>],
+    /// Each point's blocks for back-substitution.
+    blocks: Vec<PointBlocks>,
+    /// The points moved by the last step.
+    trial: Vec<Vector3<f64>>,
+    /// The robust cost at `pose`, `points`.
+    cost: f64,
+    /// The reduced pose system `(S, g)`.
+    system: (Matrix6<f64>, Vector6<f64>),
+    /// The last step `δξ` and the pose it leads to with its cost.
+    step: (Vector6<f64>, Option<(Pose, f64)>),
+}
+
+impl LeastSquares for PairLm<'_, '_> {
+    type Error = RefineError;
+
+    fn linearise(&mut self) -> Result<f64, RefineError> {
+        let [r, _] = self
+            .problem
+            .build(
+                self.pose,
+                self.points,
+                None,
+                &mut self.blocks,
+                Parts::PointPose,
+            )
+            .ok_or(RefineError::Singular)?;
+        self.system = (r.pose_pose, r.pose_gradient);
+        Ok(self.cost)
+    }
+
+    fn solve_damped(&mut self, lambda: f64) -> bool {
+        let (s, g) = &self.system;
+        let mut damped = *s;
+        for d in 0..6 {
+            damped[(d, d)] *= 1.0 + lambda;
         }
-        Ok(self.config.max_iterations)
+        let Some(chol) = damped.cholesky() else {
+            return false;
+        };
+        self.step = (-chol.solve(g), None);
+        true
+    }
+
+    fn trial_cost(&mut self) -> f64 {
+        let dxi = self.step.0;
+        let next = moved(self.pose, &dxi);
+        for ((t, p), b) in self
+            .trial
+            .iter_mut()
+            .zip(self.points.iter())
+            .zip(&self.blocks)
+        {
+            *t = back_substitute(p, &b.pp_inv, &(b.gradient + b.pose * dxi));
+        }
+        let c = self.problem.cost(&next, &self.trial);
+        self.step.1 = Some((next, c));
+        c
+    }
+
+    fn converged(&self, current: f64, trial: f64) -> bool {
+        (current - trial) < 1e-7 * current.max(1e-300) || self.step.0.norm() < 1e-10
+    }
+
+    fn accept(&mut self) {
+        if let Some((next, c)) = self.step.1.take() {
+            *self.pose = next;
+            self.points.copy_from_slice(&self.trial);
+            self.cost = c;
+        }
     }
 }
 
@@ -398,7 +408,7 @@ pub fn refine(
             current: current.len(),
         });
     }
-    let mut pose = Pose::from_motion(start);
+    let mut pose = Pose::of(&start.inverse());
     // Points fitted to the starting pose, then gated.
     let mut fitted: Vec<Option<(Vector3<f64>, f64)>> = reference
         .iter()
@@ -529,7 +539,7 @@ impl Problem<'_> {
         let scale2 = chi2 / dof;
         let cluster_factor = noise::cluster_factor(&mut scores, &inv);
         Ok(Refined {
-            motion: pose.motion(),
+            motion: pose.isometry().inverse(),
             covariance: inv * noise::variance_factor(scale2, cluster_factor),
             inliers: self.active,
             points,

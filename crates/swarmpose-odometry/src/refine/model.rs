@@ -483,17 +483,7 @@ mod tests {
 
     #[test]
     fn residuals_agree_with_the_linearisation() {
-        let m = model(DisparityCorrection::from_coefficients([
-            0.7, 1.9, -0.4, 0.3, 0.8,
-        ]));
-        let rot = *Rotation3::from_euler_angles(0.02, -0.05, 0.01).matrix();
-        let trans = Vector3::new(0.1, -0.05, -0.9);
-        let p = Vector3::new(0.3, -0.1, 1.0 / 12.0);
-        let z = StereoObservation {
-            u: 812.0,
-            v: 111.0,
-            d: 31.0,
-        };
+        let (m, rot, trans, p, z) = jacobian_case();
         let (a2, b2) = m.residuals2(&rot, &trans, &p, &z, &z).expect("in front");
         let la = m.in_reference(&p, &z);
         let lb = m.in_current(&rot, &trans, &p, &z).expect("in front");

@@ -41,10 +41,10 @@ use std::collections::HashSet;
 use nalgebra::{DMatrix, DVector, Matrix6, SymmetricEigen};
 
 use super::prior::{Prior, terms};
-use super::residual::Pose;
 use super::solve::{self, Scratch};
 use super::tracks::{Tracks, tracks_of};
 use super::{Keyframe, WindowConfig};
+use crate::nls::pose::Pose;
 use crate::refine::evidence::Matrix6xK;
 use crate::refine::model::{CALIBRATION_TERMS, StereoModel};
 

@@ -6,8 +6,9 @@ use rand_chacha::ChaCha8Rng;
 
 use super::super::tests::{measure, model, random_points};
 use super::*;
+use crate::nls::robust::huber;
 use crate::refine::model::{CALIBRATION_TERMS as CALIBRATION, StereoObservation};
-use crate::window::residual::{huber, linearize, relative_poses};
+use crate::window::residual::{linearize, relative_poses};
 use crate::window::tracks::{Tracks, tracks_of};
 
 /// Five keyframes 1 m apart, turning 1 degree each, given poses off by up to 2 cm and

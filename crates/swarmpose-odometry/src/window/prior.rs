@@ -5,10 +5,9 @@
 use nalgebra::{DMatrix, DVector, Vector6};
 
 use super::Keyframe;
-use super::residual::Pose;
+use crate::nls::pose::{Pose, unit_quaternion};
 use crate::refine::evidence::{Matrix6xK, VectorK};
 use crate::refine::model::{FOCAL_TERM, StereoModel};
-use crate::refine::unit_quaternion;
 
 /// A Gaussian prior on keyframe poses: half the robust cost it stands for is
 /// `bᵀδ + ½ δᵀ H δ` (plus a constant), `δ` the poses' perturbations from their

@@ -1,58 +1,12 @@
-//! A keyframe's measurement of a track as the window's solver sees it: the pose type
-//! (`T_kw`, world to camera, perturbed as `E(ξ) T_kw`), the relative poses `T_ja` of the
-//! window's keyframes, the whitened residual of a measurement with its Jacobians (see
-//! [`super::solve`] for their derivation), and the Huber weight.
+//! A keyframe's measurement of a track as the window's solver sees it: the relative poses
+//! `T_ja` of the window's keyframes (each keyframe's `T_kw`, world to camera, a
+//! [`crate::nls::pose::Pose`] perturbed as `E(ξ) T_kw`), and the whitened residual of a
+//! measurement with its Jacobians (see [`super::solve`] for their derivation).
 
-use nalgebra::{Isometry3, Matrix3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Matrix3, Vector3};
 
+use crate::nls::pose::Pose;
 use crate::refine::model::{Matrix3x6, Matrix3xK, StereoModel, StereoObservation};
-use crate::refine::unit_quaternion;
-
-/// A pose `T_kw` as a rotation matrix and translation.
-#[derive(Debug, Clone, Copy)]
-pub(super) struct Pose {
-    pub(super) rot: Matrix3<f64>,
-    pub(super) trans: Vector3<f64>,
-}
-
-impl Pose {
-    pub(super) fn of(t: &Isometry3<f64>) -> Self {
-        Self {
-            rot: *t.rotation.to_rotation_matrix().matrix(),
-            trans: t.translation.vector,
-        }
-    }
-
-    pub(super) fn moved(&self, nu: &Vector3<f64>, omega: &Vector3<f64>) -> Self {
-        let e = *UnitQuaternion::from_scaled_axis(*omega)
-            .to_rotation_matrix()
-            .matrix();
-        Self {
-            rot: e * self.rot,
-            trans: e * self.trans + nu,
-        }
-    }
-
-    pub(super) fn isometry(&self) -> Isometry3<f64> {
-        Isometry3::from_parts(Translation3::from(self.trans), unit_quaternion(&self.rot))
-    }
-
-    /// `T_ja = T_jw T_aw⁻¹` for `self = T_jw`.
-    fn relative_to(&self, a: &Self) -> (Matrix3<f64>, Vector3<f64>) {
-        let rot = self.rot * a.rot.transpose();
-        (rot, self.trans - rot * a.trans)
-    }
-}
-
-/// Huber weight and cost of a squared whitened norm.
-pub(super) fn huber(s2: f64, k: f64) -> (f64, f64) {
-    if s2 <= k * k {
-        (1.0, s2)
-    } else {
-        let s = s2.sqrt();
-        (k / s, 2.0 * k * s - k * k)
-    }
-}
 
 /// A relative pose `T_ja`: rotation and translation (`P_j = R P_a + t`, metres).
 pub(super) type Relative = (Matrix3<f64>, Vector3<f64>);

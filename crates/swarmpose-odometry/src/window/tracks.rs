@@ -4,7 +4,9 @@
 use nalgebra::{Matrix3, Vector3};
 
 use super::Keyframe;
-use super::residual::{Pose, Relative, huber, linearize, relative_poses};
+use super::residual::{Relative, linearize, relative_poses};
+use crate::nls::pose::Pose;
+use crate::nls::robust::huber;
 use crate::refine::model::{StereoModel, StereoObservation};
 
 /// A track seen at least twice in the window: its measurements

@@ -10,9 +10,9 @@ use swarmpose_eval::{Evaluation, Trajectory, evaluate};
 use swarmpose_odometry::{Decision, FrameResult, Odometry, OdometryConfig, Status};
 use swarmpose_runs::batch::{camera_of, collect};
 
-/// The directory of a shared data set (see [`swarmpose_datasets::dataset_for_test`]).
+/// The directory of a shared data set (see [`swarmpose_testdata::dataset_for_test`]).
 pub fn dataset(name: &str) -> Option<PathBuf> {
-    swarmpose_datasets::dataset_for_test(name)
+    swarmpose_testdata::dataset_for_test(name)
 }
 
 /// A finished run: every frame's result and the final calibration decision.

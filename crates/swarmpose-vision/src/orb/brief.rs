@@ -141,8 +141,5 @@ mod tests {
                 assert!(x * x + y * y <= PATTERN_RADIUS * PATTERN_RADIUS);
             }
         }
-        // Pinned: the pattern must not change silently.
-        let first = a[0][0];
-        assert!(first.0.is_finite() && first.1.is_finite());
     }
 }

@@ -24,10 +24,14 @@ use nalgebra::{
 mod system;
 
 use super::prior::{Prior, terms};
-use super::residual::{Pose, Relative, huber, relative_poses};
+use super::residual::{Relative, relative_poses};
 use super::tracks::{Tracks, tracks_of};
 use super::{Keyframe, WindowConfig, WindowReport};
-use crate::refine::evidence::{Matrix6xK, MatrixK};
+use crate::nls::lm::{Damping, LeastSquares};
+use crate::nls::pose::Pose;
+use crate::nls::robust::huber;
+use crate::nls::schur::back_substitute;
+use crate::refine::evidence::{Matrix6xK, MatrixK, VectorK};
 use crate::refine::model::{Matrix3x6, StereoModel};
 use crate::refine::noise::{Score, cluster_factor, variance_factor};
 use system::build;
@@ -189,50 +193,25 @@ pub(crate) fn refine_window(
     if ws.tracks.is_empty() {
         return None;
     }
-    // The prior of the keyframes marginalised before, on the slots of its keyframes.
-    let prior = prior.and_then(|p| p.on(frames).map(|slots| (p, slots)));
-    let terms = terms(model);
-    let prior_energy = |poses: &[Pose]| {
-        prior
-            .as_ref()
-            .map_or(0.0, |(p, slots)| p.energy(slots, poses, &terms))
-    };
     ws.trial_points.clear();
     ws.trial_points.extend_from_slice(&ws.points);
-    let mut lambda = 1e-4;
-    let mut iterations = 0;
-    let mut covariance = None;
-    for _ in 0..config.max_iterations {
-        iterations += 1;
-        // The cost at the current state comes with its linearisation.
-        let sc = &mut ws.sc;
-        build(model, k, (&ws.poses, 1), &ws.tracks, &ws.points, sc)?;
-        if let Some((p, slots)) = &prior {
-            let system = (&mut sc.s, &mut sc.g);
-            p.add_to(
-                (slots, &ws.poses, 1),
-                &terms,
-                system,
-                &mut sc.pose_calibration,
-            );
-        }
-        let current = sc.cost + prior_energy(&ws.poses);
-        if !current.is_finite() {
-            return None;
-        }
-        if iterations == 1 {
-            covariance = newest_covariance(
-                sc,
-                (observations, &ws.tracks),
-                calibration_covariance,
-                (&mut ws.damped, &mut ws.columns),
-            );
-        }
-        let step = ws.damped_steps((model, k, n), &mut lambda, current, &prior_energy);
-        if step != Step::Taken {
-            break;
-        }
-    }
+    let mut lm = WindowLm {
+        ws,
+        model,
+        k,
+        n,
+        // The prior of the keyframes marginalised before, on the slots of its keyframes.
+        prior: prior.and_then(|p| p.on(frames).map(|slots| (p, slots))),
+        terms: terms(model),
+        observations,
+        calibration_covariance,
+        iterations: 0,
+        covariance: None,
+    };
+    let iterations = WINDOW_DAMPING
+        .minimise(&mut lm, config.max_iterations)
+        .ok()?;
+    let (ws, covariance) = (lm.ws, lm.covariance);
     for (f, p) in frames.iter_mut().zip(ws.poses.iter()) {
         f.pose_cw = p.isometry();
     }
@@ -246,56 +225,105 @@ pub(crate) fn refine_window(
     })
 }
 
-/// What one Levenberg-Marquardt iteration of the window did.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Step {
-    /// It took a step that lowered the cost: the next iteration may go on.
-    Taken,
-    /// It took a step that lowered the cost by less than a millionth: converged.
-    Converged,
-    /// The damping grew past its bound without a step that lowers the cost.
-    Stalled,
+/// The damping of the window: from 10⁻⁴, a step still tried at 10⁸.
+const WINDOW_DAMPING: Damping = Damping {
+    start: 1e-4,
+    ceiling: 1e8,
+    ceiling_tried: true,
+};
+
+/// The window's Levenberg-Marquardt problem: the state and buffers in the workspace, the
+/// prior of the keyframes marginalised before, and the covariance of the newest pose,
+/// taken at the first linearisation.
+struct WindowLm<'w> {
+    ws: &'w mut Workspace,
+    model: &'w StereoModel,
+    /// Huber threshold.
+    k: f64,
+    /// Keyframes.
+    n: usize,
+    prior: Option<(&'w Prior, Vec<usize>)>,
+    /// The calibration terms the prior is evaluated at.
+    terms: VectorK,
+    observations: usize,
+    calibration_covariance: &'w MatrixK,
+    iterations: usize,
+    covariance: Option<Matrix6<f64>>,
+}
+
+impl WindowLm<'_> {
+    /// The prior's part of the cost at `poses`.
+    fn prior_energy(&self, poses: &[Pose]) -> f64 {
+        self.prior
+            .as_ref()
+            .map_or(0.0, |(p, slots)| p.energy(slots, poses, &self.terms))
+    }
+}
+
+impl LeastSquares for WindowLm<'_> {
+    /// The window's system cannot be built (a point left a view, a singular block) or
+    /// its cost is not finite.
+    type Error = ();
+
+    fn linearise(&mut self) -> Result<f64, ()> {
+        self.iterations += 1;
+        let Self { ws, model, k, .. } = self;
+        // The cost at the current state comes with its linearisation.
+        let sc = &mut ws.sc;
+        build(model, *k, (&ws.poses, 1), &ws.tracks, &ws.points, sc).ok_or(())?;
+        if let Some((p, slots)) = &self.prior {
+            let system = (&mut sc.s, &mut sc.g);
+            p.add_to(
+                (slots, &ws.poses, 1),
+                &self.terms,
+                system,
+                &mut sc.pose_calibration,
+            );
+        }
+        let current = sc.cost + self.prior_energy(&self.ws.poses);
+        if !current.is_finite() {
+            return Err(());
+        }
+        if self.iterations == 1 {
+            let ws = &mut *self.ws;
+            self.covariance = newest_covariance(
+                &ws.sc,
+                (self.observations, &ws.tracks),
+                self.calibration_covariance,
+                (&mut ws.damped, &mut ws.columns),
+            );
+        }
+        Ok(current)
+    }
+
+    fn solve_damped(&mut self, lambda: f64) -> bool {
+        self.ws.solve_damped(lambda)
+    }
+
+    fn trial_cost(&mut self) -> f64 {
+        self.ws.move_trial();
+        let ws = &*self.ws;
+        cost(
+            self.model,
+            self.k,
+            (&ws.trial_rel, self.n),
+            &ws.tracks,
+            &ws.trial_points,
+        ) + self.prior_energy(&ws.trial)
+    }
+
+    fn converged(&self, current: f64, trial: f64) -> bool {
+        current - trial < 1e-6 * current
+    }
+
+    fn accept(&mut self) {
+        let ws = &mut *self.ws;
+        std::mem::swap(&mut ws.poses, &mut ws.trial);
+        ws.points.copy_from_slice(&ws.trial_points);
+    }
 }
 
 impl Workspace {
-    /// One iteration's damped steps from the linearised system in `sc` at the state
-    /// `poses`, `points` (of cost `current`, `prior_energy` the prior's part): the
-    /// damping `lambda` grows tenfold until a step lowers the cost, and that step is
-    /// taken (the damping then shrinks tenfold). `n` keyframes, Huber threshold `k`.
-    fn damped_steps(
-        &mut self,
-        (model, k, n): (&StereoModel, f64, usize),
-        lambda: &mut f64,
-        current: f64,
-        prior_energy: &impl Fn(&[Pose]) -> f64,
-    ) -> Step {
-        loop {
-            if *lambda > 1e8 {
-                return Step::Stalled;
-            }
-            if !self.solve_damped(*lambda) {
-                *lambda *= 10.0;
-                continue;
-            }
-            self.move_trial();
-            let c = cost(
-                model,
-                k,
-                (&self.trial_rel, n),
-                &self.tracks,
-                &self.trial_points,
-            ) + prior_energy(&self.trial);
-            if c < current {
-                let done = current - c < 1e-6 * current;
-                std::mem::swap(&mut self.poses, &mut self.trial);
-                self.points.copy_from_slice(&self.trial_points);
-                *lambda = (*lambda * 0.1).max(1e-9);
-                return if done { Step::Converged } else { Step::Taken };
-            }
-            *lambda *= 10.0;
-        }
-    }
-
     /// The step `dx` of the reduced system damped by `lambda` (`S + λ diag(S)`, and a
     /// tiny constant on the diagonal); false when that is not positive definite.
     fn solve_damped(&mut self, lambda: f64) -> bool {
@@ -342,7 +370,7 @@ impl Workspace {
             for (v, b) in &sc.hpx[e.start..e.end] {
                 rhs += b * dx.fixed_rows::<6>(6 * v);
             }
-            *tp = p - e.hpp_inv * rhs;
+            *tp = back_substitute(p, &e.hpp_inv, &rhs);
         }
         relative_poses(trial, trial_rel);
     }

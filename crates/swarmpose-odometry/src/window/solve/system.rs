@@ -5,9 +5,12 @@
 use nalgebra::{DMatrix, DVector, Matrix3, Matrix6, SMatrix, Vector3, Vector6};
 
 use super::{Eliminated, Scratch};
+use crate::nls::pose::Pose;
+use crate::nls::robust::huber;
+use crate::nls::schur::{point_inverse, through_point};
 use crate::refine::evidence::Matrix6xK;
 use crate::refine::model::{CALIBRATION_TERMS, Matrix3x6, StereoModel, StereoObservation};
-use crate::window::residual::{Pose, huber, linearize, relative_poses};
+use crate::window::residual::{linearize, relative_poses};
 use crate::window::tracks::Tracks;
 
 /// Adds `block` to the `H_pξ` of variable `v` among `hpx[start..]`, and `score` to its
@@ -162,11 +165,11 @@ fn eliminate_point(point: PointSums, m: usize, sc: &mut Scratch) -> Option<()> {
         hpc,
         start,
     } = point;
-    let hpp_inv = hpp.try_inverse()?;
+    let hpp_inv = point_inverse(&hpp)?;
     let end = sc.hpx.len();
     for i1 in start..end {
         let (v1, b1) = sc.hpx[i1];
-        let t1 = b1.transpose() * hpp_inv;
+        let t1 = through_point(&b1, &hpp_inv);
         sc.gradient[v1] -= t1 * gp;
         sc.pose_calibration[v1] -= t1 * hpc;
         for i2 in start..end {

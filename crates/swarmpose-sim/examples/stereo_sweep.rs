@@ -1,5 +1,9 @@
-//! `pso` on the stereo-noise generator: success tables (ignored: run with
-//! `cargo test --release -p swarmpose-sim --test stereo_sweep -- --ignored --nocapture`).
+//! `pso` on the stereo-noise generator: measurement scripts that print success tables
+//! (they assert nothing, so they are an example rather than tests). Run one with
+//! `cargo run --release -p swarmpose-sim --example stereo_sweep -- NAME`, NAME one of
+//! `sweep` (`RUNS` seeds per cell, default 20), `debug` (per-seed diagnostics at the
+//! outlier fraction `FRAC`, default 0.95), `large` (20 000 rows), `noisy` (isotropic
+//! noise of 0.3 and 1 m) or `timing-inputs` (writes the timing inputs to `$STEREO_OUT`).
 #![allow(clippy::unwrap_used)]
 
 use swarmpose_core::{Estimator, PsoEstimator, WlsEstimator};
@@ -30,8 +34,6 @@ fn count(spec: &StereoSpec, runs: u64, covariances: bool) -> (usize, usize, usiz
     (ok, wrong, err, oracle)
 }
 
-#[test]
-#[ignore = "a sweep: minutes in the dev profile"]
 fn stereo_sweep() {
     let runs: u64 = std::env::var("RUNS")
         .ok()
@@ -54,8 +56,6 @@ fn stereo_sweep() {
     }
 }
 
-#[test]
-#[ignore = "diagnostics"]
 fn stereo_debug() {
     let f: f64 = std::env::var("FRAC")
         .ok()
@@ -110,8 +110,6 @@ fn stereo_debug() {
     }
 }
 
-#[test]
-#[ignore = "a sweep: 20 000 rows"]
 fn large_sweep() {
     let runs: u64 = std::env::var("RUNS")
         .ok()
@@ -146,8 +144,6 @@ fn large_sweep() {
     }
 }
 
-#[test]
-#[ignore = "a sweep: isotropic noise of 0.3 and 1 m"]
 fn noisy_sweep() {
     use swarmpose_core::SvdEstimator;
     use swarmpose_core::geometry::rotation_angle_between;
@@ -189,8 +185,6 @@ fn noisy_sweep() {
     }
 }
 
-#[test]
-#[ignore = "writes timing inputs to $STEREO_OUT"]
 fn write_timing_inputs() {
     let Ok(dir) = std::env::var("STEREO_OUT") else {
         return;
@@ -213,5 +207,21 @@ fn write_timing_inputs() {
             &s.plain().unwrap(),
         )
         .unwrap();
+    }
+}
+
+/// The measurement named by the first argument.
+fn main() {
+    let name = std::env::args().nth(1).unwrap_or_default();
+    match name.as_str() {
+        "sweep" => stereo_sweep(),
+        "debug" => stereo_debug(),
+        "large" => large_sweep(),
+        "noisy" => noisy_sweep(),
+        "timing-inputs" => write_timing_inputs(),
+        _ => {
+            eprintln!("usage: stereo_sweep sweep|debug|large|noisy|timing-inputs");
+            std::process::exit(2);
+        }
     }
 }
