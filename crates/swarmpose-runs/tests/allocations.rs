@@ -102,8 +102,10 @@ fn summary(label: &str, counts: &[(u64, u64)], from: usize) -> (f64, u64) {
 /// The built-in synthetic street (a right camera with a principal point 1 px off, so
 /// that the self-calibration corrects it), 40 frames through the default engine (a window
 /// of 10 keyframes): in steady state (from frame 15, the window full) the frames
-/// allocate at most [`MAX_CALLS`] times each. Measured: 177 per frame on average, 181 at
-/// most (3427 and 3552 before the buffers were kept; RESULTS.md, "Allocations per frame").
+/// allocate at most [`MAX_CALLS`] times each. Measured: 238 per frame on average, 290 at
+/// most, after the covariance floor (a split check every frame) and the frame's inlier
+/// list were added (177 and 181 before them; 3427 and 3552 before the buffers were kept;
+/// RESULTS.md, "Allocations per frame").
 #[test]
 fn steady_state_allocations_per_frame() {
     let seq = SyntheticSequence::new(40, 0.4, 0.5f64.to_radians()).with_right_camera_error(
@@ -123,9 +125,9 @@ fn steady_state_allocations_per_frame() {
     );
 }
 
-/// Bound of [`steady_state_allocations_per_frame`]: about a third above the largest
+/// Bound of [`steady_state_allocations_per_frame`]: about a quarter above the largest
 /// measured, so that an allocation per track, feature or match (hundreds) fails it.
-const MAX_CALLS: u64 = 250;
+const MAX_CALLS: u64 = 360;
 
 /// The same on kitti_vo_seq2 (51 frames, in memory), when present, with a bound above
 /// the largest measured (214 per frame on average, 255 at most; 3647 and 4766 before; 304
