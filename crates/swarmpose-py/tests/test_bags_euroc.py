@@ -6,7 +6,7 @@ of swarmpose (the Bouguet-style split of crates/swarmpose-vision/src/rectify, wr
 from its description); `swarmpose.Sequence` of the bag gives the folder's rectified
 camera and pixels, and `swarmpose.odometry` of the bag agrees with the folder's run
 within 1 mm and 0.01 degree (the issue's bound; the cargo test
-crates/swarmpose-cli/tests/ros_bags.rs checks the same for an MCAP bag of mono8 Images)."""
+crates/swarmpose-cli/tests/cli/ros_bags.rs checks the same for an MCAP bag of mono8 Images)."""
 
 import json
 import re

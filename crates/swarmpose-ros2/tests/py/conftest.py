@@ -41,8 +41,17 @@ _built = []
 
 
 def built(package: str, binary: str) -> Path:
-    """`binary` of `package`: the node and the CLI built (incrementally) by cargo, both in
-    one invocation (one feature set: no rebuild between them)."""
+    """`binary` of `package`. With SWARMPOSE_BIN_DIR set (.ci/run sets it to the folder
+    of `cargo test --workspace`'s binaries, which the node's command-line test makes cargo
+    build), the binary there, which must exist; otherwise the node and the CLI built
+    (incrementally) by cargo, both in one invocation (one feature set: no rebuild between
+    them)."""
+    bin_dir = os.environ.get("SWARMPOSE_BIN_DIR")
+    if bin_dir:
+        path = Path(bin_dir) / binary
+        if not path.is_file():
+            pytest.fail(f"SWARMPOSE_BIN_DIR={bin_dir}: no {binary} there (run cargo test --workspace first)")
+        return path
     if not _built:
         subprocess.run(
             ["cargo", "build", "--quiet", "-p", "swarmpose-ros2", "-p", "swarmpose-cli", "--bins"],

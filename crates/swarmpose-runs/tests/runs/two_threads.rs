@@ -1,0 +1,142 @@
+//! The two-thread mode (front end of frame k + 1 beside the back end of frame k) gives
+//! the same results as one thread, stops where one thread stops, and names the frame
+//! that broke the stream.
+
+use std::ops::ControlFlow;
+
+use swarmpose_datasets::{StereoSequence, open};
+use swarmpose_odometry::{FrameResult, Odometry, OdometryConfig, OwnedStereoFrame, RunEnd};
+use swarmpose_runs::RunError;
+use swarmpose_runs::batch::{camera_of, run_sequence, run_sequence_two_threads};
+use swarmpose_runs::synthetic::SyntheticSequence;
+use swarmpose_vision::image::GrayImage;
+
+type Runner = fn(
+    &dyn StereoSequence,
+    &mut Odometry,
+    f64,
+    &mut dyn FnMut(&FrameResult) -> ControlFlow<()>,
+) -> Result<RunEnd, RunError>;
+
+fn results(
+    seq: &dyn StereoSequence,
+    runner: Runner,
+    stop_after: usize,
+) -> (Vec<FrameResult>, RunEnd) {
+    results_with(seq, runner, stop_after, OdometryConfig::default())
+}
+
+fn results_with(
+    seq: &dyn StereoSequence,
+    runner: Runner,
+    stop_after: usize,
+    config: OdometryConfig,
+) -> (Vec<FrameResult>, RunEnd) {
+    let mut odo = Odometry::new(camera_of(seq), config).expect("engine");
+    let mut out = Vec::new();
+    let end = runner(seq, &mut odo, 0.1, &mut |r| {
+        out.push(r.clone());
+        if out.len() == stop_after {
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
+        }
+    })
+    .expect("run");
+    (out, end)
+}
+
+/// Everything but the stage times, which are measured.
+fn assert_same(a: &[FrameResult], b: &[FrameResult]) {
+    assert_eq!(a.len(), b.len());
+    for (x, y) in a.iter().zip(b) {
+        assert_eq!(x.index, y.index);
+        assert_eq!(x.pose, y.pose, "frame {}", x.index);
+        assert_eq!(x.motion, y.motion, "frame {}", x.index);
+        assert_eq!(x.covariance, y.covariance, "frame {}", x.index);
+        assert_eq!(x.status, y.status, "frame {}", x.index);
+        assert_eq!(x.counts, y.counts, "frame {}", x.index);
+        assert_eq!(x.correction, y.correction, "frame {}", x.index);
+    }
+}
+
+#[test]
+fn two_threads_give_the_one_thread_trajectory() {
+    let synthetic = SyntheticSequence::default();
+    let mut sequences: Vec<(String, Box<dyn StereoSequence>)> =
+        vec![("synthetic".into(), Box::new(synthetic))];
+    if let Some(dir) = crate::common::dataset("kitti_vo_seq2") {
+        sequences.push(("kitti_vo_seq2".into(), open(&dir).expect("open")));
+    }
+    for (name, seq) in &sequences {
+        let (one, end1) = results(seq.as_ref(), run_sequence, usize::MAX);
+        let (two, end2) = results(seq.as_ref(), run_sequence_two_threads, usize::MAX);
+        assert!(matches!(end1, RunEnd::Finished) && matches!(end2, RunEnd::Finished));
+        assert_eq!(one.len(), seq.len(), "{name}");
+        assert_same(&one, &two);
+        eprintln!(
+            "{name}: {} frames, identical with one and two threads",
+            one.len()
+        );
+        // Stopped by the caller after 5 frames: both stop there.
+        let (one, end1) = results(seq.as_ref(), run_sequence, 5);
+        let (two, end2) = results(seq.as_ref(), run_sequence_two_threads, 5);
+        assert!(matches!(end1, RunEnd::Stopped(5)) && matches!(end2, RunEnd::Stopped(5)));
+        assert_same(&one, &two);
+    }
+}
+
+/// Images resampled to the working size ([`OdometryConfig::max_working_pixels`],
+/// [`OdometryConfig::min_working_pixels`]): the front thread halves or doubles them, with
+/// the same results as one thread.
+#[test]
+fn two_threads_resample_as_one_thread_does() {
+    let seq = SyntheticSequence::new(6, 0.8, 0.0);
+    let (w, h) = seq.image_size();
+    let halved = OdometryConfig {
+        max_working_pixels: w * h / 4,
+        min_working_pixels: 0,
+        ..OdometryConfig::default()
+    };
+    let doubled = OdometryConfig {
+        min_working_pixels: w * h + 1,
+        ..OdometryConfig::default()
+    };
+    for config in [halved, doubled] {
+        let (one, _) = results_with(&seq, run_sequence, usize::MAX, config.clone());
+        let (two, _) = results_with(&seq, run_sequence_two_threads, usize::MAX, config);
+        assert_eq!(one.len(), seq.len());
+        assert!(one.iter().skip(1).all(|r| r.status.is_tracked()));
+        assert_same(&one, &two);
+    }
+}
+
+#[test]
+fn a_bad_frame_stops_the_stream_and_is_named() {
+    let seq = SyntheticSequence::default();
+    let mut odo = Odometry::new(camera_of(&seq), OdometryConfig::default()).expect("engine");
+    let frames = (0..8).map(|i| {
+        let pair = seq.frame(i).map_err(RunError::from)?;
+        let right = if i == 6 {
+            GrayImage::new(3, 3) // not the camera's size
+        } else {
+            pair.right
+        };
+        Ok(OwnedStereoFrame {
+            left: pair.left,
+            right,
+            timestamp_s: i as f64 * 0.1,
+            load_ms: 0.0,
+        })
+    });
+    let mut seen = 0;
+    let e: RunError = odo
+        .run_two_threads(frames, &mut |_| {
+            seen += 1;
+            ControlFlow::Continue(())
+        })
+        .expect_err("frame 6 is bad");
+    assert_eq!(seen, 6, "frames 0-5 are given out");
+    assert!(e.to_string().starts_with("frame 6: "), "{e}");
+    assert!(matches!(e, RunError::AtFrame { index: 6, .. }), "{e}");
+}
