@@ -5,9 +5,7 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use swarmpose_ros::msg::{
-    CameraInfo, Header, Image, RosMessage, StringMsg, Time, encode, schema_text,
-};
+use swarmpose_ros::msg::{CameraInfo, Header, Image, RosMessage, StringMsg, Time, encode};
 use swarmpose_ros::{Bag, BagSequence, RosError, StereoOptions};
 
 use common::{TopicData, write_mcap};
