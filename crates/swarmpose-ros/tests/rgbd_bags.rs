@@ -245,7 +245,11 @@ fn small_bag(
 ) -> PathBuf {
     let size = (32, 24);
     let k = [30.0, 30.0, 16.0, 12.0];
-    let bpp = if depth_encoding == "32FC1" { 4 } else { 1 };
+    let bpp = match depth_encoding {
+        "32FC1" => 4,
+        "16UC1" => 2,
+        _ => 1,
+    };
     let mut topics: Vec<TopicData> = vec![
         (COLOUR, Image::TYPE, Vec::new()),
         (COLOUR_INFO, CameraInfo::TYPE, Vec::new()),
