@@ -10,14 +10,24 @@ the section's markers; see tools/generated).
 --timings: a `cargo build --timings` report (target/cargo-timings/cargo-timing.html) of a
 build from an empty target directory, whose unit times give the compile time of the
 crates the bag support adds; without it, that line is left out.
+
+--build-cost: measures the CPU time (user + system, `/usr/bin/time`, children included)
+that the bag support adds to a clean release build, in an empty target directory under
+the system's temporary folder (removed after): first the workspace crates swarmpose-ros
+depends on (and their dependencies), then swarmpose-ros (its own dependencies, and the
+features it adds to shared ones, e.g. `image`'s JPEG decoder), then swarmpose-ros alone
+again after touching it; the added cost is the second minus the third. Kept in
+TARGET/ros_bench_build_cost.json and reused by later runs without the option.
 """
 
 import argparse
 import json
 import os
 import re
+import shutil
 import subprocess
 import sys
+import tempfile
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
@@ -63,6 +73,43 @@ def added_by_ros():
     return sorted(c for c in added if not c.startswith("swarmpose-ros "))
 
 
+def cli_crate_count():
+    """The crates (name version, the workspace's own included) of the CLI's build."""
+    return len(crate_set("swarmpose-cli"))
+
+
+# The workspace crates swarmpose-ros depends on (Cargo.toml [dependencies]).
+ROS_WORKSPACE_DEPS = ["swarmpose-vision", "swarmpose-datasets", "swarmpose-odometry"]
+
+
+def cpu_seconds(args, env):
+    """User + system CPU seconds of a command and its children (`/usr/bin/time`)."""
+    out = subprocess.run(["/usr/bin/time", "-f", "CPU %U %S", *args], cwd=ROOT, env=env,
+                         capture_output=True, text=True, check=True)
+    line = [l for l in out.stderr.splitlines() if l.startswith("CPU ")][-1]
+    user, system = (float(x) for x in line.split()[1:3])
+    return user + system
+
+
+def measure_build_cost(target):
+    """The CPU seconds of the three clean release builds (see --build-cost)."""
+    scratch = tempfile.mkdtemp(prefix="swarmpose-ros-build-cost-")
+    env = dict(os.environ, CARGO_TARGET_DIR=scratch)
+    try:
+        base = cpu_seconds(["cargo", "build", "--release", "--quiet",
+                            *(a for p in ROS_WORKSPACE_DEPS for a in ("-p", p))], env)
+        with_ros = cpu_seconds(["cargo", "build", "--release", "--quiet", "-p", "swarmpose-ros"], env)
+        os.utime(os.path.join(ROOT, "crates", "swarmpose-ros", "src", "lib.rs"))
+        ros_alone = cpu_seconds(["cargo", "build", "--release", "--quiet", "-p", "swarmpose-ros"], env)
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)
+    cost = {"base_s": base, "with_ros_s": with_ros, "ros_alone_s": ros_alone,
+            "load": " / ".join(f"{v:.1f}" for v in os.getloadavg())}
+    with open(os.path.join(target, "ros_bench_build_cost.json"), "w", encoding="utf-8") as f:
+        json.dump(cost, f)
+    return cost
+
+
 def compile_seconds(html, crates):
     """The summed unit times (seconds) of `crates` in a cargo timings report."""
     text = open(html, encoding="utf-8").read()
@@ -78,20 +125,29 @@ def main():
                         help="the cargo target directory [$CARGO_TARGET_DIR or target]")
     parser.add_argument("--timings", help="a cargo --timings report of a clean build")
     parser.add_argument("--no-run", action="store_true", help="use the bench's last results")
+    parser.add_argument("--build-cost", action="store_true",
+                        help="measure the CPU time of the bag support's clean build (minutes)")
     a = parser.parse_args()
     if not a.no_run:
         bench(a.data)
+    cost_file = os.path.join(a.target, "ros_bench_build_cost.json")
+    cost = measure_build_cost(a.target) if a.build_cost else None
+    if cost is None and os.path.exists(cost_file):
+        with open(cost_file, encoding="utf-8") as f:
+            cost = json.load(f)
     m = lambda g, n: median_ms(a.target, g, n)  # noqa: E731
     folder = m("read", "folder")
     rows = [f"| folder (two PNGs) | {folder:.2f} | | |"]
     verdicts = []
-    for name, label in (("bag_mcap", "MCAP, chunks uncompressed"), ("bag_mcap_zstd", "MCAP, zstd chunks")):
+    for name, label in (("bag_mcap", "MCAP, chunks uncompressed"), ("bag_mcap_zstd", "MCAP, zstd chunks"),
+                        ("bag_db3", "SQLite `.db3`")):
         read, opened = m("read", name), m("open", name) / FRAMES
         more = (read + opened) / folder - 1.0
         rows.append(f"| {label} | {read:.2f} | {opened:.2f} | {100 * more:+.1f} % |")
         verdicts.append(more <= READ_MORE_TARGET)
     write = m("write", "odometry_mcap_frame")
     added = added_by_ros()
+    total = cli_crate_count()
     lines = [
         "Speed of the ROS 2 input and output (`cargo bench -p swarmpose-ros --bench bags`, "
         f"medians, one thread; generated {provenance()}; the machine was shared with other "
@@ -110,9 +166,21 @@ def main():
         f"Writing one frame of `odometry.mcap` without images: {write:.3f} ms "
         f"(target at most {WRITE_TARGET_MS:.0f} ms: {'met' if write <= WRITE_TARGET_MS else 'NOT met'}).",
         "",
-        f"The bag support adds {len(added)} crates to the default build of the CLI: "
+        f"The bag support adds {len(added)} crates to the default build of the CLI "
+        f"(`cargo tree -e normal,build`: {total} crates with it, the workspace's own included; "
+        f"{total - len(added) - 1} without it and swarmpose-ros): "
         + ", ".join(f"`{c}`" for c in added) + ".",
     ]
+    if cost:
+        added_s = cost["with_ros_s"] - cost["ros_alone_s"]
+        lines += [
+            "",
+            f"CPU time (user + system, `/usr/bin/time`) they add to a clean release build: {added_s:.0f} s "
+            f"(building swarmpose-ros and what it brings after its workspace dependencies: "
+            f"{cost['with_ros_s']:.0f} s, of which swarmpose-ros itself {cost['ros_alone_s']:.0f} s; "
+            f"the workspace dependencies before: {cost['base_s']:.0f} s). Measured with `--build-cost` "
+            f"while the machine was shared with other builds (load average {cost['load']}).",
+        ]
     if a.timings:
         secs = compile_seconds(a.timings, added)
         lines.append(f"Their compile time, summed over the units of `{os.path.basename(a.timings)}` "

@@ -10,7 +10,8 @@
 //! | Karlsruhe sequences | [`karlsruhe`] | `I1_*.png`, `I2_*.png`, `calib.txt` (`P1_roi`, `P2_roi`); INS data is not camera ground truth |
 //! | EuRoC MAV (ASL) | [`euroc`] | raw images, undistorted and rectified on load from `sensor.yaml` |
 //!
-//! [`open`] detects the layout of a directory.
+//! [`open`] detects the layout of a directory. RGB-D sequences (a gray image and a depth
+//! image a frame) are behind [`DepthSequence`] ([`rgbd`]).
 //!
 //! Frames: ground-truth poses are those of the (rectified) LEFT camera at each frame,
 //! expressed in the left camera frame of frame 0 (x right, y down, z forward, metres).
@@ -24,6 +25,7 @@ mod frames;
 pub mod karlsruhe;
 pub mod kitti;
 pub mod projection;
+pub mod rgbd;
 mod text;
 
 use std::path::{Path, PathBuf};
@@ -31,6 +33,7 @@ use std::path::{Path, PathBuf};
 use nalgebra::Isometry3;
 
 pub use error::DatasetError;
+pub use rgbd::{DepthSequence, Intrinsics, RgbdFrame};
 pub use swarmpose_vision::image::GrayImage;
 pub use swarmpose_vision::stereo::RectifiedStereo;
 

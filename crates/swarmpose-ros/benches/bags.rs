@@ -3,9 +3,9 @@
 //! - `read/*`: one stereo frame of the first KITTI frames (`kitti_vo_seq2`, 1241 x 376)
 //!   read from its folder (two PNGs decoded) and from an MCAP bag of the same frames
 //!   (`sensor_msgs/Image` mono8 with `camera_info`, as `ros2 bag record` writes them:
-//!   chunks uncompressed, and with zstd), frame after frame in a loop;
-//!   `open/*`: opening the bag (every image's header read once for its stamp), to be
-//!   shared among the bag's frames.
+//!   MCAP with chunks uncompressed and with zstd, and SQLite `.db3`), frame after frame
+//!   in a loop; `open/*`: opening the bag (its index, then every image's header read
+//!   once for its stamp), to be shared among the bag's frames.
 //! - `write/odometry_mcap_frame`: one frame of `odometry.mcap` without images (Odometry,
 //!   PoseWithCovarianceStamped, /tf, DiagnosticArray, ground-truth pose; one zstd chunk
 //!   flushed to the file).
@@ -63,37 +63,20 @@ fn camera_info(seq: &dyn StereoSequence, right: bool, header: Header) -> CameraI
     }
 }
 
-/// Writes the first [`FRAMES`] frames of `seq` as an MCAP bag at `path`.
-fn write_bag(seq: &dyn StereoSequence, path: &Path, compression: Option<Compression>) {
-    let file = BufWriter::new(File::create(path).expect("bag file"));
-    let mut w = WriteOptions::new()
-        .profile("ros2")
-        .compression(compression)
-        .create(file)
-        .expect("mcap writer");
-    let mut channel = |topic: &str, ty: &str| {
-        let text = schema_text(ty).expect("schema");
-        let schema = w
-            .add_schema(ty, "ros2msg", text.as_bytes())
-            .expect("schema");
-        w.add_channel(schema, topic, "cdr", &BTreeMap::new())
-            .expect("channel")
-    };
-    let sides: Vec<(u16, u16)> = ["left", "right"]
-        .iter()
-        .map(|s| {
-            (
-                channel(&format!("/stereo/{s}/image_rect"), Image::TYPE),
-                channel(&format!("/stereo/{s}/camera_info"), CameraInfo::TYPE),
-            )
-        })
-        .collect();
-    let mut sequence = 0;
+/// A bag's messages: topic, type, log time (ns) and bytes.
+type Messages = Vec<(String, &'static str, i64, Vec<u8>)>;
+
+/// The messages of the first [`FRAMES`] frames of `seq`, as a stereo camera driver
+/// publishes them: per frame and side, the image and its `camera_info`.
+fn messages(seq: &dyn StereoSequence) -> Messages {
+    let mut out = Vec::new();
     for k in 0..FRAMES {
         let pair = seq.frame(k).expect("frame");
         let t = 1_317_000_000_000_000_000 + k as i64 * 100_000_000;
-        for (side, ((image_ch, info_ch), img)) in
-            sides.iter().zip([pair.left, pair.right]).enumerate()
+        for (side, (name, img)) in ["left", "right"]
+            .iter()
+            .zip([pair.left, pair.right])
+            .enumerate()
         {
             let header = Header {
                 stamp: Time::from_nanos(t),
@@ -109,22 +92,99 @@ fn write_bag(seq: &dyn StereoSequence, path: &Path, compression: Option<Compress
                 data: img.data,
             };
             let info = camera_info(seq, side == 1, header);
-            for (ch, data) in [
-                (*image_ch, encode(&image).expect("cdr")),
-                (*info_ch, encode(&info).expect("cdr")),
-            ] {
-                sequence += 1;
-                let h = MessageHeader {
-                    channel_id: ch,
-                    sequence,
-                    log_time: t as u64,
-                    publish_time: t as u64,
-                };
-                w.write_to_known_channel(&h, &data).expect("write");
-            }
+            out.push((
+                format!("/stereo/{name}/image_rect"),
+                Image::TYPE,
+                t,
+                encode(&image).expect("cdr"),
+            ));
+            out.push((
+                format!("/stereo/{name}/camera_info"),
+                CameraInfo::TYPE,
+                t,
+                encode(&info).expect("cdr"),
+            ));
         }
     }
+    out
+}
+
+/// Writes `messages` as an MCAP bag at `path`.
+fn write_mcap(messages: &Messages, path: &Path, compression: Option<Compression>) {
+    let file = BufWriter::new(File::create(path).expect("bag file"));
+    let mut w = WriteOptions::new()
+        .profile("ros2")
+        .compression(compression)
+        .create(file)
+        .expect("mcap writer");
+    let mut channels: BTreeMap<String, u16> = BTreeMap::new();
+    for (sequence, (topic, ty, t, data)) in messages.iter().enumerate() {
+        let ch = match channels.get(topic) {
+            Some(&ch) => ch,
+            None => {
+                let text = schema_text(ty).expect("schema");
+                let schema = w
+                    .add_schema(ty, "ros2msg", text.as_bytes())
+                    .expect("schema");
+                let ch = w
+                    .add_channel(schema, topic, "cdr", &BTreeMap::new())
+                    .expect("channel");
+                channels.insert(topic.clone(), ch);
+                ch
+            }
+        };
+        let h = MessageHeader {
+            channel_id: ch,
+            sequence: sequence as u32,
+            log_time: *t as u64,
+            publish_time: *t as u64,
+        };
+        w.write_to_known_channel(&h, data).expect("write");
+    }
     w.finish().expect("finish");
+}
+
+/// Writes `messages` as a rosbag2 SQLite file at `path` (the tables `ros2 bag record`
+/// writes, without the QoS and metadata columns the reader does not use).
+fn write_db3(messages: &Messages, path: &Path) {
+    let _ = std::fs::remove_file(path);
+    let mut db = rusqlite::Connection::open(path).expect("db3");
+    db.execute_batch(
+        "CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT NOT NULL, type TEXT NOT NULL, \
+         serialization_format TEXT NOT NULL, offered_qos_profiles TEXT NOT NULL); \
+         CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER NOT NULL, \
+         timestamp INTEGER NOT NULL, data BLOB NOT NULL);",
+    )
+    .expect("tables");
+    let tx = db.transaction().expect("transaction");
+    let mut ids: BTreeMap<String, i64> = BTreeMap::new();
+    for (topic, ty, t, data) in messages {
+        let next = ids.len() as i64 + 1;
+        let id = *ids.entry(topic.clone()).or_insert_with(|| {
+            tx.execute(
+                "INSERT INTO topics VALUES (?1, ?2, ?3, 'cdr', '')",
+                rusqlite::params![next, topic, ty],
+            )
+            .expect("topic");
+            next
+        });
+        tx.execute(
+            "INSERT INTO messages(topic_id, timestamp, data) VALUES (?1, ?2, ?3)",
+            rusqlite::params![id, t, data],
+        )
+        .expect("message");
+    }
+    tx.commit().expect("commit");
+}
+
+/// The bags of the clip: MCAP with chunks uncompressed, with zstd chunks, SQLite.
+const BAGS: [&str; 3] = ["mcap", "mcap_zstd", "db3"];
+
+fn bag_path(dir: &Path, name: &str) -> PathBuf {
+    dir.join(match name {
+        "db3" => "db3.db3".to_owned(),
+        _ => format!("{name}.mcap"),
+    })
 }
 
 fn bench_read(c: &mut Criterion, seq: &dyn StereoSequence, dir: &Path) {
@@ -137,10 +197,12 @@ fn bench_read(c: &mut Criterion, seq: &dyn StereoSequence, dir: &Path) {
             black_box(seq.frame(k).expect("frame"))
         });
     });
-    for (name, compression) in [("mcap", None), ("mcap_zstd", Some(Compression::Zstd))] {
-        let path = dir.join(format!("{name}.mcap"));
-        write_bag(seq, &path, compression);
-        let bag = BagSequence::open(&path, &StereoOptions::default()).expect("bag");
+    let msgs = messages(seq);
+    write_mcap(&msgs, &dir.join("mcap.mcap"), None);
+    write_mcap(&msgs, &dir.join("mcap_zstd.mcap"), Some(Compression::Zstd));
+    write_db3(&msgs, &dir.join("db3.db3"));
+    for name in BAGS {
+        let bag = BagSequence::open(&bag_path(dir, name), &StereoOptions::default()).expect("bag");
         assert_eq!(bag.len(), FRAMES);
         g.bench_function(format!("bag_{name}"), |b| {
             b.iter(|| {
@@ -152,8 +214,8 @@ fn bench_read(c: &mut Criterion, seq: &dyn StereoSequence, dir: &Path) {
     g.finish();
     let mut g = c.benchmark_group("open");
     g.sample_size(10);
-    for name in ["mcap", "mcap_zstd"] {
-        let path = dir.join(format!("{name}.mcap"));
+    for name in BAGS {
+        let path = bag_path(dir, name);
         g.bench_function(format!("bag_{name}"), |b| {
             b.iter(|| black_box(BagSequence::open(&path, &StereoOptions::default()).expect("bag")));
         });

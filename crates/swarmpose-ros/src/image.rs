@@ -8,7 +8,8 @@
 //! | `CompressedImage` PNG | decoded as the folder loaders decode a PNG |
 //! | `CompressedImage` JPEG | decoded by the `image` crate (zune-jpeg), then luma |
 //!
-//! Depth: `16UC1` (millimetres) and `32FC1` (metres) to metres, 0 where there is none.
+//! Depth: `16UC1` (millimetres; 65535, saturated, is none) and `32FC1` (metres) to metres,
+//! 0 where there is none.
 //! Any other encoding is refused by name.
 
 use std::path::Path;
@@ -117,9 +118,18 @@ pub fn image_to_gray(img: &Image) -> Result<GrayImage, String> {
 /// A one-line message naming an encoding not in [`DEPTH_ENCODINGS`].
 pub fn image_to_depth_m(img: &Image) -> Result<Vec<f32>, String> {
     match img.encoding.as_str() {
+        // Divided in f64, then rounded once to f32: the depth a TUM folder gives for the
+        // same millimetres (5 units each). 65535 is a sensor's saturated or "too far"
+        // value, not 65.5 m: no depth, as in the TUM reader.
         "16UC1" | "mono16" => Ok(values_u16(img)?
             .into_iter()
-            .map(|mm| f32::from(mm) * 1e-3)
+            .map(|mm| {
+                if mm == u16::MAX {
+                    0.0
+                } else {
+                    (f64::from(mm) / 1000.0) as f32
+                }
+            })
             .collect()),
         "32FC1" => {
             let mut out = Vec::with_capacity(img.width as usize * img.height as usize);

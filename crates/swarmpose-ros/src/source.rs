@@ -1,11 +1,14 @@
-//! One front door for every stereo input: a ROS 2 bag (an `.mcap` or `.db3` file, or a
-//! folder with `metadata.yaml`) or a dataset folder ([`swarmpose_datasets::open`]).
+//! One front door for every input but a TUM RGB-D folder: a ROS 2 bag (an `.mcap` or
+//! `.db3` file, or a folder with `metadata.yaml`; stereo or RGB-D) or a stereo dataset
+//! folder ([`swarmpose_datasets::open`]).
 
 use std::path::Path;
 
-use swarmpose_datasets::{DatasetError, StereoSequence};
+use swarmpose_datasets::{DatasetError, DepthSequence, StereoSequence};
 
+use crate::bag::Bag;
 use crate::msg::CameraInfo;
+use crate::rgbd::{BagRgbdSequence, rgbd_cameras};
 use crate::stereo::pairing::UnpairedImage;
 use crate::stereo::{BagSequence, StereoOptions, to_dataset};
 
@@ -23,18 +26,124 @@ pub fn is_bag(path: &Path) -> bool {
 /// What a bag adds to a sequence for the ROS 2 outputs.
 #[derive(Debug, Clone, PartialEq)]
 pub struct BagInfo {
-    /// The left images' `frame_id`.
+    /// The left (RGB-D: colour) images' `frame_id`.
     pub frame_id: String,
-    /// The left camera's `camera_info`.
+    /// The left (RGB-D: colour) camera's `camera_info`.
     pub camera_info: CameraInfo,
     /// The header stamp of each frame, nanoseconds.
     pub stamps_ns: Vec<i64>,
-    /// The left and right image topics.
+    /// The left and right image topics (RGB-D: the colour and depth ones).
     pub topics: (String, String),
     /// The images left without a partner (in no frame), in stamp order.
     pub unpaired: Vec<UnpairedImage>,
     /// Where reading stopped early (a cut bag), if it did.
     pub stopped: Option<String>,
+}
+
+/// The [`BagInfo`] of a [`BagSequence`] or a [`BagRgbdSequence`] (the same accessors).
+macro_rules! bag_info {
+    ($seq:expr) => {{
+        let seq = &$seq;
+        let (a, b) = seq.topics();
+        BagInfo {
+            frame_id: seq.frame_id().to_owned(),
+            camera_info: seq.camera_info().clone(),
+            stamps_ns: seq.stamps_ns(),
+            topics: (a.to_owned(), b.to_owned()),
+            unpaired: seq.unpaired().to_vec(),
+            stopped: seq.bag().stopped().map(str::to_owned),
+        }
+    }};
+}
+
+/// The frames of an input.
+pub enum Input {
+    /// Stereo pairs.
+    Stereo(Box<dyn StereoSequence>),
+    /// RGB-D frames.
+    Rgbd(Box<dyn DepthSequence>),
+}
+
+impl Input {
+    /// Number of frames.
+    #[must_use]
+    pub fn len(&self) -> usize {
+        match self {
+            Self::Stereo(s) => s.len(),
+            Self::Rgbd(s) => s.len(),
+        }
+    }
+
+    /// True when there are no frames.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The layout (`kitti`, `ros2 bag`, `ros2 bag, rgb-d`, ...).
+    #[must_use]
+    pub fn layout(&self) -> &'static str {
+        match self {
+            Self::Stereo(s) => s.layout(),
+            Self::Rgbd(s) => s.layout(),
+        }
+    }
+}
+
+/// An opened input: its frames, and what a bag adds.
+pub struct OpenedInput {
+    /// The frames.
+    pub input: Input,
+    /// For a bag, what it adds.
+    pub bag: Option<BagInfo>,
+}
+
+impl std::fmt::Debug for OpenedInput {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("OpenedInput")
+            .field("layout", &self.input.layout())
+            .field("frames", &self.input.len())
+            .field("bag", &self.bag)
+            .finish()
+    }
+}
+
+/// Opens `path`: a ROS 2 bag with `opts` (RGB-D when a depth topic is named or it has
+/// one colour and one depth camera, else stereo), or else a stereo dataset folder (`opts`
+/// unused).
+///
+/// # Errors
+/// The bag's error (one line naming the bag), or the folder loader's.
+pub fn open_input(path: &Path, opts: &StereoOptions) -> Result<OpenedInput, DatasetError> {
+    if !is_bag(path) {
+        if opts.left.is_some() || opts.right.is_some() || opts.depth.is_some() {
+            return Err(DatasetError::Parse {
+                path: path.to_owned(),
+                line: 0,
+                message: "topics are named for a ROS 2 bag, and this is not one".to_owned(),
+            });
+        }
+        return Ok(OpenedInput {
+            input: Input::Stereo(swarmpose_datasets::open(path)?),
+            bag: None,
+        });
+    }
+    let ros = |e: crate::RosError| to_dataset(&e);
+    let bag = Bag::open(path).map_err(ros)?;
+    if let Some((colour, depth)) = rgbd_cameras(&bag, opts).map_err(ros)? {
+        let seq = BagRgbdSequence::from_bag(bag, &colour, &depth, opts).map_err(ros)?;
+        let info = bag_info!(seq);
+        return Ok(OpenedInput {
+            input: Input::Rgbd(Box::new(seq)),
+            bag: Some(info),
+        });
+    }
+    let seq = BagSequence::from_bag(bag, opts).map_err(ros)?;
+    let info = bag_info!(seq);
+    Ok(OpenedInput {
+        input: Input::Stereo(Box::new(seq)),
+        bag: Some(info),
+    })
 }
 
 /// An opened stereo input.
@@ -55,36 +164,27 @@ impl std::fmt::Debug for Opened {
     }
 }
 
-/// Opens `path`: a ROS 2 bag with `opts`, or else a dataset folder (`opts` unused).
+/// Opens `path` as [`open_input`] does, for a stereo input only.
 ///
 /// # Errors
-/// The bag's error (one line naming the bag), or the folder loader's.
+/// As [`open_input`]; an RGB-D bag is refused in one line naming its topics.
 pub fn open_stereo(path: &Path, opts: &StereoOptions) -> Result<Opened, DatasetError> {
-    if !is_bag(path) {
-        if opts.left.is_some() || opts.right.is_some() {
-            return Err(DatasetError::Parse {
-                path: path.to_owned(),
-                line: 0,
-                message: "topics are named for a ROS 2 bag, and this is not one".to_owned(),
-            });
-        }
-        return Ok(Opened {
-            sequence: swarmpose_datasets::open(path)?,
-            bag: None,
-        });
+    let opened = open_input(path, opts)?;
+    match opened.input {
+        Input::Stereo(sequence) => Ok(Opened {
+            sequence,
+            bag: opened.bag,
+        }),
+        Input::Rgbd(seq) => Err(DatasetError::Parse {
+            path: seq.root().to_owned(),
+            line: 0,
+            message: format!(
+                "an RGB-D bag ({}): this reader takes stereo pairs; `swarmpose odometry` runs it",
+                opened.bag.map_or_else(String::new, |b| format!(
+                    "colour {}, depth {}",
+                    b.topics.0, b.topics.1
+                ))
+            ),
+        }),
     }
-    let seq = BagSequence::open(path, opts).map_err(|e| to_dataset(&e))?;
-    let (l, r) = seq.topics();
-    let bag = BagInfo {
-        frame_id: seq.frame_id().to_owned(),
-        camera_info: seq.camera_info().clone(),
-        stamps_ns: seq.stamps_ns(),
-        topics: (l.to_owned(), r.to_owned()),
-        unpaired: seq.unpaired().to_vec(),
-        stopped: seq.bag().stopped().map(str::to_owned),
-    };
-    Ok(Opened {
-        sequence: Box::new(seq),
-        bag: Some(bag),
-    })
 }

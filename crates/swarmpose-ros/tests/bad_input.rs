@@ -3,47 +3,12 @@
 
 mod common;
 
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use mcap::records::MessageHeader;
-use swarmpose_ros::msg::{
-    CameraInfo, Header, Image, RosMessage, StringMsg, Time, encode, schema_text,
-};
+use swarmpose_ros::msg::{CameraInfo, Header, Image, RosMessage, StringMsg, Time, encode};
 use swarmpose_ros::{Bag, BagSequence, RosError, StereoOptions};
 
-/// A topic to write: name, type, and (stamp ns, bytes) messages.
-type TopicData = (&'static str, &'static str, Vec<(i64, Vec<u8>)>);
-
-fn write_mcap(path: &Path, topics: &[TopicData]) {
-    let f = std::io::BufWriter::new(std::fs::File::create(path).expect("create"));
-    let mut w = mcap::WriteOptions::new()
-        .profile("ros2")
-        .create(f)
-        .expect("writer");
-    for (name, ty, msgs) in topics {
-        let schema = w
-            .add_schema(
-                ty,
-                "ros2msg",
-                schema_text(ty).unwrap_or_default().as_bytes(),
-            )
-            .expect("schema");
-        let ch = w
-            .add_channel(schema, name, "cdr", &BTreeMap::new())
-            .expect("channel");
-        for (k, (t, data)) in msgs.iter().enumerate() {
-            let header = MessageHeader {
-                channel_id: ch,
-                sequence: k as u32,
-                log_time: *t as u64,
-                publish_time: *t as u64,
-            };
-            w.write_to_known_channel(&header, data).expect("write");
-        }
-    }
-    w.finish().expect("finish");
-}
+use common::{TopicData, write_mcap};
 
 fn image(t: i64, encoding: &str, w: u32, h: u32) -> Vec<u8> {
     let bpp = if encoding == "mono8" { 1 } else { 2 };

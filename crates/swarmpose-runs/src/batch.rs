@@ -4,7 +4,7 @@
 use std::ops::ControlFlow;
 use std::time::Instant;
 
-use swarmpose_datasets::StereoSequence;
+use swarmpose_datasets::{DepthSequence, StereoSequence};
 
 use swarmpose_odometry::{
     DepthView, FrameResult, Odometry, OwnedStereoFrame, RgbdInput, RunEnd, RunFailure,
@@ -12,7 +12,6 @@ use swarmpose_odometry::{
 };
 
 use crate::error::RunError;
-use crate::rgbd::RgbdSequence;
 
 /// Milliseconds since `t`.
 fn ms(t: Instant) -> f64 {
@@ -95,29 +94,50 @@ pub fn run_sequence_two_threads(
     odometry.run_two_threads(frames, on_frame)
 }
 
-/// [`run_sequence`] for a TUM RGB-D sequence (its own timestamps).
+/// The camera of an RGB-D sequence: its intrinsics and image size, with the RGB-D
+/// engine's virtual baseline.
+///
+/// # Errors
+/// [`RunError::Dataset`]: the sequence's camera cannot be read or is not plausible.
+pub fn rgbd_camera(seq: &dyn DepthSequence) -> Result<StereoCamera, RunError> {
+    let (k, (width, height)) = seq.camera()?;
+    // Checked by the sequence; the virtual baseline is the engine's own.
+    Ok(StereoCamera {
+        rig: swarmpose_vision::stereo::RectifiedStereo {
+            fx: k.fx,
+            fy: k.fy,
+            cx: k.cx,
+            cy: k.cy,
+            baseline_m: swarmpose_odometry::frontend::RgbdNoise::default().virtual_baseline_m,
+        },
+        width,
+        height,
+    })
+}
+
+/// [`run_sequence`] for an RGB-D sequence (a TUM RGB-D folder, an RGB-D bag), frame `i`
+/// at its own time ([`DepthSequence::timestamp_s`]).
 ///
 /// # Errors
 /// As [`run_sequence`].
 pub fn run_rgbd_sequence(
-    seq: &RgbdSequence,
+    seq: &dyn DepthSequence,
     odometry: &mut Odometry,
     on_frame: &mut dyn FnMut(&FrameResult) -> ControlFlow<()>,
 ) -> Result<RunEnd, RunError> {
-    let stamps = seq.stamps();
-    for (i, &stamp) in stamps.iter().enumerate() {
+    for i in 0..seq.len() {
         let at = |e: RunError| e.at_frame(i);
         let t = Instant::now();
-        let (gray, depth) = seq.frame(i).map_err(at)?;
+        let frame = seq.frame(i).map_err(|e| at(e.into()))?;
         let load_ms = ms(t);
         let input = RgbdInput {
-            gray: gray.view(),
+            gray: frame.gray.view(),
             depth: DepthView {
-                width: gray.width,
-                height: gray.height,
-                data: &depth,
+                width: frame.gray.width,
+                height: frame.gray.height,
+                data: &frame.depth_m,
             },
-            timestamp_s: stamp,
+            timestamp_s: seq.timestamp_s(i).unwrap_or(0.0),
         };
         let r = odometry
             .track_rgbd_timed(input, load_ms)

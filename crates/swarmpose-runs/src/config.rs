@@ -58,6 +58,9 @@ pub struct InputConfig {
     pub left_topic: Option<String>,
     /// ROS 2 bag: the right image topic (`None`: found).
     pub right_topic: Option<String>,
+    /// ROS 2 bag: the depth image topic of an RGB-D input (`None`: found when the bag has
+    /// one colour and one depth camera); with it, `left_topic` names the colour topic.
+    pub depth_topic: Option<String>,
     /// ROS 2 bag: largest difference of the header stamps of a left and a right image
     /// paired into a frame, milliseconds (default 0: equal stamps).
     pub stamp_tolerance_ms: f64,
@@ -69,6 +72,7 @@ impl Default for InputConfig {
             frame_period_s: 0.1,
             left_topic: None,
             right_topic: None,
+            depth_topic: None,
             stamp_tolerance_ms: 0.0,
         }
     }

@@ -18,6 +18,7 @@ use swarmpose_eval::{Format, Trajectory};
 use swarmpose_vision::image::GrayImage;
 
 use crate::error::RunError;
+use swarmpose_datasets::{DatasetError, DepthSequence, RgbdFrame};
 use swarmpose_odometry::StereoCamera;
 
 /// Depth PNG units per metre.
@@ -25,29 +26,8 @@ pub const DEPTH_SCALE: f64 = 5000.0;
 /// Largest time between paired colour, depth and ground truth, seconds.
 pub const MAX_DIFF_S: f64 = 0.02;
 
-/// Pinhole intrinsics, pixels.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Intrinsics {
-    /// Focal length along x.
-    pub fx: f64,
-    /// Focal length along y.
-    pub fy: f64,
-    /// Principal point column.
-    pub cx: f64,
-    /// Principal point row.
-    pub cy: f64,
-}
-
-impl Default for Intrinsics {
-    fn default() -> Self {
-        Self {
-            fx: 525.0,
-            fy: 525.0,
-            cx: 319.5,
-            cy: 239.5,
-        }
-    }
-}
+/// Pinhole intrinsics, pixels (default: TUM's recommendation, 525, 525, 319.5, 239.5).
+pub use swarmpose_datasets::Intrinsics;
 
 /// A TUM RGB-D sequence.
 #[derive(Debug, Clone)]
@@ -213,30 +193,10 @@ impl RgbdSequence {
     /// baseline is the RGB-D engine's virtual one).
     ///
     /// # Errors
-    /// [`RunError::Rgbd`] when the first image cannot be read, or naming
+    /// [`RunError::Dataset`] when the first image cannot be read, or naming
     /// `intrinsics.txt` when its numbers are not a plausible camera for the images.
     pub fn camera(&self) -> Result<StereoCamera, RunError> {
-        let Some((_, rgb, _)) = self.frames.first() else {
-            return Err(rgbd_err(&self.root, 0, "no frame"));
-        };
-        let (w, h) = image::image_dimensions(rgb)
-            .map_err(|e| rgbd_err(rgb, 0, format!("cannot read: {e}")))?;
-        let k = self.intrinsics;
-        let camera = StereoCamera {
-            rig: swarmpose_vision::stereo::RectifiedStereo {
-                fx: k.fx,
-                fy: k.fy,
-                cx: k.cx,
-                cy: k.cy,
-                baseline_m: swarmpose_odometry::frontend::RgbdNoise::default().virtual_baseline_m,
-            },
-            width: w as usize,
-            height: h as usize,
-        };
-        match camera.rig.implausibility(camera.width, camera.height) {
-            Some(why) => Err(rgbd_err(&self.root.join("intrinsics.txt"), 0, why)),
-            None => Ok(camera),
-        }
+        crate::batch::rgbd_camera(self)
     }
 
     /// Loads frame `i`: the gray image and the depth in metres (0 = none).
@@ -323,5 +283,70 @@ fn read_intrinsics(path: &Path) -> Result<Intrinsics, RunError> {
             cy: *cy,
         }),
         _ => Err(rgbd_err(path, 1, "expected four numbers: fx fy cx cy")),
+    }
+}
+
+/// A [`RunError`] of the reader as the sequences' error (the same line).
+fn dataset_error(e: RunError) -> DatasetError {
+    match e {
+        RunError::Rgbd {
+            path,
+            line,
+            message,
+        } => DatasetError::Parse {
+            path,
+            line,
+            message,
+        },
+        RunError::Dataset(d) => d,
+        other => DatasetError::Parse {
+            path: std::path::PathBuf::new(),
+            line: 0,
+            message: other.to_string(),
+        },
+    }
+}
+
+impl DepthSequence for RgbdSequence {
+    fn layout(&self) -> &'static str {
+        "tum rgb-d"
+    }
+
+    fn root(&self) -> &Path {
+        &self.root
+    }
+
+    fn len(&self) -> usize {
+        self.frames.len()
+    }
+
+    fn camera(&self) -> Result<(Intrinsics, (usize, usize)), DatasetError> {
+        let Some((_, rgb, _)) = self.frames.first() else {
+            return Err(dataset_error(rgbd_err(&self.root, 0, "no frame")));
+        };
+        let (w, h) = image::image_dimensions(rgb)
+            .map_err(|e| dataset_error(rgbd_err(rgb, 0, format!("cannot read: {e}"))))?;
+        let size = (w as usize, h as usize);
+        match self.intrinsics.implausibility(size.0, size.1) {
+            Some(why) => Err(dataset_error(rgbd_err(
+                &self.root.join("intrinsics.txt"),
+                0,
+                why,
+            ))),
+            None => Ok((self.intrinsics, size)),
+        }
+    }
+
+    fn frame(&self, i: usize) -> Result<RgbdFrame, DatasetError> {
+        let (gray, depth_m) = RgbdSequence::frame(self, i).map_err(dataset_error)?;
+        Ok(RgbdFrame { gray, depth_m })
+    }
+
+    fn ground_truth(&self) -> Option<&[Isometry3<f64>]> {
+        self.ground_truth.as_deref()
+    }
+
+    fn timestamp_s(&self, i: usize) -> Option<f64> {
+        self.frames.get(i).map(|f| f.0)
     }
 }

@@ -12,16 +12,18 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use nalgebra::Isometry3;
 use swarmpose_core::EstimatorConfig;
-use swarmpose_datasets::StereoSequence;
+use swarmpose_datasets::{DepthSequence, StereoSequence};
 use swarmpose_odometry::frontend::RgbdNoise;
 use swarmpose_odometry::window::Marginalisation;
 use swarmpose_odometry::{
     CorrectionModel, Decision, FrameResult, Odometry, OdometryConfig, RunEnd,
 };
 use swarmpose_ros::convert::FrameNames;
-use swarmpose_ros::{BagInfo, StereoOptions as BagOptions, open_stereo};
+use swarmpose_ros::{BagInfo, Input, StereoOptions as BagOptions, open_input};
 use swarmpose_runs::RunError;
-use swarmpose_runs::batch::{camera_of, run_rgbd_sequence, run_sequence, run_sequence_two_threads};
+use swarmpose_runs::batch::{
+    camera_of, rgbd_camera, run_rgbd_sequence, run_sequence, run_sequence_two_threads,
+};
 use swarmpose_runs::config::{InputConfig, RunConfig};
 use swarmpose_runs::output::{Smoothed, Summary, calibration_json};
 use swarmpose_runs::output_dir::FrameFiles;
@@ -188,6 +190,12 @@ pub struct OdometryArgs {
     #[arg(long, value_name = "TOPIC")]
     pub right: Option<String>,
 
+    /// ROS 2 bag: the depth image topic of an RGB-D input (16UC1 millimetres or 32FC1
+    /// metres; found when the bag has one colour and one depth camera); --left then
+    /// names the colour topic.
+    #[arg(long, value_name = "TOPIC")]
+    pub depth: Option<String>,
+
     /// ROS 2 bag: largest difference of the header stamps of a left and a right image
     /// paired into a frame, milliseconds (0: equal stamps).
     #[arg(long, value_name = "MS", help = with_default(
@@ -255,7 +263,7 @@ fn progress_bar(quiet: bool, total: usize) -> ProgressBar {
 /// The input of a run.
 enum Source {
     Stereo(Box<dyn StereoSequence>, String, Option<Vec<Isometry3<f64>>>),
-    Rgbd(RgbdSequence, String),
+    Rgbd(Box<dyn DepthSequence>, String),
 }
 
 /// The left image of frame `i` of `source` as the engine took it (read again, for
@@ -263,7 +271,7 @@ enum Source {
 fn left_image(source: &Source, i: usize) -> Result<GrayImage, String> {
     match source {
         Source::Stereo(seq, ..) => seq.frame(i).map(|p| p.left).map_err(|e| e.to_string()),
-        Source::Rgbd(seq, _) => seq.frame(i).map(|f| f.0).map_err(|e| e.to_string()),
+        Source::Rgbd(seq, _) => seq.frame(i).map(|f| f.gray).map_err(|e| e.to_string()),
     }
 }
 
@@ -317,6 +325,9 @@ pub fn run_config(args: &OdometryArgs) -> Result<RunConfig, CliError> {
         input.left_topic.clone_from(&args.left);
         input.right_topic.clone_from(&args.right);
     }
+    if args.depth.is_some() {
+        input.depth_topic.clone_from(&args.depth);
+    }
     if let Some(f) = &args.odom_frame {
         rc.output.odom_frame.clone_from(f);
     }
@@ -345,12 +356,13 @@ pub fn run_config(args: &OdometryArgs) -> Result<RunConfig, CliError> {
 pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
     let rc = run_config(args)?;
     let config = rc.odometry.clone();
-    let bag_options = BagOptions::with_tolerance_ms(
+    let mut bag_options = BagOptions::with_tolerance_ms(
         rc.input.left_topic.clone(),
         rc.input.right_topic.clone(),
         rc.input.stamp_tolerance_ms,
     )
     .map_err(|e| CliError::usage(format!("--stamp-tolerance: {e}")))?;
+    bag_options.depth.clone_from(&rc.input.depth_topic);
     let mut bag: Option<BagInfo> = None;
     let source = match &args.sequence {
         None => {
@@ -364,27 +376,36 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
             Source::Stereo(Box::new(seq), "built-in synthetic sequence".into(), gt)
         }
         Some(dir) if swarmpose_runs::rgbd::detect(dir) => {
-            if rc.threads != 1 {
-                return Err(CliError::usage(
-                    "--threads 2 is for stereo sequences; a TUM RGB-D directory runs on one thread",
-                ));
-            }
             let seq = RgbdSequence::open(dir).map_err(odometry_error)?;
-            Source::Rgbd(seq, format!("{} (TUM RGB-D)", dir.display()))
+            Source::Rgbd(Box::new(seq), format!("{} (TUM RGB-D)", dir.display()))
         }
         Some(dir) => {
             let opened =
-                open_stereo(dir, &bag_options).map_err(|e| CliError::usage(e.to_string()))?;
+                open_input(dir, &bag_options).map_err(|e| CliError::usage(e.to_string()))?;
             bag = opened.bag;
-            let seq = opened.sequence;
-            for note in seq.notes() {
-                warn(note);
+            let title = format!("{} ({})", dir.display(), opened.input.layout());
+            match opened.input {
+                Input::Stereo(seq) => {
+                    for note in seq.notes() {
+                        warn(note);
+                    }
+                    let gt = seq.ground_truth().map(<[_]>::to_vec);
+                    Source::Stereo(seq, title, gt)
+                }
+                Input::Rgbd(seq) => {
+                    for note in seq.notes() {
+                        warn(note);
+                    }
+                    Source::Rgbd(seq, title)
+                }
             }
-            let title = format!("{} ({})", dir.display(), seq.layout());
-            let gt = seq.ground_truth().map(<[_]>::to_vec);
-            Source::Stereo(seq, title, gt)
         }
     };
+    if matches!(source, Source::Rgbd(..)) && rc.threads != 1 {
+        return Err(CliError::usage(
+            "--threads 2 is for stereo sequences; an RGB-D input runs on one thread",
+        ));
+    }
     let (n, root) = match &source {
         Source::Stereo(s, ..) => (s.len(), s.root().to_owned()),
         Source::Rgbd(s, _) => (s.len(), s.root().to_owned()),
@@ -406,10 +427,12 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
         Source::Stereo(seq, ..) => Odometry::builder(camera_of(seq.as_ref()))
             .config(config.clone())
             .build(),
-        Source::Rgbd(seq, _) => Odometry::builder(seq.camera().map_err(odometry_error)?)
-            .config(config)
-            .rgbd(RgbdNoise::default())
-            .build(),
+        Source::Rgbd(seq, _) => {
+            Odometry::builder(rgbd_camera(seq.as_ref()).map_err(odometry_error)?)
+                .config(config)
+                .rgbd(RgbdNoise::default())
+                .build()
+        }
     }
     .map_err(odometry_error)?;
     let dir = super::odometry_output::prepare(&args.out)?;
@@ -505,7 +528,7 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
             rc.input.frame_period_s,
             &mut on_frame,
         ),
-        Source::Rgbd(seq, _) => run_rgbd_sequence(seq, &mut odometry, &mut on_frame),
+        Source::Rgbd(seq, _) => run_rgbd_sequence(seq.as_ref(), &mut odometry, &mut on_frame),
     };
     pb.finish_and_clear();
     if let Some(e) = write_error {

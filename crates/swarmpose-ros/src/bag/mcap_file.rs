@@ -1,7 +1,8 @@
-//! One MCAP file: indexed by walking its records from the start (so that a file without
-//! summary, or cut short, is read as far as it goes), schema and channel records parsed
-//! by the `mcap` crate, chunks decompressed here (zstd, lz4 or none) so that a chunk cut
-//! by a dying recorder still gives the messages it holds whole.
+//! One MCAP file: indexed from its summary when it has a usable one
+//! ([`super::mcap_summary`]: nothing decompressed), else by walking its records from the
+//! start (so that a file without summary, or cut short, is read as far as it goes), schema
+//! and channel records parsed by the `mcap` crate, chunks decompressed here (zstd, lz4 or
+//! none) so that a chunk cut by a dying recorder still gives the messages it holds whole.
 
 use std::fs::File;
 use std::io::{Read, Seek, SeekFrom};
@@ -291,6 +292,18 @@ impl McapFile {
                 format!("not an MCAP file ({size} bytes, no MCAP magic at its start)"),
             ));
         }
+        if super::mcap_summary::index_from_summary(&mut file, size, file_no, sink)
+            .map_err(|e| container(path, e))?
+        {
+            return Ok((
+                Self {
+                    path: path.to_owned(),
+                    file: Mutex::new(file),
+                    cache: Mutex::new(None),
+                },
+                None,
+            ));
+        }
         let mut walk = Walk {
             path,
             file_no,
@@ -317,17 +330,22 @@ impl McapFile {
         ))
     }
 
-    /// The bytes of the message at `location` (CDR with its header).
+    /// `f` of the bytes of the message at `location` (CDR with its header), borrowed from
+    /// the cached chunk when it is in one.
     ///
     /// # Errors
     /// [`RosError::Io`], or [`RosError::Container`] when the record is no longer there.
-    pub(crate) fn read(&self, location: Location) -> Result<Vec<u8>, RosError> {
+    pub(crate) fn with_message<R>(
+        &self,
+        location: Location,
+        f: impl FnOnce(&[u8]) -> R,
+    ) -> Result<R, RosError> {
         let missing = |what: String| container(&self.path, format!("no message at {what}"));
         match location {
             Location::McapPlain { offset, .. } => {
                 let (op, body) = self.record_at(offset, false)?;
                 (op == OP_MESSAGE)
-                    .then(|| message_data(&body).map(<[u8]>::to_vec))
+                    .then(|| message_data(&body).map(f))
                     .flatten()
                     .ok_or_else(|| missing(format!("byte {offset}")))
             }
@@ -338,7 +356,7 @@ impl McapFile {
                     .and_then(|i| first_record(buf.get(i..)?))
                     .filter(|r| r.0 == OP_MESSAGE)
                     .and_then(|r| message_data(r.1))
-                    .map(<[u8]>::to_vec)
+                    .map(f)
                     .ok_or_else(|| missing(format!("byte {inner} of the chunk at byte {chunk}")))
             }
             Location::Sqlite { .. } => Err(missing("an SQLite row".to_owned())),

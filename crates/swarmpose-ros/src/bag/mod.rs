@@ -1,14 +1,17 @@
 //! ROS 2 bags without ROS: a single `.mcap` file, a single SQLite `.db3` file, or a
 //! rosbag2 folder (`metadata.yaml` naming one or more `.mcap` or `.db3` files: a split
-//! bag). [`Bag::open`] reads every file once to index its messages by topic (topic,
-//! type, log time and where the bytes are), and [`Bag::read`] fetches one message's bytes
-//! afterwards, so that a stereo sequence has random access to its frames.
+//! bag). [`Bag::open`] indexes the messages of every file by topic (topic, type, log time
+//! and where the bytes are: from an MCAP file's summary, or its records when it has none;
+//! from a `.db3` file's `messages` table), and [`Bag::read`] fetches one message's bytes
+//! afterwards, so that a stereo sequence has random access to its frames;
+//! [`Bag::visit`] reads many messages in file order, each chunk decompressed once.
 //!
 //! An MCAP file whose recorder died has no summary and may end in the middle of a record
 //! (even of a compressed chunk): it is read up to its last whole message and
 //! [`Bag::stopped`] says where it stopped.
 
 mod mcap_file;
+mod mcap_summary;
 mod metadata;
 mod sqlite;
 
@@ -46,6 +49,22 @@ pub(crate) enum Location {
         /// The row's `id`.
         id: i64,
     },
+}
+
+impl Location {
+    /// The file and the position in it: sorting by it reads a file front to back, the
+    /// messages of a chunk together.
+    fn file_order(self) -> (usize, u64, u64) {
+        match self {
+            Self::McapPlain { file, offset } => (file, offset, 0),
+            Self::McapChunk { file, chunk, inner } => (file, chunk, inner),
+            Self::Sqlite { file, id } => (file, id as u64, 0),
+        }
+    }
+
+    fn file(self) -> usize {
+        self.file_order().0
+    }
 }
 
 /// One message of a topic: its log (receive) time and where its bytes are.
@@ -253,27 +272,61 @@ impl Bag {
                     topic.entries.len()
                 ),
             })?;
-        let file = match entry.location {
-            Location::McapPlain { file, .. }
-            | Location::McapChunk { file, .. }
-            | Location::Sqlite { file, .. } => file,
-        };
-        match self.files.get(file) {
-            Some(Storage::Mcap(m)) => m.read(entry.location),
-            Some(Storage::Sqlite(s)) => s.read(entry.location),
+        self.with_bytes(entry.location, <[u8]>::to_vec)
+    }
+
+    /// `f` of the bytes at `location`.
+    fn with_bytes<R>(&self, location: Location, f: impl FnOnce(&[u8]) -> R) -> Result<R, RosError> {
+        match self.files.get(location.file()) {
+            Some(Storage::Mcap(m)) => m.with_message(location, f),
+            Some(Storage::Sqlite(s)) => s.read(location).map(|b| f(&b)),
             None => Err(RosError::Container {
                 path: self.path.clone(),
-                message: format!("message {index} of {} is in no file", topic.name),
+                message: format!("a message in file {}, not in the bag", location.file()),
             }),
         }
     }
 
-    /// Message `index` of `topic`, decoded as `T`.
+    /// Calls `f(k, i, bytes)` for every message `i` of each topic `topics[k]`, in the
+    /// order of the files (each chunk read and decompressed once, whatever the topics'
+    /// order): the way to read every message of a few topics.
     ///
     /// # Errors
-    /// As [`Bag::read`]; [`RosError::Decode`] naming the topic and message when the
-    /// topic is of another type or the bytes do not decode.
-    pub fn decode<T: RosMessage>(&self, topic: &Topic, index: usize) -> Result<T, RosError> {
+    /// As [`Bag::read`], and the first error of `f` (which stops the visit).
+    pub fn visit(
+        &self,
+        topics: &[&Topic],
+        mut f: impl FnMut(usize, usize, &[u8]) -> Result<(), RosError>,
+    ) -> Result<(), RosError> {
+        let mut all: Vec<(Location, usize, usize)> = topics
+            .iter()
+            .enumerate()
+            .flat_map(|(k, t)| {
+                t.entries
+                    .iter()
+                    .enumerate()
+                    .map(move |(i, e)| (e.location, k, i))
+            })
+            .collect();
+        all.sort_by_key(|m| m.0.file_order());
+        for (location, k, i) in all {
+            self.with_bytes(location, |b| f(k, i, b))??;
+        }
+        Ok(())
+    }
+
+    /// The bytes of message `index` of `topic` (as [`Bag::read`] or [`Bag::visit`] gave
+    /// them), decoded as `T`.
+    ///
+    /// # Errors
+    /// [`RosError::Decode`] naming the topic and message when the topic is of another type
+    /// or the bytes do not decode.
+    pub fn decode_bytes<T: RosMessage>(
+        &self,
+        topic: &Topic,
+        index: usize,
+        bytes: &[u8],
+    ) -> Result<T, RosError> {
         let decode_error = |message: String| RosError::Decode {
             path: self.path.clone(),
             topic: topic.name.clone(),
@@ -290,7 +343,19 @@ impl Bag {
                 topic.encoding
             )));
         }
+        decode(bytes).map_err(|e| decode_error(e.0))
+    }
+
+    /// Message `index` of `topic`, decoded as `T`.
+    ///
+    /// # Errors
+    /// As [`Bag::read`]; [`RosError::Decode`] naming the topic and message when the
+    /// topic is of another type or the bytes do not decode.
+    pub fn decode<T: RosMessage>(&self, topic: &Topic, index: usize) -> Result<T, RosError> {
+        if topic.msg_type != T::TYPE || topic.encoding != "cdr" {
+            return self.decode_bytes(topic, index, &[]);
+        }
         let bytes = self.read(topic, index)?;
-        decode(&bytes).map_err(|e| decode_error(e.0))
+        self.decode_bytes(topic, index, &bytes)
     }
 }

@@ -1,11 +1,13 @@
 //! Stereo frames from a ROS 2 bag, behind [`swarmpose_datasets::StereoSequence`]: the
 //! camera topics found or named ([`topics`]), left and right paired by header stamp
 //! ([`pairing`]), the rig from `camera_info` ([`calib`]), images to gray
-//! ([`crate::image`]). Opening reads every image once for its header stamp; a frame is
-//! then read, converted and (raw streams) rectified when asked for.
+//! ([`crate::image`]). Opening reads every image once for its header stamp and every
+//! `camera_info`, in one pass ([`scan`]); a frame is then read, converted and (raw
+//! streams) rectified when asked for.
 
 pub mod calib;
 pub mod pairing;
+pub(crate) mod scan;
 pub mod topics;
 
 use std::path::Path;
@@ -18,9 +20,10 @@ use swarmpose_vision::rectify::remap;
 use crate::bag::{Bag, Topic};
 use crate::error::RosError;
 use crate::image::{compressed_to_gray, image_to_gray};
-use crate::msg::{CameraInfo, CompressedImage, Image, RosMessage, decode_header};
+use crate::msg::{CameraInfo, CompressedImage, Image, RosMessage};
 use calib::{Rig, rig_from_camera_info};
-use pairing::{UnpairedImage, pair_by_stamp};
+use pairing::{UnpairedImage, pair_frames};
+use scan::scan;
 use topics::{CameraTopics, cameras, info_topic_of, is_image_type};
 
 /// How to find the stereo input of a bag.
@@ -30,6 +33,9 @@ pub struct StereoOptions {
     pub left: Option<String>,
     /// The right image topic (found when `None`).
     pub right: Option<String>,
+    /// The depth image topic of an RGB-D bag (found when `None`: a bag with one colour
+    /// and one depth camera); with it, `left` names the colour topic.
+    pub depth: Option<String>,
     /// Largest difference of the header stamps of a left and a right image paired into
     /// a frame, nanoseconds (0: equal stamps).
     pub stamp_tolerance_ns: i64,
@@ -54,6 +60,7 @@ impl StereoOptions {
         Ok(Self {
             left,
             right,
+            depth: None,
             stamp_tolerance_ns: (tolerance_ms * 1e6).round() as i64,
         })
     }
@@ -75,43 +82,50 @@ pub struct BagSequence {
     notes: Vec<String>,
 }
 
-fn topics_error(bag: &Bag, message: String) -> RosError {
+pub(crate) fn topics_error(bag: &Bag, message: String) -> RosError {
     RosError::Topics {
         path: bag.path().to_owned(),
         message: format!("{message}; {}", bag.listing()),
     }
 }
 
-fn calib_error(bag: &Bag, message: String) -> RosError {
+pub(crate) fn calib_error(bag: &Bag, message: String) -> RosError {
     RosError::Calibration {
         path: bag.path().to_owned(),
         message,
     }
 }
 
+/// The camera of image topic `name`, which must exist and have a `camera_info` beside it.
+///
+/// # Errors
+/// [`RosError::Topics`] for no such image topic; [`RosError::Calibration`] without a
+/// `camera_info`.
+pub(crate) fn named_camera(bag: &Bag, name: &str) -> Result<CameraTopics, RosError> {
+    let t = bag
+        .topic(name)
+        .ok_or_else(|| topics_error(bag, format!("no topic {name}")))?;
+    if !is_image_type(&t.msg_type) {
+        return Err(topics_error(
+            bag,
+            format!("{name} is a {}, not an image topic", t.msg_type),
+        ));
+    }
+    let info = info_topic_of(bag, name).ok_or_else(|| {
+        calib_error(
+            bag,
+            format!("no camera_info topic beside {name}: the rig is unknown"),
+        )
+    })?;
+    Ok(CameraTopics {
+        image: name.to_owned(),
+        info,
+    })
+}
+
 /// The camera topics named in `opts`, or found.
 fn choose(bag: &Bag, opts: &StereoOptions) -> Result<(CameraTopics, CameraTopics), RosError> {
-    let named = |name: &str| -> Result<CameraTopics, RosError> {
-        let t = bag
-            .topic(name)
-            .ok_or_else(|| topics_error(bag, format!("no topic {name}")))?;
-        if !is_image_type(&t.msg_type) {
-            return Err(topics_error(
-                bag,
-                format!("{name} is a {}, not an image topic", t.msg_type),
-            ));
-        }
-        let info = info_topic_of(bag, name).ok_or_else(|| {
-            calib_error(
-                bag,
-                format!("no camera_info topic beside {name}: the rig is unknown"),
-            )
-        })?;
-        Ok(CameraTopics {
-            image: name.to_owned(),
-            info,
-        })
-    };
+    let named = |name: &str| named_camera(bag, name);
     if let (Some(l), Some(r)) = (&opts.left, &opts.right) {
         return Ok((named(l)?, named(r)?));
     }
@@ -191,65 +205,8 @@ fn order(
     ))
 }
 
-/// The header stamps (nanoseconds) and the frame id of every image of `topic`.
-fn stamps(bag: &Bag, topic: &Topic) -> Result<(Vec<i64>, String), RosError> {
-    let mut out = Vec::with_capacity(topic.entries.len());
-    let mut frame_id = String::new();
-    for i in 0..topic.entries.len() {
-        let bytes = bag.read(topic, i)?;
-        let h = decode_header(&bytes).map_err(|e| RosError::Decode {
-            path: bag.path().to_owned(),
-            topic: topic.name.clone(),
-            index: i,
-            msg_type: topic.msg_type.clone(),
-            message: e.0,
-        })?;
-        if i == 0 {
-            frame_id = h.frame_id;
-        }
-        out.push(h.stamp.as_nanos());
-    }
-    Ok((out, frame_id))
-}
-
-/// The `camera_info` of a camera: the first message, checked to be the same in every
-/// other.
-fn camera_info(bag: &Bag, name: &str) -> Result<CameraInfo, RosError> {
-    let topic = bag
-        .topic(name)
-        .ok_or_else(|| calib_error(bag, format!("no topic {name}")))?;
-    if topic.entries.is_empty() {
-        return Err(calib_error(
-            bag,
-            format!("{name} has no message: the rig is unknown"),
-        ));
-    }
-    let first: CameraInfo = bag.decode(topic, 0)?;
-    for i in 1..topic.entries.len() {
-        let c: CameraInfo = bag.decode(topic, i)?;
-        if (c.width, c.height, &c.d, c.k, c.r, c.p)
-            != (
-                first.width,
-                first.height,
-                &first.d,
-                first.k,
-                first.r,
-                first.p,
-            )
-        {
-            return Err(calib_error(
-                bag,
-                format!(
-                    "{name}: message {i} gives another calibration than message 0 (a changing rig is not supported)"
-                ),
-            ));
-        }
-    }
-    Ok(first)
-}
-
 /// Image message `index` of `topic` as gray.
-fn gray(bag: &Bag, topic: &Topic, index: usize) -> Result<GrayImage, RosError> {
+pub(crate) fn gray(bag: &Bag, topic: &Topic, index: usize) -> Result<GrayImage, RosError> {
     let image_error = |message: String| RosError::Image {
         path: bag.path().to_owned(),
         topic: topic.name.clone(),
@@ -274,7 +231,14 @@ impl BagSequence {
     /// the tolerance; [`RosError::Calibration`] for a missing or unusable
     /// `camera_info`; [`RosError::Image`] for an encoding that is not read.
     pub fn open(path: &Path, opts: &StereoOptions) -> Result<Self, RosError> {
-        let bag = Bag::open(path)?;
+        Self::from_bag(Bag::open(path)?, opts)
+    }
+
+    /// Finds the stereo input of an opened bag.
+    ///
+    /// # Errors
+    /// As [`BagSequence::open`].
+    pub fn from_bag(bag: Bag, opts: &StereoOptions) -> Result<Self, RosError> {
         let (lc, rc) = choose(&bag, opts)?;
         let topic = |n: &str| {
             bag.topic(n)
@@ -282,76 +246,42 @@ impl BagSequence {
                 .ok_or_else(|| topics_error(&bag, format!("no topic {n}")))
         };
         let (left, right) = (topic(&lc.image)?, topic(&rc.image)?);
-        let (ls, frame_id) = stamps(&bag, &left)?;
-        let (rs, _) = stamps(&bag, &right)?;
-        let tol = opts.stamp_tolerance_ns.max(0);
-        let p = pair_by_stamp(&ls, &rs, tol);
-        if p.pairs.is_empty() {
-            let gap = ls
-                .iter()
-                .filter_map(|l| rs.iter().map(|r| (r - l).abs()).min())
-                .min()
-                .map_or("no image on one side".to_owned(), |d| {
-                    format!("the nearest are {:.3} ms apart", d as f64 * 1e-6)
-                });
+        let (left_info, right_info) = (topic(&lc.info)?, topic(&rc.info)?);
+        let (stamps, infos) = scan(&bag, &[&left, &right], &[&left_info, &right_info])?;
+        let (Ok([left_stamps, right_stamps]), Ok([li, ri])) =
+            (<[_; 2]>::try_from(stamps), <[_; 2]>::try_from(infos))
+        else {
             return Err(topics_error(
                 &bag,
-                format!(
-                    "no left image of {} has a right image of {} within {:.3} ms of its header stamp ({gap}): \
-                     unsynchronised cameras (allow more with the stamp tolerance)",
-                    left.name,
-                    right.name,
-                    tol as f64 * 1e-6
-                ),
+                "the camera topics were not read".to_owned(),
             ));
-        }
-        let alone = |topic: &Topic, stamps: &[i64], i: usize| UnpairedImage {
-            topic: topic.name.clone(),
-            message: i,
-            stamp_ns: stamps[i],
         };
-        let mut unpaired: Vec<UnpairedImage> = p
-            .left_alone
-            .iter()
-            .map(|&i| alone(&left, &ls, i))
-            .chain(p.right_alone.iter().map(|&i| alone(&right, &rs, i)))
-            .collect();
-        unpaired.sort_by_key(|u| u.stamp_ns);
-        let (li, ri) = (camera_info(&bag, &lc.info)?, camera_info(&bag, &rc.info)?);
-        let (l0, r0) = (
-            gray(&bag, &left, p.pairs[0].0)?,
-            gray(&bag, &right, p.pairs[0].1)?,
+        let (ls, rs, frame_id) = (
+            left_stamps.stamps_ns,
+            right_stamps.stamps_ns,
+            left_stamps.frame_id,
         );
+        let paired = pair_frames(
+            &bag,
+            [(&left, &ls[..]), (&right, &rs[..])],
+            ["left", "right"],
+            opts.stamp_tolerance_ns,
+        )?;
+        let (first_l, first_r, _) = paired.frames[0];
+        let (l0, r0) = (gray(&bag, &left, first_l)?, gray(&bag, &right, first_r)?);
         let rig = rig_from_camera_info(&li, &ri, (l0.width, l0.height), (r0.width, r0.height))
             .map_err(|m| calib_error(&bag, format!("{} and {}: {m}", lc.info, rc.info)))?;
-        let mut notes = Vec::new();
-        if !unpaired.is_empty() {
-            notes.push(format!(
-                "{} images without a partner within {:.3} ms, not used: {}",
-                unpaired.len(),
-                tol as f64 * 1e-6,
-                unpaired
-                    .iter()
-                    .map(ToString::to_string)
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ));
-        }
-        if let Some(s) = bag.stopped() {
-            notes.push(s.to_owned());
-        }
-        let frames = p.pairs.iter().map(|&(l, r)| (l, r, ls[l])).collect();
         Ok(Self {
             size: (l0.width, l0.height),
             bag,
             left,
             right,
-            frames,
+            frames: paired.frames,
             rig,
             left_info: li,
             frame_id,
-            unpaired,
-            notes,
+            unpaired: paired.unpaired,
+            notes: paired.notes,
         })
     }
 

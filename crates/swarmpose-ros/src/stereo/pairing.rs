@@ -2,6 +2,10 @@
 //! nearest in time, when it is within the tolerance (0: equal stamps) and not taken by
 //! a nearer left image. Images without a partner are listed, never dropped silently.
 
+use super::topics_error;
+use crate::bag::{Bag, Topic};
+use crate::error::RosError;
+
 /// The pairs `(left index, right index)` and the indices left without a partner, of
 /// stamp lists (nanoseconds, in any order).
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
@@ -33,6 +37,89 @@ impl std::fmt::Display for UnpairedImage {
             self.topic, self.message, self.stamp_ns
         )
     }
+}
+
+/// The frames of two image topics paired by header stamp.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub(crate) struct Paired {
+    /// `(first topic's message, second topic's message, first one's stamp ns)` of each
+    /// frame, in stamp order.
+    pub(crate) frames: Vec<(usize, usize, i64)>,
+    /// The images in no frame, in stamp order.
+    pub(crate) unpaired: Vec<UnpairedImage>,
+    /// The line saying so (when there are any), and where reading stopped (a cut bag).
+    pub(crate) notes: Vec<String>,
+}
+
+/// The frames of `topics` (each with its header stamps, ns), each image of the first
+/// with the nearest of the second within `tolerance_ns`; `sides` name them in messages
+/// (`left`, `right`; `colour`, `depth`).
+///
+/// # Errors
+/// [`RosError::Topics`] (listing the bag's topics) when no image finds a partner.
+pub(crate) fn pair_frames(
+    bag: &Bag,
+    topics: [(&Topic, &[i64]); 2],
+    sides: [&str; 2],
+    tolerance_ns: i64,
+) -> Result<Paired, RosError> {
+    let [(a, sa), (b, sb)] = topics;
+    let tol = tolerance_ns.max(0);
+    let p = pair_by_stamp(sa, sb, tol);
+    if p.pairs.is_empty() {
+        let gap = sa
+            .iter()
+            .filter_map(|l| sb.iter().map(|r| (r - l).abs()).min())
+            .min()
+            .map_or("no image on one side".to_owned(), |d| {
+                format!("the nearest are {:.3} ms apart", d as f64 * 1e-6)
+            });
+        return Err(topics_error(
+            bag,
+            format!(
+                "no {} image of {} has a {} image of {} within {:.3} ms of its header stamp ({gap}): \
+                 unsynchronised cameras (allow more with the stamp tolerance)",
+                sides[0],
+                a.name,
+                sides[1],
+                b.name,
+                tol as f64 * 1e-6
+            ),
+        ));
+    }
+    let alone = |topic: &Topic, stamps: &[i64], i: usize| UnpairedImage {
+        topic: topic.name.clone(),
+        message: i,
+        stamp_ns: stamps[i],
+    };
+    let mut unpaired: Vec<UnpairedImage> = p
+        .left_alone
+        .iter()
+        .map(|&i| alone(a, sa, i))
+        .chain(p.right_alone.iter().map(|&i| alone(b, sb, i)))
+        .collect();
+    unpaired.sort_by_key(|u| u.stamp_ns);
+    let mut notes = Vec::new();
+    if !unpaired.is_empty() {
+        notes.push(format!(
+            "{} images without a partner within {:.3} ms, not used: {}",
+            unpaired.len(),
+            tol as f64 * 1e-6,
+            unpaired
+                .iter()
+                .map(ToString::to_string)
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+    }
+    if let Some(s) = bag.stopped() {
+        notes.push(s.to_owned());
+    }
+    Ok(Paired {
+        frames: p.pairs.iter().map(|&(l, r)| (l, r, sa[l])).collect(),
+        unpaired,
+        notes,
+    })
 }
 
 /// Pairs `left` and `right` stamps (nanoseconds) within `tolerance_ns`.
