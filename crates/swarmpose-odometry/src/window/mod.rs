@@ -89,7 +89,7 @@ pub struct WindowConfig {
     /// so that a change of the self-calibration does not rescale the window's keyframes
     /// and jump the online pose (default false: the window solves every measurement under
     /// the newest correction). It is not the default: the online steps follow the
-    /// smoothed ones within 0.4 % instead of 1.4 % on kitti_vo_seq2, but the drift and
+    /// smoothed ones within 0.5 % instead of 1.35 % on kitti_vo_seq2, but the drift and
     /// Karlsruhe's ATE grow (docs/self-calibration.md has every sequence).
     pub correction_per_track: bool,
 }
