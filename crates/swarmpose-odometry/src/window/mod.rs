@@ -85,7 +85,8 @@ pub struct WindowConfig {
     /// (default [`Marginalisation::Off`]: discarded; docs/window.md has the measurements).
     pub marginalise: Marginalisation,
     /// Each track keeps the disparity correction of the frame where it began, and a new
-    /// correction enters the window through new tracks only ([`calibration`]; issue 30),
+    /// correction enters the window through new tracks only (module `window::calibration`;
+    /// issue 30),
     /// so that a change of the self-calibration does not rescale the window's keyframes
     /// and jump the online pose (default false: the window solves every measurement under
     /// the newest correction). It is not the default: the online steps follow the
