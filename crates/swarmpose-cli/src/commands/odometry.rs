@@ -125,6 +125,12 @@ pub struct OdometryArgs {
               OdometryConfig::default().window.marginalise.name()))]
     pub marginalise: Option<Marginalisation>,
 
+    /// Each feature track keeps the disparity correction of the frame where it began: a
+    /// change of the self-calibration enters through new tracks only and does not jump
+    /// the online pose, at a cost in drift (docs/self-calibration.md).
+    #[arg(long)]
+    pub correction_per_track: bool,
+
     /// Fewest inliers for a motion to be accepted (at least 3).
     #[arg(long, value_name = "N", value_parser = min_inliers, allow_negative_numbers = true,
           help = with_default("Fewest inliers for a motion to be accepted (at least 3)",
@@ -318,6 +324,7 @@ pub fn run_config(args: &OdometryArgs) -> Result<RunConfig, CliError> {
     set(&mut o.min_working_pixels, args.min_working_pixels);
     o.seed = args.seed.unwrap_or(o.seed);
     o.window.marginalise = args.marginalise.unwrap_or(o.window.marginalise);
+    o.window.correction_per_track |= args.correction_per_track;
     let input = &mut rc.input;
     input.frame_period_s = args.frame_period.unwrap_or(input.frame_period_s);
     input.stamp_tolerance_ms = args.stamp_tolerance.unwrap_or(input.stamp_tolerance_ms);

@@ -4,8 +4,9 @@
 
 use swarmpose_vision::temporal::template::PatchTemplate;
 
+use super::calibration::corrected;
 use super::{Images, Link, Window};
-use crate::refine::model::StereoObservation;
+use crate::refine::model::{StereoModel, StereoObservation};
 
 /// Iterations of a template's (affine) alignment.
 const ALIGN_ITERATIONS: usize = 10;
@@ -26,11 +27,13 @@ fn at(z: &StereoObservation) -> (f32, f32) {
 
 impl Window {
     /// The track of each link's current feature and its measurement in the current
-    /// frame, into `observations` (one per track); the current frame's track of each
-    /// feature becomes the newest, and the tracks that did not go on lose their
-    /// templates.
+    /// frame, into `observations` (one per track); with a `correcting` model, its
+    /// disparity corrected by the track's correction (a track that begins here takes the
+    /// model's; [`super::calibration`]). The current frame's track of each feature becomes
+    /// the newest, and the tracks that did not go on lose their templates and corrections.
     pub(super) fn link_tracks(
         &mut self,
+        correcting: Option<&StereoModel>,
         links: &[Link],
         images: Option<Images<'_>>,
         observations: &mut Vec<(u32, StereoObservation)>,
@@ -48,10 +51,17 @@ impl Window {
             let (track, z) = match (self.newest_tracks.get(&l.reference_feature), images) {
                 (Some(&t), None) => (t, l.current_keypoint),
                 (Some(&t), Some(im)) => self.continue_track(t, l, im),
-                (None, _) => self.begin_track(l, images),
+                (None, _) => self.begin_track(correcting, l, images),
             };
             if used.insert(track) {
                 tracks.insert(l.current_feature, track);
+                let z = match correcting {
+                    Some(m) => {
+                        let c = *self.corrections.entry(track).or_insert(m.correction);
+                        corrected(m, &c, &z)
+                    }
+                    None => z,
+                };
                 observations.push((track, z));
             }
         }
@@ -59,6 +69,7 @@ impl Window {
         self.next_tracks = std::mem::replace(&mut self.newest_tracks, tracks);
         // `used` holds the tracks of the newest frame: the live ones.
         self.templates.retain(|t, _| used.contains(t));
+        self.corrections.retain(|t, _| used.contains(t));
         self.used = used;
     }
 
@@ -96,13 +107,26 @@ impl Window {
     }
 
     /// A new track begun by the link `l`: its measurement in the reference frame (the
-    /// window's newest) and, with images, the reference's patch as its template, the
-    /// pair's measurement then being its first in the current frame (the detected
-    /// keypoint otherwise).
-    fn begin_track(&mut self, l: &Link, images: Option<Images<'_>>) -> (u32, StereoObservation) {
+    /// window's newest; with a `correcting` model, corrected by its correction, which
+    /// becomes the track's) and, with images, the reference's patch as its template, the
+    /// pair's measurement then being its first in the current frame (the detected keypoint
+    /// otherwise).
+    fn begin_track(
+        &mut self,
+        correcting: Option<&StereoModel>,
+        l: &Link,
+        images: Option<Images<'_>>,
+    ) -> (u32, StereoObservation) {
         let t = self.new_track();
+        let z = match correcting {
+            Some(m) => {
+                self.corrections.insert(t, m.correction);
+                corrected(m, &m.correction, &l.reference)
+            }
+            None => l.reference,
+        };
         if let Some(r) = self.frames.back_mut() {
-            r.observations.push((t, l.reference));
+            r.observations.push((t, z));
         }
         match images.and_then(|im| PatchTemplate::sample(im.reference, at(&l.reference))) {
             Some(tpl) => {

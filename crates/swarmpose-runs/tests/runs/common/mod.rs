@@ -136,3 +136,54 @@ pub fn karlsruhe_errors_percent(dir: &std::path::Path, r: &Run) -> (f64, f64) {
         100.0 * (y[last] - t * x[last]).norm() / length,
     )
 }
+
+/// Issue 30's bar on an online step at a change of the calibration's model: 1 %.
+pub const CALIBRATION_STEP_BAR: f64 = 0.01;
+
+/// Per frame `k ≥ 1`: whether the correction model changed there (frame `k`'s differs from
+/// frame `k − 1`'s or frame `k + 1`'s, as `tools/variants/step_ratios.py` marks it), and
+/// the online step length `|t_k − t_{k−1}|` (positions of [`FrameResult::pose`], as given
+/// out) over the smoothed trajectory's step between the same two frames (each frame's last
+/// pose in the window, [`swarmpose_runs::output::Smoothed`]), minus one. Steps shorter than
+/// 1 % of the median online step are left out (their ratio says nothing).
+pub fn online_against_smoothed(r: &Run) -> Vec<(usize, bool, f64)> {
+    let mut smoothed = swarmpose_runs::output::Smoothed::default();
+    for f in &r.results {
+        smoothed.add(f);
+    }
+    let step = |p: &[Isometry3<f64>], k: usize| {
+        (p[k].translation.vector - p[k - 1].translation.vector).norm()
+    };
+    let online = r.poses();
+    let s = smoothed.poses();
+    let mut lengths: Vec<f64> = (1..online.len()).map(|k| step(&online, k)).collect();
+    lengths.sort_by(f64::total_cmp);
+    let floor = 0.01 * lengths.get(lengths.len() / 2).copied().unwrap_or(0.0);
+    let m: Vec<_> = r.results.iter().map(|f| f.correction_model).collect();
+    (1..online.len())
+        .filter(|&k| step(&online, k) > floor && step(s, k) > floor)
+        .map(|k| {
+            let changed = m[k] != m[k - 1] || m.get(k + 1).is_some_and(|n| *n != m[k]);
+            (k, changed, step(&online, k) / step(s, k) - 1.0)
+        })
+        .collect()
+}
+
+/// The worst `|online / smoothed − 1|` of [`online_against_smoothed`] at the frames where
+/// the model changed and at the others (0 when there is none), and how many changed.
+pub fn worst_steps(r: &Run) -> (f64, f64, usize) {
+    let rows = online_against_smoothed(r);
+    let worst = |changed: bool| {
+        rows.iter()
+            .filter(|x| x.1 == changed)
+            .fold(0.0, |w: f64, x| {
+                if x.2.is_nan() {
+                    f64::NAN
+                } else {
+                    w.max(x.2.abs())
+                }
+            })
+    };
+    let n = rows.iter().filter(|x| x.1).count();
+    (worst(true), worst(false), n)
+}
