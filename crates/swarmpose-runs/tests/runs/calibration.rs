@@ -272,11 +272,11 @@ fn a_converging_correction_moves_no_online_step_by_more_than_a_percent() {
     let run_with = |correction_per_track: bool| {
         let mut config = OdometryConfig::default();
         config.window.correction_per_track = correction_per_track;
-        let run = common::run_sequence(&seq, config);
+        let run = crate::common::run_sequence(&seq, config);
         let applied: Vec<f64> = run.results.iter().map(|r| r.correction.offset_px).collect();
-        let rows = common::online_against_smoothed(&run);
+        let rows = crate::common::online_against_smoothed(&run);
         let worst = rows.iter().fold(0.0, |w: f64, x| w.max(x.2.abs()));
-        let e = common::evaluate_poses(run.poses(), truth);
+        let e = crate::common::evaluate_poses(run.poses(), truth);
         eprintln!(
             "correction_per_track {correction_per_track}: offsets applied {applied:.3?}; \
              worst online / smoothed step {:.3} % over {} frames; drift {:.3} %",
@@ -300,13 +300,13 @@ fn a_converging_correction_moves_no_online_step_by_more_than_a_percent() {
     };
     let worst = run_with(true);
     assert!(
-        worst <= common::CALIBRATION_STEP_BAR,
+        worst <= crate::common::CALIBRATION_STEP_BAR,
         "an online step differs from the smoothed one by {:.2} %",
         100.0 * worst
     );
     let by_default = run_with(false);
     assert!(
-        by_default > common::CALIBRATION_STEP_BAR,
+        by_default > crate::common::CALIBRATION_STEP_BAR,
         "by default the worst step differs by {:.2} % only",
         100.0 * by_default
     );
