@@ -318,8 +318,15 @@ pub fn double(img: GrayView<'_>, tmp: &mut Vec<i32>, out: &mut Vec<u8>) -> (usiz
 }
 
 /// Separable binomial blur `[1 4 6 4 1] / 16` (σ ≈ 1 pixel), borders clamped. `out` is
-/// resized to the image; `tmp` is scratch space (reused between calls).
+/// resized to the image; `tmp` is scratch space (reused between calls). Compiled for the
+/// CPU's best instruction set ([`crate::simd`]).
 pub fn blur5(img: GrayView<'_>, tmp: &mut Vec<u16>, out: &mut Vec<u8>) {
+    crate::simd::dispatch(|| blur5_in(img, tmp, out));
+}
+
+/// [`blur5`], inlined into each instruction set's compilation.
+#[inline(always)]
+fn blur5_in(img: GrayView<'_>, tmp: &mut Vec<u16>, out: &mut Vec<u8>) {
     let (w, h) = (img.width, img.height);
     tmp.clear();
     tmp.resize(w * h, 0);

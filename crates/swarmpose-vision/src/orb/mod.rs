@@ -13,6 +13,7 @@ use std::sync::{Mutex, TryLockError};
 use crate::bucketing::{BucketConfig, BucketScratch, bucket_indices_into};
 use crate::features::{BinaryDescriptor, FeatureExtractor, Features, GrayView, Keypoint};
 use crate::image::blur5;
+use crate::simd;
 
 use brief::{PATTERN_RADIUS, RotatedPattern};
 use fast::{Corner, FastScratch, centroid_angle, disc_half_widths, fast9, harris};
@@ -126,9 +127,11 @@ impl OrbExtractor {
     /// Keypoints are at integer pixels, [`BORDER`] away from every edge.
     #[must_use]
     pub fn detect(&self, image: GrayView<'_>) -> Vec<Keypoint> {
-        self.buffers.with(|s| self.detect_in(image, s))
+        self.buffers
+            .with(|s| simd::dispatch(|| self.detect_in(image, s)))
     }
 
+    #[inline(always)]
     fn detect_in(&self, image: GrayView<'_>, s: &mut Scratch) -> Vec<Keypoint> {
         fast9(
             image,
@@ -184,11 +187,13 @@ impl OrbExtractor {
     /// any closer than [`BORDER`] to an edge get an all-zero descriptor.
     #[must_use]
     pub fn describe(&self, image: GrayView<'_>, keypoints: &[Keypoint]) -> Vec<BinaryDescriptor> {
-        self.buffers.with(|s| describe_in(image, keypoints, s))
+        self.buffers
+            .with(|s| simd::dispatch(|| describe_in(image, keypoints, s)))
     }
 }
 
 /// [`OrbExtractor::describe`] in the buffers `s`.
+#[inline(always)]
 fn describe_in(
     image: GrayView<'_>,
     keypoints: &[Keypoint],
