@@ -91,7 +91,25 @@ pub fn fast9(
     scratch: &mut FastScratch,
     out: &mut Vec<Corner>,
 ) {
-    simd::dispatch(|| fast9_in(img, threshold, border, scratch, out));
+    simd::dispatch(Fast9(img, threshold, border, scratch, out));
+}
+
+/// A call of [`fast9`] for [`simd::dispatch`].
+struct Fast9<'a>(
+    GrayView<'a>,
+    u8,
+    usize,
+    &'a mut FastScratch,
+    &'a mut Vec<Corner>,
+);
+
+impl simd::Kernel for Fast9<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn run(self) {
+        fast9_in(self.0, self.1, self.2, self.3, self.4);
+    }
 }
 
 /// [`fast9`], inlined into each instruction set's compilation.

@@ -128,7 +128,7 @@ impl OrbExtractor {
     #[must_use]
     pub fn detect(&self, image: GrayView<'_>) -> Vec<Keypoint> {
         self.buffers
-            .with(|s| simd::dispatch(|| self.detect_in(image, s)))
+            .with(|s| simd::dispatch(Detect(self, image, s)))
     }
 
     #[inline(always)]
@@ -188,7 +188,31 @@ impl OrbExtractor {
     #[must_use]
     pub fn describe(&self, image: GrayView<'_>, keypoints: &[Keypoint]) -> Vec<BinaryDescriptor> {
         self.buffers
-            .with(|s| simd::dispatch(|| describe_in(image, keypoints, s)))
+            .with(|s| simd::dispatch(Describe(image, keypoints, s)))
+    }
+}
+
+/// A call of [`OrbExtractor::detect`] for [`simd::dispatch`].
+struct Detect<'a>(&'a OrbExtractor, GrayView<'a>, &'a mut Scratch);
+
+impl simd::Kernel for Detect<'_> {
+    type Output = Vec<Keypoint>;
+
+    #[inline(always)]
+    fn run(self) -> Vec<Keypoint> {
+        self.0.detect_in(self.1, self.2)
+    }
+}
+
+/// A call of [`OrbExtractor::describe`] for [`simd::dispatch`].
+struct Describe<'a>(GrayView<'a>, &'a [Keypoint], &'a mut Scratch);
+
+impl simd::Kernel for Describe<'_> {
+    type Output = Vec<BinaryDescriptor>;
+
+    #[inline(always)]
+    fn run(self) -> Vec<BinaryDescriptor> {
+        describe_in(self.0, self.1, self.2)
     }
 }
 

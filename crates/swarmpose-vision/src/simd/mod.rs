@@ -14,15 +14,37 @@ thread_local! {
     static BASELINE: Cell<bool> = const { Cell::new(false) };
 }
 
-/// Runs `op` compiled for the best instruction set of this CPU, or for the target's
-/// baseline inside [`baseline`]. `op` and what it calls must be inlined (`#[inline]` or
-/// `#[inline(always)]`) to be compiled for the dispatched instruction set.
+/// A kernel call: its arguments, and [`Kernel::run`] calling the kernel. Every
+/// implementation marks `run` `#[inline(always)]`, and the kernel it calls too: that is
+/// what compiles them into each instruction set's copy (a closure would be compiled once,
+/// for the baseline, and called from every copy).
+pub trait Kernel {
+    /// What the kernel returns.
+    type Output;
+    /// Calls the kernel.
+    fn run(self) -> Self::Output;
+}
+
+/// A [`Kernel`] as pulp's unit of dispatch.
+struct Dispatched<K>(K);
+
+impl<K: Kernel> pulp::WithSimd for Dispatched<K> {
+    type Output = K::Output;
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _simd: S) -> K::Output {
+        self.0.run()
+    }
+}
+
+/// Runs `kernel` compiled for the best instruction set of this CPU, or for the target's
+/// baseline inside [`baseline`].
 #[inline(always)]
-pub fn dispatch<R>(op: impl FnOnce() -> R) -> R {
+pub fn dispatch<K: Kernel>(kernel: K) -> K::Output {
     if BASELINE.with(Cell::get) {
-        op()
+        kernel.run()
     } else {
-        pulp::Arch::new().dispatch(op)
+        pulp::Arch::new().dispatch(Dispatched(kernel))
     }
 }
 

@@ -183,7 +183,29 @@ pub fn match_stereo<D: Descriptor>(
     rig: &RectifiedStereo,
     config: &StereoConfig,
 ) -> Vec<StereoMatch> {
-    crate::simd::dispatch(|| match_stereo_in([left, right], [left_img, right_img], rig, config))
+    crate::simd::dispatch(MatchStereo(
+        [left, right],
+        [left_img, right_img],
+        rig,
+        config,
+    ))
+}
+
+/// A call of [`match_stereo`] for [`crate::simd::dispatch`].
+struct MatchStereo<'a, D>(
+    [&'a Features<D>; 2],
+    [GrayView<'a>; 2],
+    &'a RectifiedStereo,
+    &'a StereoConfig,
+);
+
+impl<D: Descriptor> crate::simd::Kernel for MatchStereo<'_, D> {
+    type Output = Vec<StereoMatch>;
+
+    #[inline(always)]
+    fn run(self) -> Vec<StereoMatch> {
+        match_stereo_in(self.0, self.1, self.2, self.3)
+    }
 }
 
 /// [`match_stereo`] on the (left, right) features and images, inlined into each

@@ -80,7 +80,25 @@ fn nearest_both<D: Descriptor>(
     b: &[D],
     window: Option<f32>,
 ) -> (Vec<Option<Best>>, Vec<Option<Best>>) {
-    crate::simd::dispatch(|| nearest_both_in(a_kps, a, b_kps, b, window))
+    crate::simd::dispatch(NearestBoth(a_kps, a, b_kps, b, window))
+}
+
+/// A call of [`nearest_both`] for [`crate::simd::dispatch`].
+struct NearestBoth<'a, D>(
+    &'a [Keypoint],
+    &'a [D],
+    &'a [Keypoint],
+    &'a [D],
+    Option<f32>,
+);
+
+impl<D: Descriptor> crate::simd::Kernel for NearestBoth<'_, D> {
+    type Output = (Vec<Option<Best>>, Vec<Option<Best>>);
+
+    #[inline(always)]
+    fn run(self) -> Self::Output {
+        nearest_both_in(self.0, self.1, self.2, self.3, self.4)
+    }
 }
 
 /// [`nearest_both`], inlined into each instruction set's compilation.
