@@ -100,8 +100,9 @@ proptest! {
         let rig = RectifiedStereo { fx: 100.0, fy: 100.0, cx: w as f64 / 2.0, cy: h as f64 / 2.0, baseline_m: 0.5 };
         let config = StereoConfig { min_point_disparity_px: 0.0, ..StereoConfig::default() };
         let stereo = || match_stereo(&fl, &fr, view(&left, w), view(&right, w), &rig, &config);
-        let found = stereo();
-        prop_assert_eq!(&found, &baseline(stereo));
+        // Compared as printed (Rust prints a float exactly): the unmeasured row offsets are
+        // NaN, which `==` never equals.
+        prop_assert_eq!(format!("{:?}", stereo()), format!("{:?}", baseline(stereo)));
         let temporal = || mutual_matches(&fl.keypoints, &fl.descriptors, &fr.keypoints, &fr.descriptors, &TemporalConfig::default());
         prop_assert_eq!(temporal(), baseline(temporal));
     }
