@@ -17,6 +17,7 @@
 //! | [`rectify`] | radial-tangential undistortion and stereo rectification maps, remap |
 //! | [`render`] | a tiny renderer of textured planes (tests without data) |
 //! | [`draw`] | match drawings (the paper's figure 9) |
+//! | [`simd`] | runtime dispatch of the vector kernels (AVX2/POPCNT where the CPU has them) |
 #![deny(missing_docs)]
 #![forbid(unsafe_code)]
 #![warn(clippy::unwrap_used)]
@@ -29,6 +30,7 @@ pub mod image;
 pub mod orb;
 pub mod rectify;
 pub mod render;
+pub mod simd;
 pub mod stereo;
 pub mod surf;
 pub mod temporal;

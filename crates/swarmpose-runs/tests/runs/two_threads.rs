@@ -140,3 +140,36 @@ fn a_bad_frame_stops_the_stream_and_is_named() {
     assert!(e.to_string().starts_with("frame 6: "), "{e}");
     assert!(matches!(e, RunError::AtFrame { index: 6, .. }), "{e}");
 }
+
+/// The vector kernels ([`swarmpose_vision::simd`]) compiled for the target's baseline
+/// (the scalar fallback: SSE2 on x86_64) give the trajectory of their dispatched
+/// compilation (AVX2 and POPCNT where the CPU has them), frame by frame, with the same
+/// feature, stereo and match counts, on every shared sequence.
+#[test]
+fn baseline_kernels_give_the_dispatched_trajectory() {
+    let mut sequences: Vec<(String, Box<dyn StereoSequence>)> =
+        vec![("synthetic".into(), Box::new(SyntheticSequence::default()))];
+    for name in [
+        "kitti_vo_seq2",
+        "karlsruhe_2010_03_09_drive_0023",
+        "euroc_v1_01_easy_micro",
+    ] {
+        if let Some(dir) = common::dataset(name) {
+            sequences.push((name.into(), open(&dir).expect("open")));
+        }
+    }
+    for (name, seq) in &sequences {
+        let frames = 12;
+        let (fast, _) = results(seq.as_ref(), run_sequence, frames);
+        let (scalar, _) =
+            swarmpose_vision::simd::baseline(|| results(seq.as_ref(), run_sequence, frames));
+        assert_eq!(fast.len(), frames.min(seq.len()), "{name}");
+        assert_same(&fast, &scalar);
+        let features: usize = fast.iter().map(|r| r.counts.left_features).sum();
+        assert!(features > 0, "{name}: no features");
+        eprintln!(
+            "{name}: {} frames ({features} left features), identical with the baseline kernels",
+            fast.len()
+        );
+    }
+}

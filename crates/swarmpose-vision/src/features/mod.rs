@@ -35,7 +35,7 @@ pub trait Descriptor: Clone + Send + Sync + 'static {
 pub struct BinaryDescriptor(pub [u8; 32]);
 
 impl Descriptor for BinaryDescriptor {
-    #[inline]
+    #[inline(always)]
     fn distance(&self, other: &Self) -> f32 {
         // Four 64-bit words: one popcount each.
         let mut n = 0u32;

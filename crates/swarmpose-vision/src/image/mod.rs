@@ -318,8 +318,27 @@ pub fn double(img: GrayView<'_>, tmp: &mut Vec<i32>, out: &mut Vec<u8>) -> (usiz
 }
 
 /// Separable binomial blur `[1 4 6 4 1] / 16` (σ ≈ 1 pixel), borders clamped. `out` is
-/// resized to the image; `tmp` is scratch space (reused between calls).
+/// resized to the image; `tmp` is scratch space (reused between calls). Compiled for the
+/// CPU's best instruction set ([`crate::simd`]).
 pub fn blur5(img: GrayView<'_>, tmp: &mut Vec<u16>, out: &mut Vec<u8>) {
+    crate::simd::dispatch(Blur5(img, tmp, out));
+}
+
+/// A call of [`blur5`] for [`crate::simd::dispatch`].
+struct Blur5<'a>(GrayView<'a>, &'a mut Vec<u16>, &'a mut Vec<u8>);
+
+impl crate::simd::Kernel for Blur5<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn run(self) {
+        blur5_in(self.0, self.1, self.2);
+    }
+}
+
+/// [`blur5`], inlined into each instruction set's compilation.
+#[inline(always)]
+fn blur5_in(img: GrayView<'_>, tmp: &mut Vec<u16>, out: &mut Vec<u8>) {
     let (w, h) = (img.width, img.height);
     tmp.clear();
     tmp.resize(w * h, 0);

@@ -101,6 +101,7 @@ impl RotatedPattern {
     /// image `smooth`; bit `k` is set when test point 1 is darker than test point 2. The
     /// caller keeps `(x, y)` at least `PATTERN_RADIUS + 1` pixels from every edge.
     #[must_use]
+    #[inline]
     pub fn describe(
         &self,
         smooth: GrayView<'_>,

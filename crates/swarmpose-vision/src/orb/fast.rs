@@ -2,6 +2,7 @@
 //! Harris response and intensity-centroid orientation used to rank and orient them.
 
 use crate::features::GrayView;
+use crate::simd;
 
 /// The 16 pixels of the Bresenham circle of radius 3, clockwise from the top.
 const CIRCLE: [(isize, isize); 16] = [
@@ -35,7 +36,7 @@ pub struct Corner {
 }
 
 /// True when `mask` (16 bits, circular) has a run of at least 9 set bits.
-#[inline]
+#[inline(always)]
 fn has_run9(mask: u32) -> bool {
     let m = mask | (mask << 16);
     let mut r = m;
@@ -81,8 +82,39 @@ pub struct FastScratch {
 
 /// FAST-9 corners at least `border` pixels (and at least 3) from every edge, after a
 /// 3x3 non-maximum suppression on the score. `scratch` is reused between calls; `out` is
-/// cleared and receives the corners in raster order.
+/// cleared and receives the corners in raster order. Compiled for the CPU's best
+/// instruction set ([`crate::simd`]).
 pub fn fast9(
+    img: GrayView<'_>,
+    threshold: u8,
+    border: usize,
+    scratch: &mut FastScratch,
+    out: &mut Vec<Corner>,
+) {
+    simd::dispatch(Fast9(img, threshold, border, scratch, out));
+}
+
+/// A call of [`fast9`] for [`simd::dispatch`].
+struct Fast9<'a>(
+    GrayView<'a>,
+    u8,
+    usize,
+    &'a mut FastScratch,
+    &'a mut Vec<Corner>,
+);
+
+impl simd::Kernel for Fast9<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn run(self) {
+        fast9_in(self.0, self.1, self.2, self.3, self.4);
+    }
+}
+
+/// [`fast9`], inlined into each instruction set's compilation.
+#[inline(always)]
+fn fast9_in(
     img: GrayView<'_>,
     threshold: u8,
     border: usize,
@@ -183,6 +215,7 @@ pub fn fast9(
 /// a 7x7 window at `(x, y)`, with central-difference gradients (intensity units / 255).
 /// The caller keeps the window and its gradients inside the image (4 pixels).
 #[must_use]
+#[inline]
 pub fn harris(img: GrayView<'_>, x: usize, y: usize) -> f32 {
     let w = img.width;
     let d = img.data;
@@ -220,6 +253,7 @@ pub fn disc_half_widths(r: usize) -> Vec<usize> {
 /// `(x, y)`: `atan2(m01, m10)` radians, image axes (x right, y down). The caller keeps
 /// the disc inside the image.
 #[must_use]
+#[inline]
 pub fn centroid_angle(img: GrayView<'_>, x: usize, y: usize, u_max: &[usize]) -> f32 {
     let w = img.width as isize;
     let d = img.data;

@@ -13,6 +13,7 @@ use std::sync::{Mutex, TryLockError};
 use crate::bucketing::{BucketConfig, BucketScratch, bucket_indices_into};
 use crate::features::{BinaryDescriptor, FeatureExtractor, Features, GrayView, Keypoint};
 use crate::image::blur5;
+use crate::simd;
 
 use brief::{PATTERN_RADIUS, RotatedPattern};
 use fast::{Corner, FastScratch, centroid_angle, disc_half_widths, fast9, harris};
@@ -126,9 +127,11 @@ impl OrbExtractor {
     /// Keypoints are at integer pixels, [`BORDER`] away from every edge.
     #[must_use]
     pub fn detect(&self, image: GrayView<'_>) -> Vec<Keypoint> {
-        self.buffers.with(|s| self.detect_in(image, s))
+        self.buffers
+            .with(|s| simd::dispatch(Detect(self, image, s)))
     }
 
+    #[inline(always)]
     fn detect_in(&self, image: GrayView<'_>, s: &mut Scratch) -> Vec<Keypoint> {
         fast9(
             image,
@@ -184,11 +187,37 @@ impl OrbExtractor {
     /// any closer than [`BORDER`] to an edge get an all-zero descriptor.
     #[must_use]
     pub fn describe(&self, image: GrayView<'_>, keypoints: &[Keypoint]) -> Vec<BinaryDescriptor> {
-        self.buffers.with(|s| describe_in(image, keypoints, s))
+        self.buffers
+            .with(|s| simd::dispatch(Describe(image, keypoints, s)))
+    }
+}
+
+/// A call of [`OrbExtractor::detect`] for [`simd::dispatch`].
+struct Detect<'a>(&'a OrbExtractor, GrayView<'a>, &'a mut Scratch);
+
+impl simd::Kernel for Detect<'_> {
+    type Output = Vec<Keypoint>;
+
+    #[inline(always)]
+    fn run(self) -> Vec<Keypoint> {
+        self.0.detect_in(self.1, self.2)
+    }
+}
+
+/// A call of [`OrbExtractor::describe`] for [`simd::dispatch`].
+struct Describe<'a>(GrayView<'a>, &'a [Keypoint], &'a mut Scratch);
+
+impl simd::Kernel for Describe<'_> {
+    type Output = Vec<BinaryDescriptor>;
+
+    #[inline(always)]
+    fn run(self) -> Vec<BinaryDescriptor> {
+        describe_in(self.0, self.1, self.2)
     }
 }
 
 /// [`OrbExtractor::describe`] in the buffers `s`.
+#[inline(always)]
 fn describe_in(
     image: GrayView<'_>,
     keypoints: &[Keypoint],

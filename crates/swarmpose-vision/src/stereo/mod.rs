@@ -148,6 +148,7 @@ impl RowIndex {
 
 /// Best candidate of `query` among `cands` (indices into `kps`/`descs`) allowed by
 /// `ok(query keypoint, candidate keypoint)`: `(index, best, second best)` distances.
+#[inline(always)]
 fn best_two<D: Descriptor>(
     q: &D,
     cands: &[usize],
@@ -171,13 +172,48 @@ fn best_two<D: Descriptor>(
 
 /// Matches left to right features of a rectified pair and triangulates the matches.
 /// `left_img`/`right_img` are the images the features come from (for the sub-pixel
-/// refinement). Matches are in ascending order of the left index.
+/// refinement). Matches are in ascending order of the left index. Compiled for the CPU's
+/// best instruction set ([`crate::simd`]: the descriptor distances are population counts).
 #[must_use]
 pub fn match_stereo<D: Descriptor>(
     left: &Features<D>,
     right: &Features<D>,
     left_img: GrayView<'_>,
     right_img: GrayView<'_>,
+    rig: &RectifiedStereo,
+    config: &StereoConfig,
+) -> Vec<StereoMatch> {
+    crate::simd::dispatch(MatchStereo(
+        [left, right],
+        [left_img, right_img],
+        rig,
+        config,
+    ))
+}
+
+/// A call of [`match_stereo`] for [`crate::simd::dispatch`].
+struct MatchStereo<'a, D>(
+    [&'a Features<D>; 2],
+    [GrayView<'a>; 2],
+    &'a RectifiedStereo,
+    &'a StereoConfig,
+);
+
+impl<D: Descriptor> crate::simd::Kernel for MatchStereo<'_, D> {
+    type Output = Vec<StereoMatch>;
+
+    #[inline(always)]
+    fn run(self) -> Vec<StereoMatch> {
+        match_stereo_in(self.0, self.1, self.2, self.3)
+    }
+}
+
+/// [`match_stereo`] on the (left, right) features and images, inlined into each
+/// instruction set's compilation.
+#[inline(always)]
+fn match_stereo_in<D: Descriptor>(
+    [left, right]: [&Features<D>; 2],
+    [left_img, right_img]: [GrayView<'_>; 2],
     rig: &RectifiedStereo,
     config: &StereoConfig,
 ) -> Vec<StereoMatch> {

@@ -57,7 +57,7 @@ fn by_column(kps: &[Keypoint]) -> (Vec<usize>, Vec<f32>) {
 }
 
 /// `(index, distance)` offered to a best-two search: the first of equal distances wins.
-#[inline]
+#[inline(always)]
 fn offer(best: &mut Best, j: usize, d: f32) {
     if d < best.1 {
         *best = (j, d, best.1);
@@ -71,8 +71,39 @@ fn offer(best: &mut Best, j: usize, d: f32) {
 /// other whose column (found through a sorted index) and row are within the window of
 /// its own. Each distance is computed once for both directions; each item sees its
 /// candidates in the order of the other set's column index, as a search of one direction
-/// at a time would.
+/// at a time would. Compiled for the CPU's best instruction set ([`crate::simd`]: the
+/// descriptor distances are population counts).
 fn nearest_both<D: Descriptor>(
+    a_kps: &[Keypoint],
+    a: &[D],
+    b_kps: &[Keypoint],
+    b: &[D],
+    window: Option<f32>,
+) -> (Vec<Option<Best>>, Vec<Option<Best>>) {
+    crate::simd::dispatch(NearestBoth(a_kps, a, b_kps, b, window))
+}
+
+/// A call of [`nearest_both`] for [`crate::simd::dispatch`].
+struct NearestBoth<'a, D>(
+    &'a [Keypoint],
+    &'a [D],
+    &'a [Keypoint],
+    &'a [D],
+    Option<f32>,
+);
+
+impl<D: Descriptor> crate::simd::Kernel for NearestBoth<'_, D> {
+    type Output = (Vec<Option<Best>>, Vec<Option<Best>>);
+
+    #[inline(always)]
+    fn run(self) -> Self::Output {
+        nearest_both_in(self.0, self.1, self.2, self.3, self.4)
+    }
+}
+
+/// [`nearest_both`], inlined into each instruction set's compilation.
+#[inline(always)]
+fn nearest_both_in<D: Descriptor>(
     a_kps: &[Keypoint],
     a: &[D],
     b_kps: &[Keypoint],
