@@ -154,7 +154,7 @@ fn baseline_kernels_give_the_dispatched_trajectory() {
         "karlsruhe_2010_03_09_drive_0023",
         "euroc_v1_01_easy_micro",
     ] {
-        if let Some(dir) = common::dataset(name) {
+        if let Some(dir) = crate::common::dataset(name) {
             sequences.push((name.into(), open(&dir).expect("open")));
         }
     }
