@@ -6,7 +6,6 @@
 //! binary with the workspace's features, which the Cyclone DDS pytest
 //! (`tests/py`, `SWARMPOSE_BIN_DIR`) then uses without a build of its own (issue 32).
 
-use std::path::PathBuf;
 use std::process::{Command, Output};
 
 fn node(args: &[&str], env: &[(&str, &str)]) -> Output {
@@ -33,15 +32,12 @@ fn refused(out: &Output, words: &str) {
     assert!(out.stdout.is_empty(), "nothing on standard output");
 }
 
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!(
-        "swarmpose-ros2-command-line-{}-{name}",
-        std::process::id()
-    ));
-    if let Err(e) = std::fs::create_dir_all(&dir) {
-        panic!("cannot create {}: {e}", dir.display());
+/// A temporary folder, removed when dropped (also when a test fails).
+fn scratch() -> tempfile::TempDir {
+    match tempfile::tempdir() {
+        Ok(dir) => dir,
+        Err(e) => panic!("cannot create a temporary folder: {e}"),
     }
-    dir
 }
 
 #[test]
@@ -54,23 +50,21 @@ fn a_domain_outside_dds_range_is_refused() {
 
 #[test]
 fn a_missing_configuration_file_is_refused() {
-    let dir = scratch("missing");
-    let path = dir.join("no-such-config.json");
+    let dir = scratch();
+    let path = dir.path().join("no-such-config.json");
     let out = node(&["--config", &path.to_string_lossy()], &[]);
     refused(&out, "no-such-config.json");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn a_corrupt_configuration_file_is_refused() {
-    let dir = scratch("corrupt");
-    let path = dir.join("config.json");
+    let dir = scratch();
+    let path = dir.path().join("config.json");
     if let Err(e) = std::fs::write(&path, "{\"odometry\": {\"window\": ") {
         panic!("cannot write {}: {e}", path.display());
     }
     let out = node(&["--config", &path.to_string_lossy()], &[]);
     refused(&out, "config.json");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
