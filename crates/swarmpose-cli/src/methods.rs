@@ -5,9 +5,12 @@
 //! Defaults shown in `--help` are read from the core's `Default` configurations, so
 //! they cannot drift from what runs.
 
+use std::ffi::OsStr;
 use std::fmt::Display;
 
-use clap::{Args, ValueEnum};
+use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+use clap::{Arg, Args, Command};
+pub use swarmpose_core::Method;
 use swarmpose_core::estimators::MAX_SAMPLES;
 use swarmpose_core::pso::{MAX_ITERATIONS, MAX_SWARM_SIZE, PsoConfig};
 use swarmpose_core::{
@@ -16,48 +19,29 @@ use swarmpose_core::{
 
 use crate::error::CliError;
 
-/// An estimator by its command-line name.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum Method {
-    /// Robust PSO over unit quaternions on translation-free pairs, then SVD refinement.
-    Pso,
-    /// The paper's PSO/SVD, literally (all-point centroids); fragile with outliers.
-    PsoPaper,
-    /// Arun's SVD least squares on all points, no outlier rejection.
-    Svd,
-    /// MSAC with 3-point samples and a final SVD refit.
-    Msac,
-    /// Weighted least squares on all points (Mahalanobis with covariances), no outlier
-    /// rejection.
-    Wls,
-}
+/// `--method NAME`: an estimator of the core's registry ([`Method::ALL`], the one list
+/// of names) by its command-line name, each with its [`Method::summary`] in `--help`.
+#[derive(Debug, Clone, Copy)]
+pub struct MethodParser;
 
-impl Method {
-    /// The core's registry entry ([`swarmpose_core::Method`], the one list of names).
-    pub fn core(self) -> swarmpose_core::Method {
-        match self {
-            Method::Pso => swarmpose_core::Method::Pso,
-            Method::PsoPaper => swarmpose_core::Method::PsoPaper,
-            Method::Svd => swarmpose_core::Method::Svd,
-            Method::Msac => swarmpose_core::Method::Msac,
-            Method::Wls => swarmpose_core::Method::Wls,
-        }
+impl TypedValueParser for MethodParser {
+    type Value = Method;
+
+    fn parse_ref(
+        &self,
+        cmd: &Command,
+        arg: Option<&Arg>,
+        value: &OsStr,
+    ) -> Result<Method, clap::Error> {
+        let names = PossibleValuesParser::new(Method::ALL.map(|m| m.name()));
+        let name = names.parse_ref(cmd, arg, value)?;
+        Method::from_name(&name)
+            .ok_or_else(|| clap::Error::new(clap::error::ErrorKind::InvalidValue))
     }
 
-    /// The command-line method of a registry entry.
-    pub fn of(core: swarmpose_core::Method) -> Self {
-        match core {
-            swarmpose_core::Method::Pso => Method::Pso,
-            swarmpose_core::Method::PsoPaper => Method::PsoPaper,
-            swarmpose_core::Method::Svd => Method::Svd,
-            swarmpose_core::Method::Msac => Method::Msac,
-            swarmpose_core::Method::Wls => Method::Wls,
-        }
-    }
-
-    /// The command-line name, equal to the estimator's [`Estimator::name`].
-    pub fn name(self) -> &'static str {
-        self.core().name()
+    fn possible_values(&self) -> Option<Box<dyn Iterator<Item = PossibleValue> + '_>> {
+        let values = Method::ALL.map(|m| PossibleValue::new(m.name()).help(m.summary()));
+        Some(Box::new(values.into_iter()))
     }
 }
 
@@ -300,7 +284,7 @@ fn reject(method: Method, options: &[&'static str]) -> Result<(), CliError> {
 /// # Errors
 /// A usage error when an option given does not apply to `method`.
 pub fn build(method: Method, options: &EstimatorOptions) -> Result<Box<dyn Estimator>, CliError> {
-    Ok(configure(EstimatorConfig::of(method.core()), options)?.build())
+    Ok(configure(EstimatorConfig::of(method), options)?.build())
 }
 
 /// The settings of `base`'s estimator with `options` applied over them (a run
@@ -314,7 +298,7 @@ pub fn configure(
 ) -> Result<EstimatorConfig, CliError> {
     let pso = options.pso_given();
     let msac = options.msac_given();
-    let method = Method::of(base.method());
+    let method = base.method();
     Ok(match base {
         EstimatorConfig::Pso(mut config) => {
             reject(method, &msac)?;
@@ -357,17 +341,23 @@ mod tests {
 
     #[test]
     fn names_match_the_estimators() {
-        // One list: every registry entry is a --method value and the other way round.
-        assert_eq!(
-            Method::value_variants().len(),
-            swarmpose_core::Method::ALL.len()
-        );
-        for &m in Method::value_variants() {
+        // Every registry entry is a --method value, parsed back to itself, and names its
+        // estimator.
+        let cmd = Command::new("t");
+        let values: Vec<PossibleValue> = MethodParser.possible_values().expect("listed").collect();
+        assert_eq!(values.len(), Method::ALL.len());
+        for (m, value) in Method::ALL.into_iter().zip(&values) {
             let e = build(m, &EstimatorOptions::default()).expect("defaults build");
             assert_eq!(e.name(), m.name());
-            let parsed = Method::from_str(m.name(), false).expect("value name");
-            assert_eq!(parsed, m);
+            assert_eq!(value.get_name(), m.name());
+            let parsed = MethodParser.parse_ref(&cmd, None, OsStr::new(m.name()));
+            assert_eq!(parsed.expect("value name"), m);
         }
+        assert!(
+            MethodParser
+                .parse_ref(&cmd, None, OsStr::new("ransac"))
+                .is_err()
+        );
     }
 
     #[test]

@@ -14,7 +14,7 @@ use rand_distr::{Distribution, Normal, StandardNormal};
 
 use crate::error::PoseError;
 use crate::geometry::Correspondences;
-use crate::rng::seeded;
+use crate::rng::{SeededRng, seeded};
 
 /// What to generate. Defaults in brackets.
 #[derive(Debug, Clone, PartialEq)]
@@ -60,7 +60,8 @@ pub struct SyntheticScenario {
     pub inlier: Vec<bool>,
 }
 
-fn uniform_unit(rng: &mut crate::rng::SeededRng) -> Unit<Vector3<f64>> {
+/// A uniformly distributed unit vector (a normalised standard normal draw).
+pub fn random_unit(rng: &mut SeededRng) -> Unit<Vector3<f64>> {
     loop {
         let v = Vector3::new(
             StandardNormal.sample(rng),
@@ -71,6 +72,19 @@ fn uniform_unit(rng: &mut crate::rng::SeededRng) -> Unit<Vector3<f64>> {
             return Unit::new_normalize(v);
         }
     }
+}
+
+/// A motion rotating by `angle_rad` about a uniform random axis, then translating along a
+/// uniform random direction by a uniform length in `[0, max_translation_m]` metres (drawn
+/// in that order).
+pub fn random_motion(
+    rng: &mut SeededRng,
+    angle_rad: f64,
+    max_translation_m: f64,
+) -> Isometry3<f64> {
+    let rotation = UnitQuaternion::from_axis_angle(&random_unit(rng), angle_rad);
+    let t = random_unit(rng).into_inner() * rng.random_range(0.0..=max_translation_m);
+    Isometry3::from_parts(Translation3::from(t), rotation)
 }
 
 impl SyntheticSpec {
@@ -95,10 +109,7 @@ impl SyntheticSpec {
         }
         let mut rng = seeded(seed);
         let angle = rng.random_range(0.0..=self.max_rotation_rad.max(0.0));
-        let rotation = UnitQuaternion::from_axis_angle(&uniform_unit(&mut rng), angle);
-        let t = uniform_unit(&mut rng).into_inner()
-            * rng.random_range(0.0..=self.max_translation_m.max(0.0));
-        let truth = Isometry3::from_parts(Translation3::from(t), rotation);
+        let truth = random_motion(&mut rng, angle, self.max_translation_m.max(0.0));
         let noise = Normal::new(0.0, self.noise_sigma_m)
             .map_err(|e| PoseError::InvalidConfig(e.to_string()))?;
         let box_point = |rng: &mut crate::rng::SeededRng| {

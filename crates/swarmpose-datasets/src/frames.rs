@@ -6,6 +6,9 @@ use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
 use crate::error::DatasetError;
+use crate::projection::Calibration;
+use crate::text::check_plausible;
+use crate::{RectifiedStereo, first_image};
 
 /// One frame of a camera: its number (or timestamp) and its image.
 pub(crate) type Listed = (i64, PathBuf);
@@ -147,5 +150,57 @@ mod tests {
         assert_eq!(frame_number("000003_copy.png", ""), None);
         assert_eq!(frame_number(".png", ""), None);
         assert_eq!(frame_number("x.png", ""), None);
+    }
+}
+
+/// A sequence of numbered left and right image files and a calibration file: what the
+/// KITTI and Karlsruhe layouts share.
+#[derive(Debug, Clone)]
+pub(crate) struct ListedPairs {
+    /// The sequence directory.
+    pub(crate) root: PathBuf,
+    /// The left and right images of each frame, in frame order.
+    pub(crate) left: Vec<PathBuf>,
+    pub(crate) right: Vec<PathBuf>,
+    /// The rectified stereo model of the calibration file.
+    pub(crate) rig: RectifiedStereo,
+    /// Width and height of the first left image, pixels.
+    pub(crate) size: (usize, usize),
+    /// Warnings about the calibration and the first image.
+    pub(crate) notes: Vec<String>,
+}
+
+impl ListedPairs {
+    /// The sequence at `root` of the images `(folder, name prefix)` numbered alike
+    /// ([`list_numbered`], [`check_pairs`]), with the rig of the file `calibration` read
+    /// by `read_calibration`, checked against the first left image's size.
+    ///
+    /// # Errors
+    /// No images or unmatched numbers, a missing or malformed calibration, an unreadable
+    /// first image, or a rig implausible for its size.
+    pub(crate) fn open(
+        root: &Path,
+        (left_dir, left_prefix): (&Path, &str),
+        (right_dir, right_prefix): (&Path, &str),
+        calibration: &Path,
+        read_calibration: fn(&Path) -> Result<Calibration, DatasetError>,
+    ) -> Result<Self, DatasetError> {
+        let left = list_numbered(left_dir, left_prefix)?;
+        let right = list_numbered(right_dir, right_prefix)?;
+        check_pairs(root, &left, left_dir, &right, right_dir)?;
+        let left: Vec<PathBuf> = left.into_iter().map(|x| x.1).collect();
+        let right: Vec<PathBuf> = right.into_iter().map(|x| x.1).collect();
+        let (rig, note) = read_calibration(calibration)?;
+        let (size, mut notes) = first_image(&left[0])?;
+        check_plausible(calibration, &rig, size)?;
+        notes.extend(note);
+        Ok(Self {
+            root: root.to_owned(),
+            left,
+            right,
+            rig,
+            size,
+            notes,
+        })
     }
 }

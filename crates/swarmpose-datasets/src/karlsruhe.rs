@@ -11,10 +11,10 @@ use std::path::{Path, PathBuf};
 use nalgebra::Isometry3;
 
 use crate::error::DatasetError;
-use crate::frames::{check_pairs, list_numbered};
-use crate::projection::{Row, rectified_pair};
-use crate::text::{KeyLines, check_plausible, numbers, parse_error, read_text, strip_bom};
-use crate::{RectifiedStereo, StereoPair, StereoSequence, first_image, load_listed_pair};
+use crate::frames::ListedPairs;
+use crate::projection::{Calibration, Row, projection_numbers, rectified_pair};
+use crate::text::{KeyLines, numbers, parse_error, read_text, rows_per_frame, strip_bom};
+use crate::{RectifiedStereo, StereoPair, StereoSequence};
 
 fn is_left(name: &str) -> bool {
     name.starts_with("I1_") && crate::text::is_png(name)
@@ -51,19 +51,16 @@ pub fn detect(dir: &Path) -> bool {
 ///
 /// # Errors
 /// [`DatasetError::Parse`] naming the file and line.
-pub fn read_calibration(path: &Path) -> Result<(RectifiedStereo, Option<String>), DatasetError> {
-    let text = read_text(path, "Karlsruhe calibration calib.txt")?;
-    parse_calibration(&text, path)
+pub fn read_calibration(path: &Path) -> Result<Calibration, DatasetError> {
+    read_text(path, "Karlsruhe calibration calib.txt")
+        .and_then(|text| parse_calibration(&text, path))
 }
 
 /// [`read_calibration`] of text already read; messages name `path`.
 ///
 /// # Errors
 /// As [`read_calibration`].
-pub fn parse_calibration(
-    text: &str,
-    path: &Path,
-) -> Result<(RectifiedStereo, Option<String>), DatasetError> {
+pub fn parse_calibration(text: &str, path: &Path) -> Result<Calibration, DatasetError> {
     let (mut p1, mut p2) = (None, None);
     let mut keys = KeyLines::default();
     for (k, line) in strip_bom(text).lines().enumerate() {
@@ -76,17 +73,7 @@ pub fn parse_calibration(
             "P2_roi" => &mut p2,
             _ => continue,
         };
-        let v = numbers(rest, path, k + 1)?;
-        if v.len() != 12 {
-            return Err(parse_error(
-                path,
-                k + 1,
-                format!(
-                    "a 3x4 projection matrix needs 12 numbers, found {}",
-                    v.len()
-                ),
-            ));
-        }
+        let v = projection_numbers(rest, path, k + 1)?;
         *slot = Some((v, k + 1));
     }
     let (Some((p1, l1)), Some((p2, l2))) = (p1, p2) else {
@@ -130,12 +117,7 @@ pub fn read_ins_positions(path: &Path) -> Result<Vec<(u64, [f64; 3])>, DatasetEr
 #[derive(Debug, Clone)]
 pub struct KarlsruheSequence {
     images: PathBuf,
-    root: PathBuf,
-    left: Vec<PathBuf>,
-    right: Vec<PathBuf>,
-    rig: RectifiedStereo,
-    size: (usize, usize),
-    notes: Vec<String>,
+    pairs: ListedPairs,
 }
 
 impl KarlsruheSequence {
@@ -149,29 +131,14 @@ impl KarlsruheSequence {
             path: dir.join("I1_000000.png"),
             what: "Karlsruhe left images I1_*.png",
         })?;
-        let left = list_numbered(&images, "I1_")?;
-        let right = list_numbered(&images, "I2_")?;
-        check_pairs(dir, &left, &images, &right, &images)?;
-        let left: Vec<PathBuf> = left.into_iter().map(|x| x.1).collect();
-        let right: Vec<PathBuf> = right.into_iter().map(|x| x.1).collect();
-        let calib = [dir.join("calib.txt"), images.join("calib.txt")]
+        let calibration = [dir.join("calib.txt"), images.join("calib.txt")]
             .into_iter()
             .chain(dir.parent().map(|p| p.join("calib.txt")))
             .find(|p| p.is_file())
             .unwrap_or_else(|| dir.join("calib.txt"));
-        let (rig, note) = read_calibration(&calib)?;
-        let (size, mut notes) = first_image(&left[0])?;
-        check_plausible(&calib, &rig, size)?;
-        notes.extend(note);
-        Ok(Self {
-            images,
-            root: dir.to_owned(),
-            left,
-            right,
-            rig,
-            size,
-            notes,
-        })
+        let (left, right) = ((images.as_path(), "I1_"), (images.as_path(), "I2_"));
+        let pairs = ListedPairs::open(dir, left, right, &calibration, read_calibration)?;
+        Ok(Self { images, pairs })
     }
 }
 
@@ -184,49 +151,13 @@ impl KarlsruheSequence {
     /// A malformed line, or a line count that differs from the frame count.
     pub fn ins_positions(&self) -> Result<Option<Vec<[f64; 3]>>, DatasetError> {
         let path = self.images.join("insdata.txt");
-        if !path.is_file() {
-            return Ok(None);
-        }
-        let rows = read_ins_positions(&path)?;
-        if rows.len() != self.left.len() {
-            return Err(parse_error(
-                &path,
-                0,
-                format!("{} rows for {} frames", rows.len(), self.left.len()),
-            ));
-        }
-        Ok(Some(rows.into_iter().map(|r| r.1).collect()))
+        let rows = rows_per_frame(&path, self.pairs.left.len(), "rows", read_ins_positions)?;
+        Ok(rows.map(|rows| rows.into_iter().map(|r| r.1).collect()))
     }
 }
 
 impl StereoSequence for KarlsruheSequence {
-    fn layout(&self) -> &'static str {
-        "karlsruhe"
-    }
-
-    fn root(&self) -> &Path {
-        &self.root
-    }
-
-    fn len(&self) -> usize {
-        self.left.len()
-    }
-
-    fn calibration(&self) -> RectifiedStereo {
-        self.rig
-    }
-
-    fn image_size(&self) -> (usize, usize) {
-        self.size
-    }
-
-    fn frame(&self, i: usize) -> Result<StereoPair, DatasetError> {
-        load_listed_pair(&self.root, &self.left, &self.right, i, self.size)
-    }
-
-    fn notes(&self) -> &[String] {
-        &self.notes
-    }
+    crate::listed_sequence!("karlsruhe");
 
     fn ground_truth(&self) -> Option<&[Isometry3<f64>]> {
         None

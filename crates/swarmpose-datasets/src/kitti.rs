@@ -8,12 +8,10 @@ use std::path::{Path, PathBuf};
 use nalgebra::Isometry3;
 
 use crate::error::DatasetError;
-use crate::frames::{check_pairs, list_numbered};
-use crate::projection::{Row, rectified_pair};
-use crate::text::{KeyLines, check_plausible, numbers, parse_error, read_text, strip_bom};
-use crate::{
-    RectifiedStereo, StereoPair, StereoSequence, first_image, load_listed_pair, pose_from_3x4,
-};
+use crate::frames::ListedPairs;
+use crate::projection::{Calibration, Row, projection_numbers, rectified_pair};
+use crate::text::{KeyLines, numbers, parse_error, read_text, rows_per_frame, strip_bom};
+use crate::{RectifiedStereo, StereoPair, StereoSequence, pose_from_3x4};
 
 /// True when `dir` looks like a KITTI sequence.
 #[must_use]
@@ -24,12 +22,7 @@ pub fn detect(dir: &Path) -> bool {
 /// A KITTI odometry sequence.
 #[derive(Debug, Clone)]
 pub struct KittiSequence {
-    root: PathBuf,
-    left: Vec<PathBuf>,
-    right: Vec<PathBuf>,
-    rig: RectifiedStereo,
-    size: (usize, usize),
-    notes: Vec<String>,
+    pairs: ListedPairs,
     poses: Option<Vec<Isometry3<f64>>>,
 }
 
@@ -39,19 +32,15 @@ pub struct KittiSequence {
 ///
 /// # Errors
 /// [`DatasetError::Parse`] naming the file and line of a malformed row or a missing one.
-pub fn read_calibration(path: &Path) -> Result<(RectifiedStereo, Option<String>), DatasetError> {
-    let text = read_text(path, "KITTI calibration calib.txt")?;
-    parse_calibration(&text, path)
+pub fn read_calibration(path: &Path) -> Result<Calibration, DatasetError> {
+    read_text(path, "KITTI calibration calib.txt").and_then(|text| parse_calibration(&text, path))
 }
 
 /// [`read_calibration`] of text already read; messages name `path`.
 ///
 /// # Errors
 /// As [`read_calibration`].
-pub fn parse_calibration(
-    text: &str,
-    path: &Path,
-) -> Result<(RectifiedStereo, Option<String>), DatasetError> {
+pub fn parse_calibration(text: &str, path: &Path) -> Result<Calibration, DatasetError> {
     let (mut p0, mut p1) = (None, None);
     let mut unnamed = Vec::new();
     let mut keys = KeyLines::default();
@@ -83,17 +72,7 @@ pub fn parse_calibration(
                 }
             }
         };
-        let v = numbers(rest, path, line_no)?;
-        if v.len() != 12 {
-            return Err(parse_error(
-                path,
-                line_no,
-                format!(
-                    "a 3x4 projection matrix needs 12 numbers, found {}",
-                    v.len()
-                ),
-            ));
-        }
+        let v = projection_numbers(rest, path, line_no)?;
         if slot.is_some() {
             // An unnamed row beside a named one of the same slot.
             return Err(parse_error(
@@ -183,38 +162,11 @@ impl KittiSequence {
                 });
             }
         }
-        let left = list_numbered(&ld, "")?;
-        let right = list_numbered(&rd, "")?;
-        check_pairs(dir, &left, &ld, &right, &rd)?;
-        let left: Vec<PathBuf> = left.into_iter().map(|x| x.1).collect();
-        let right: Vec<PathBuf> = right.into_iter().map(|x| x.1).collect();
-        let (rig, note) = read_calibration(&dir.join("calib.txt"))?;
-        let (size, mut notes) = first_image(&left[0])?;
-        check_plausible(&dir.join("calib.txt"), &rig, size)?;
-        notes.extend(note);
+        let calibration = dir.join("calib.txt");
+        let pairs = ListedPairs::open(dir, (&ld, ""), (&rd, ""), &calibration, read_calibration)?;
         let pose_file = official_poses(dir).unwrap_or_else(|| dir.join("poses.txt"));
-        let poses = if pose_file.is_file() {
-            let p = read_poses(&pose_file)?;
-            if p.len() != left.len() {
-                return Err(parse_error(
-                    &pose_file,
-                    0,
-                    format!("{} poses for {} frames", p.len(), left.len()),
-                ));
-            }
-            Some(p)
-        } else {
-            None
-        };
-        Ok(Self {
-            root: dir.to_owned(),
-            left,
-            right,
-            rig,
-            size,
-            notes,
-            poses,
-        })
+        let poses = rows_per_frame(&pose_file, pairs.left.len(), "poses", read_poses)?;
+        Ok(Self { pairs, poses })
     }
 }
 
@@ -231,33 +183,7 @@ fn official_poses(dir: &Path) -> Option<PathBuf> {
 }
 
 impl StereoSequence for KittiSequence {
-    fn layout(&self) -> &'static str {
-        "kitti"
-    }
-
-    fn root(&self) -> &Path {
-        &self.root
-    }
-
-    fn len(&self) -> usize {
-        self.left.len()
-    }
-
-    fn calibration(&self) -> RectifiedStereo {
-        self.rig
-    }
-
-    fn image_size(&self) -> (usize, usize) {
-        self.size
-    }
-
-    fn frame(&self, i: usize) -> Result<StereoPair, DatasetError> {
-        load_listed_pair(&self.root, &self.left, &self.right, i, self.size)
-    }
-
-    fn notes(&self) -> &[String] {
-        &self.notes
-    }
+    crate::listed_sequence!("kitti");
 
     fn ground_truth(&self) -> Option<&[Isometry3<f64>]> {
         self.poses.as_deref()

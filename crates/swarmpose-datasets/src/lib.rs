@@ -19,6 +19,51 @@
 #![forbid(unsafe_code)]
 #![warn(clippy::unwrap_used)]
 
+/// The [`StereoSequence`] methods that read a field: `layout` (the layout's name),
+/// `root` and `len` of the `root` and `left` fields (of the field `$pairs` when given).
+macro_rules! sequence_fields {
+    ($layout:literal $(, $pairs:ident)?) => {
+        fn layout(&self) -> &'static str {
+            $layout
+        }
+
+        fn root(&self) -> &std::path::Path {
+            &self$(.$pairs)?.root
+        }
+
+        fn len(&self) -> usize {
+            self$(.$pairs)?.left.len()
+        }
+    };
+}
+pub(crate) use sequence_fields;
+
+/// The [`StereoSequence`] methods of a layout whose frames are listed image files, kept in
+/// the field `pairs` (`frames::ListedPairs`).
+macro_rules! listed_sequence {
+    ($layout:literal) => {
+        $crate::sequence_fields!($layout, pairs);
+
+        fn calibration(&self) -> RectifiedStereo {
+            self.pairs.rig
+        }
+
+        fn image_size(&self) -> (usize, usize) {
+            self.pairs.size
+        }
+
+        fn frame(&self, i: usize) -> Result<StereoPair, DatasetError> {
+            let p = &self.pairs;
+            $crate::load_listed_pair(&p.root, &p.left, &p.right, i, p.size)
+        }
+
+        fn notes(&self) -> &[String] {
+            &self.pairs.notes
+        }
+    };
+}
+pub(crate) use listed_sequence;
+
 pub mod error;
 pub mod euroc;
 mod frames;

@@ -20,7 +20,7 @@ use nalgebra::Vector3;
 
 use crate::RectifiedStereo;
 use crate::error::DatasetError;
-use crate::text::{check_baseline, check_same_intrinsics, parse_error};
+use crate::text::{check_baseline, check_same_intrinsics, numbers, parse_error};
 
 /// The largest part of a baseline off the image rows' axis (vertical and along the
 /// optical axis together), as a fraction of its length: 1 % tilts the rows of the two
@@ -125,6 +125,34 @@ fn off_axis_parts(b: &Vector3<f64>) -> String {
         .join(" and ")
 }
 
+/// A calibration file's rectified stereo model, with a note when its baseline is slightly
+/// off the rows' axis.
+pub type Calibration = (RectifiedStereo, Option<String>);
+
+/// The 12 numbers of a 3x4 projection matrix written as `text`, at `line` of `path`.
+///
+/// # Errors
+/// [`DatasetError::Parse`] naming the file and line: a word that is no number, or a count
+/// other than 12.
+pub(crate) fn projection_numbers(
+    text: &str,
+    path: &Path,
+    line: usize,
+) -> Result<Vec<f64>, DatasetError> {
+    let v = numbers(text, path, line)?;
+    if v.len() != 12 {
+        return Err(parse_error(
+            path,
+            line,
+            format!(
+                "a 3x4 projection matrix needs 12 numbers, found {}",
+                v.len()
+            ),
+        ));
+    }
+    Ok(v)
+}
+
 /// The rig of the `left` and `right` rows, with a note when the baseline is off the rows'
 /// axis by more than a thousandth (and within [`MAX_OFF_AXIS`]).
 ///
@@ -134,7 +162,7 @@ pub(crate) fn rectified_pair(
     path: &Path,
     left: Row<'_>,
     right: Row<'_>,
-) -> Result<(RectifiedStereo, Option<String>), DatasetError> {
+) -> Result<Calibration, DatasetError> {
     let (q0, q1) = (normalised(path, left)?, normalised(path, right)?);
     check_same_intrinsics(path, (left.name, &q0), (right.name, right.line, &q1))?;
     let b = offset(&q0) - offset(&q1);

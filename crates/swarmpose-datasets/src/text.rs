@@ -29,6 +29,25 @@ pub(crate) fn parse_error(path: &Path, line: usize, message: impl Into<String>) 
     }
 }
 
+/// The rows `read` from the optional file `path` (`None` when it is absent), one per
+/// frame: `frames` of them, else an error saying how many `rows` (a plural noun) there are.
+pub(crate) fn rows_per_frame<T>(
+    path: &Path,
+    frames: usize,
+    rows: &str,
+    read: impl FnOnce(&Path) -> Result<Vec<T>, DatasetError>,
+) -> Result<Option<Vec<T>>, DatasetError> {
+    if !path.is_file() {
+        return Ok(None);
+    }
+    let v = read(path)?;
+    if v.len() != frames {
+        let message = format!("{} {rows} for {frames} frames", v.len());
+        return Err(parse_error(path, 0, message));
+    }
+    Ok(Some(v))
+}
+
 /// Whitespace- or comma-separated numbers of one line.
 pub(crate) fn numbers(text: &str, path: &Path, line: usize) -> Result<Vec<f64>, DatasetError> {
     text.split(|c: char| c.is_whitespace() || c == ',')

@@ -56,6 +56,34 @@ pub struct RunRecord {
     pub error: Option<String>,
 }
 
+impl RunRecord {
+    /// A record with no pose (its errors and inlier shares NaN, no success, no inliers, no
+    /// iterations, no error) and empty context: the fields a judged record sets replace
+    /// them (`RunRecord { run, ..RunRecord::without_pose() }`).
+    pub(crate) fn without_pose() -> Self {
+        Self {
+            noise_sigma: f64::NAN,
+            outlier_fraction: f64::NAN,
+            run: 0,
+            seed: 0,
+            estimator: String::new(),
+            threshold_m: f64::NAN,
+            n: 0,
+            n_outliers: 0,
+            position_error_m: f64::NAN,
+            rotation_error_deg: f64::NAN,
+            rotation_error_frobenius: f64::NAN,
+            success: false,
+            n_inliers_estimated: 0,
+            inlier_precision: f64::NAN,
+            inlier_recall: f64::NAN,
+            elapsed_ms: f64::NAN,
+            iterations: 0,
+            error: None,
+        }
+    }
+}
+
 /// Context of a record: the scenario's run, the estimator and its threshold.
 #[derive(Debug, Clone, Copy)]
 pub struct RunKey<'a> {
@@ -85,16 +113,8 @@ pub fn evaluate(
         threshold_m: key.threshold_m,
         n: scenario.data.len(),
         n_outliers: scenario.n_outliers(),
-        position_error_m: f64::NAN,
-        rotation_error_deg: f64::NAN,
-        rotation_error_frobenius: f64::NAN,
-        success: false,
-        n_inliers_estimated: 0,
-        inlier_precision: f64::NAN,
-        inlier_recall: f64::NAN,
         elapsed_ms: fallback_elapsed.as_secs_f64() * 1e3,
-        iterations: 0,
-        error: None,
+        ..RunRecord::without_pose()
     };
     match result {
         Err(e) => rec.error = Some(e.to_string()),

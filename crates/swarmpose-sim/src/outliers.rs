@@ -20,7 +20,8 @@ use swarmpose_core::Correspondences;
 use swarmpose_core::rng::seeded;
 
 use crate::error::SimError;
-use crate::scenario::{Geometry, SceneSpec, random_unit};
+use crate::scenario::{Geometry, SceneSpec};
+use swarmpose_core::synthetic::random_unit;
 
 /// How outliers are made.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -168,12 +169,12 @@ impl SceneSpec {
         fraction: f64,
         mode: OutlierMode,
     ) -> Result<Scenario, SimError> {
-        check_levels(noise, fraction)?;
         let Geometry {
             truth,
             points,
             n_drawn,
         } = geometry;
+        check_levels(noise, fraction)?;
         let n = points.len();
         let mut rng = seeded(corruption_seed(seed, noise, fraction, mode));
         let mut src: Vec<Point3<f64>> = points

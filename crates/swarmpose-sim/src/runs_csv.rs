@@ -135,16 +135,9 @@ mod tests {
             threshold_m: 0.06736,
             n: 150,
             n_outliers: 15,
-            position_error_m: f64::NAN,
-            rotation_error_deg: f64::NAN,
-            rotation_error_frobenius: f64::NAN,
-            success: false,
-            n_inliers_estimated: 0,
-            inlier_precision: f64::NAN,
-            inlier_recall: f64::NAN,
             elapsed_ms: 1.5,
-            iterations: 0,
             error: Some("insufficient support: 1 features, at least 4".into()),
+            ..RunRecord::without_pose()
         };
         let csv = runs_csv(std::slice::from_ref(&rec)).expect("written");
         let back = parse_runs_csv(&csv).expect("parse");

@@ -13,11 +13,11 @@
 //! outliers come from a second generator seeded by (seed, noise, fraction, mode), see
 //! [`crate::outliers`].
 
-use nalgebra::{Isometry3, Point3, Translation3, Unit, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Point3};
 use rand::RngExt;
-use rand_distr::{Distribution, StandardNormal};
 use swarmpose_core::SeededRng;
 use swarmpose_core::rng::seeded;
+use swarmpose_core::synthetic::random_motion;
 
 use crate::camera::Pinhole;
 use crate::error::SimError;
@@ -73,20 +73,6 @@ pub struct Geometry {
     pub n_drawn: usize,
 }
 
-/// A uniformly distributed unit vector.
-pub(crate) fn random_unit(rng: &mut SeededRng) -> Unit<Vector3<f64>> {
-    loop {
-        let v = Vector3::new(
-            StandardNormal.sample(rng),
-            StandardNormal.sample(rng),
-            StandardNormal.sample(rng),
-        );
-        if v.norm() > 1e-9 {
-            return Unit::new_normalize(v);
-        }
-    }
-}
-
 impl SceneSpec {
     /// Checks the settings.
     ///
@@ -134,9 +120,7 @@ impl SceneSpec {
         self.validate()?;
         let mut rng = seeded(seed);
         let angle = rng.random_range(0.0..=self.max_rotation_deg).to_radians();
-        let rotation = UnitQuaternion::from_axis_angle(&random_unit(&mut rng), angle);
-        let t = random_unit(&mut rng).into_inner() * rng.random_range(0.0..=self.max_translation_m);
-        let truth = Isometry3::from_parts(Translation3::from(t), rotation);
+        let truth = random_motion(&mut rng, angle, self.max_translation_m);
         let wanted = self.n_target.unwrap_or(MIN_VISIBLE).max(MIN_VISIBLE);
         let mut points = Vec::new();
         let mut n_drawn = 0;

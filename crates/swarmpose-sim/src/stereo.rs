@@ -13,7 +13,7 @@
 //! baseline, KITTI-like), [`StereoSpec::room`] and [`StereoSpec::tabletop`] (the same
 //! rig and pixel noise scaled down), each in any length unit ([`StereoSpec::unit`]).
 
-use nalgebra::{Isometry3, Matrix3, Point3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Matrix3, Point3, Translation3, Vector3};
 use rand::RngExt;
 use rand_distr::{Distribution, StandardNormal};
 use swarmpose_core::geometry::rotation_angle_between;
@@ -21,7 +21,7 @@ use swarmpose_core::rng::seeded;
 use swarmpose_core::{Correspondences, SeededRng};
 
 use crate::error::SimError;
-use crate::scenario::random_unit;
+use swarmpose_core::synthetic::random_motion;
 
 /// Most draws of scene points per wanted point before giving up.
 const MAX_DRAWS_PER_POINT: usize = 200;
@@ -232,9 +232,7 @@ impl StereoSpec {
         self.validate()?;
         let mut rng = seeded(seed);
         let angle = rng.random_range(0.0..=self.max_rotation_deg).to_radians();
-        let rotation = UnitQuaternion::from_axis_angle(&random_unit(&mut rng), angle);
-        let t = random_unit(&mut rng).into_inner() * rng.random_range(0.0..=self.max_translation_m);
-        let truth = Isometry3::from_parts(Translation3::from(t), rotation);
+        let truth = random_motion(&mut rng, angle, self.max_translation_m);
         let (mut src, mut dst, mut src_cov, mut dst_cov) = (vec![], vec![], vec![], vec![]);
         let (w, h) = (self.image_px[0], self.image_px[1]);
         let (cx, cy) = (w / 2.0, h / 2.0);
@@ -285,7 +283,10 @@ impl StereoSpec {
         let k = self.unit;
         let scale_p = |v: Vec<Point3<f64>>| v.into_iter().map(|p| p * k).collect::<Vec<_>>();
         let scale_c = |v: Vec<Matrix3<f64>>| v.into_iter().map(|c| c * (k * k)).collect::<Vec<_>>();
-        let truth = Isometry3::from_parts(Translation3::from(t * k), rotation);
+        let truth = Isometry3::from_parts(
+            Translation3::from(truth.translation.vector * k),
+            truth.rotation,
+        );
         let data = Correspondences::new(scale_p(src), scale_p(dst))?
             .with_noise_covariance(scale_c(src_cov), scale_c(dst_cov))?;
         Ok(StereoScenario {

@@ -38,7 +38,7 @@ use super::odometry_split::SplitLog;
 use super::odometry_unpaired::Unpaired;
 use super::stereo_options::StereoOptions;
 use crate::error::{CliError, EXIT_NOT_USABLE};
-use crate::methods::{EstimatorOptions, Method, configure};
+use crate::methods::{EstimatorOptions, Method, MethodParser, configure};
 use crate::signals::StopRequest;
 use crate::streams::{err, out, warn};
 
@@ -82,7 +82,7 @@ pub struct OdometryArgs {
     pub sequence: Option<PathBuf>,
 
     /// Estimator [default: pso].
-    #[arg(long, value_enum)]
+    #[arg(long, value_parser = MethodParser)]
     pub method: Option<Method>,
 
     /// A run configuration (the config.json every run writes): its settings replace the
@@ -311,7 +311,7 @@ pub fn run_config(args: &OdometryArgs) -> Result<RunConfig, CliError> {
     let o = &mut rc.odometry;
     args.stereo.apply(o)?;
     let base = match args.method {
-        Some(m) if m.core() != o.estimator.method() => EstimatorConfig::of(m.core()),
+        Some(m) if m != o.estimator.method() => EstimatorConfig::of(m),
         _ => o.estimator.clone(),
     };
     o.estimator = configure(base, &args.options)?;

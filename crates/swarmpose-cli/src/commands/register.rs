@@ -10,7 +10,7 @@ use swarmpose_core::{Correspondences, Estimate, PoseError};
 
 use crate::error::CliError;
 use crate::input::{display_name, read_correspondences};
-use crate::methods::{EstimatorOptions, Method, build};
+use crate::methods::{EstimatorOptions, Method, MethodParser, build};
 
 /// Arguments of `swarmpose register`.
 #[derive(Debug, Args)]
@@ -39,7 +39,7 @@ pub struct RegisterArgs {
     pub input: PathBuf,
 
     /// Estimator.
-    #[arg(long, value_enum, default_value_t = Method::Pso)]
+    #[arg(long, value_parser = MethodParser, default_value = Method::Pso.name())]
     pub method: Method,
 
     /// Seed of the random generator; one seed gives one answer.

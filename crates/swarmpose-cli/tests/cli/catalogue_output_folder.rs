@@ -5,7 +5,7 @@
 use std::fs::File;
 
 use crate::catalogue::{expect, kitti, s, succeeded};
-use crate::common::{TempDir, swarmpose};
+use crate::common::{TempDir, odometry};
 
 #[test]
 fn a_folder_in_use_is_refused_and_an_earlier_run_s_leftovers_removed() {
@@ -16,12 +16,7 @@ fn a_folder_in_use_is_refused_and_an_earlier_run_s_leftovers_removed() {
     std::fs::remove_file(seq.join("poses.txt")).expect("no ground truth");
     let out_dir = tmp.0.join("o");
     std::fs::create_dir_all(&out_dir).expect("mkdir");
-    let run = || {
-        swarmpose(
-            &["odometry", s(&seq), "--out", s(&out_dir), "--quiet"],
-            None,
-        )
-    };
+    let run = || odometry(Some(&seq), &out_dir, &[]);
     // Another run holds the folder (its lock, as a running odometry holds it).
     let lock = File::create(out_dir.join(".swarmpose-lock")).expect("lock file");
     lock.try_lock().expect("lock");

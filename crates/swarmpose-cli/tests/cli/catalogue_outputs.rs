@@ -6,7 +6,7 @@
 use std::process::{Command, Stdio};
 
 use crate::catalogue::{expect, kitti, s};
-use crate::common::{TempDir, swarmpose};
+use crate::common::{TempDir, assert_success, odometry, swarmpose};
 
 /// KITTI poses moving along z, `n` lines; `last` replaces the last line when given.
 fn poses(n: usize, last: Option<&str>) -> String {
@@ -127,10 +127,7 @@ fn odometry_checks_its_output_folder_first_and_never_mixes_runs() {
     // An --out that cannot be a folder: refused before the first frame.
     let file = tmp.file("plain-file", "x");
     let out_dir = file.join("out");
-    let out = swarmpose(
-        &["odometry", s(&seq), "--out", s(&out_dir), "--quiet"],
-        None,
-    );
+    let out = odometry(Some(&seq), &out_dir, &[]);
     expect(
         &out,
         1,
@@ -139,24 +136,13 @@ fn odometry_checks_its_output_folder_first_and_never_mixes_runs() {
     assert!(out.stdout.is_empty(), "no frame was run");
     // A reused --out: files of the earlier run that this one does not write are removed.
     let out_dir = tmp.0.join("o");
-    let out = swarmpose(
-        &["odometry", s(&seq), "--out", s(&out_dir), "--quiet"],
-        None,
-    );
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = odometry(Some(&seq), &out_dir, &[]);
+    assert_success(&out);
     for f in ["groundtruth.kitti.txt", "evaluation.json", "errors.png"] {
         assert!(out_dir.join(f).is_file(), "{f} written with ground truth");
     }
     std::fs::remove_file(seq.join("poses.txt")).expect("rm");
-    let out = swarmpose(
-        &["odometry", s(&seq), "--out", s(&out_dir), "--quiet"],
-        None,
-    );
+    let out = odometry(Some(&seq), &out_dir, &[]);
     assert_eq!(out.status.code(), Some(0));
     for f in [
         "groundtruth.kitti.txt",
@@ -183,18 +169,7 @@ fn runs_that_track_nothing_are_not_usable() {
         return;
     };
     let out_dir = tmp.0.join("o");
-    let out = swarmpose(
-        &[
-            "odometry",
-            s(&seq),
-            "--out",
-            s(&out_dir),
-            "--quiet",
-            "--min-inliers",
-            "100000",
-        ],
-        None,
-    );
+    let out = odometry(Some(&seq), &out_dir, &["--min-inliers", "100000"]);
     expect(
         &out,
         3,
@@ -217,18 +192,7 @@ fn runs_that_track_nothing_are_not_usable() {
     // A disparity offset of 1e9 px put every point at the camera and every motion at the
     // identity, with exit 0: now refused as an option.
     for flag in ["--disparity-offset", "--disparity-quadratic"] {
-        let out = swarmpose(
-            &[
-                "odometry",
-                s(&seq),
-                "--out",
-                s(&out_dir),
-                "--quiet",
-                flag,
-                "1e9",
-            ],
-            None,
-        );
+        let out = odometry(Some(&seq), &out_dir, &[flag, "1e9"]);
         expect(
             &out,
             2,

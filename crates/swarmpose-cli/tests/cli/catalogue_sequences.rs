@@ -5,7 +5,7 @@
 //! duplicates, unpaired), image depth, and the "not usable" status.
 
 use crate::catalogue::{corr, edit_line, euroc, expect, karlsruhe, kitti, line_of, s};
-use crate::common::{TempDir, swarmpose};
+use crate::common::{TempDir, assert_success, correspondences, swarmpose};
 
 #[test]
 fn kitti_calibration_twice_or_inconsistent_is_refused() {
@@ -109,12 +109,7 @@ fn a_byte_order_mark_is_accepted() {
     let text = std::fs::read_to_string(&calib).expect("calib");
     std::fs::write(&calib, format!("\u{feff}{text}")).expect("bom");
     let out = corr(&tmp, &seq, &[]);
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
 }
 
 #[test]
@@ -240,64 +235,19 @@ fn correspondences_with_no_row_and_a_report_of_another_csv() {
     };
     // The report of frames 0-1 does not belong to frames 2-3: refused before writing.
     let c01 = tmp.0.join("c01.csv");
-    let out = swarmpose(
-        &[
-            "correspondences",
-            s(&seq),
-            "--frames",
-            "0",
-            "1",
-            "--out",
-            s(&c01),
-        ],
-        None,
-    );
+    let out = correspondences(&seq, ("0", "1"), &c01, &[]);
     assert_eq!(out.status.code(), Some(0));
     let report = swarmpose(&["register", s(&c01), "--method", "svd"], None);
     assert_eq!(report.status.code(), Some(0));
     let r01 = tmp.0.join("r01.json");
     std::fs::write(&r01, &report.stdout).expect("report");
     let png = tmp.0.join("draw/m.png");
-    let good = swarmpose(
-        &[
-            "correspondences",
-            s(&seq),
-            "--frames",
-            "0",
-            "1",
-            "--out",
-            s(&c01),
-            "--draw",
-            s(&png),
-            "--inliers",
-            s(&r01),
-        ],
-        None,
-    );
-    assert_eq!(
-        good.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&good.stderr)
-    );
+    let drawn = ["--draw", s(&png), "--inliers", s(&r01)];
+    let good = correspondences(&seq, ("0", "1"), &c01, &drawn);
+    assert_success(&good);
     assert!(png.is_file(), "the drawing's folder is created");
     let c23 = tmp.0.join("c23.csv");
-    let out = swarmpose(
-        &[
-            "correspondences",
-            s(&seq),
-            "--frames",
-            "2",
-            "3",
-            "--out",
-            s(&c23),
-            "--draw",
-            s(&png),
-            "--inliers",
-            s(&r01),
-        ],
-        None,
-    );
+    let out = correspondences(&seq, ("2", "3"), &c23, &drawn);
     expect(&out, 2, &format!("swarmpose: error: {}: ", s(&r01)));
     assert!(String::from_utf8_lossy(&out.stderr).contains("another CSV"));
     assert!(!c23.exists(), "nothing written");
@@ -331,12 +281,7 @@ fn euroc_lists_and_sensor_files() {
         return;
     };
     let out = corr(&tmp, &seq, &["--no-covariance"]);
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let cam0 = seq.join("mav0/cam0");
     let cam1 = seq.join("mav0/cam1");
     // A byte-order mark in sensor.yaml is accepted.

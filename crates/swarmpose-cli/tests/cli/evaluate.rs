@@ -6,7 +6,7 @@
 use std::path::Path;
 use std::process::Command;
 
-use crate::common::{TempDir, check_error, json_of, swarmpose};
+use crate::common::{TempDir, assert_success, check_error, json_of, swarmpose};
 use nalgebra::{Isometry3, Vector3};
 use serde_json::Value;
 use swarmpose_eval::trajectory::{kitti_text, tum_text};
@@ -291,12 +291,7 @@ fn evo_agrees_on_the_files_odometry_writes() {
         &["odometry", "--out", out.to_str().expect("utf-8"), "--quiet"],
         None,
     );
-    assert_eq!(
-        run.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    assert_success(&run);
     compare_with_evo(
         "kitti",
         &out.join("trajectory.kitti.txt"),

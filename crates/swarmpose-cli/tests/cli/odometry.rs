@@ -1,9 +1,9 @@
 //! `swarmpose odometry`: bad input gives one clear line (exit 2); on kitti_vo_seq2 the
 //! outputs are written and `swarmpose evaluate` on them agrees with the run's summary.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-use crate::common::{TempDir, check_error, json_of, swarmpose};
+use crate::common::{TempDir, assert_success, check_error, evaluate_json, odometry, s, swarmpose};
 use swarmpose_vision::image::GrayImage;
 
 const CALIB: &str = "P0: 700 0 32 0 0 700 24 0 0 0 1 0\nP1: 700 0 32 -350 0 700 24 0 0 0 1 0\n";
@@ -25,10 +25,6 @@ fn kitti_dir(tmp: &TempDir, name: &str, n: usize, poses: Option<&str>) -> PathBu
         std::fs::write(dir.join("poses.txt"), p).expect("poses");
     }
     dir
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("utf-8 path")
 }
 
 #[test]
@@ -110,10 +106,7 @@ fn blank_frames_are_not_usable_but_written() {
     let tmp = TempDir::new("odo-blank");
     let dir = kitti_dir(&tmp, "blank", 12, None);
     let out_dir = tmp.0.join("out");
-    let out = swarmpose(
-        &["odometry", s(&dir), "--out", s(&out_dir), "--quiet"],
-        None,
-    );
+    let out = odometry(Some(&dir), &out_dir, &[]);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(3), "{stderr}");
     assert!(
@@ -181,10 +174,7 @@ fn a_corrupt_frame_stops_the_run_and_keeps_what_came_before() {
     let bad = dir.join("image_0").join("000030.png");
     std::fs::write(&bad, b"\x89PNG\r\n\x1a\nnot really a png").expect("corrupt");
     let out_dir = tmp.0.join("out");
-    let out = swarmpose(
-        &["odometry", s(&dir), "--out", s(&out_dir), "--quiet"],
-        None,
-    );
+    let out = odometry(Some(&dir), &out_dir, &[]);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{stderr}");
     assert!(
@@ -222,13 +212,8 @@ fn the_cli_gives_the_engine_s_trajectory() {
     use swarmpose_runs::synthetic::SyntheticSequence;
     let tmp = TempDir::new("odo-same");
     let out_dir = tmp.0.join("out");
-    let out = swarmpose(&["odometry", "--out", s(&out_dir), "--quiet"], None);
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = odometry(None, &out_dir, &[]);
+    assert_success(&out);
     let cli = std::fs::read_to_string(out_dir.join("trajectory.kitti.txt")).expect("trajectory");
     let seq = SyntheticSequence::default();
     let mut odo = Odometry::new(camera_of(&seq), OdometryConfig::default()).expect("engine");
@@ -247,16 +232,8 @@ fn kitti_run_writes_its_outputs() {
     };
     let tmp = TempDir::new("odo-kitti");
     let out_dir = tmp.0.join("out");
-    let out = swarmpose(
-        &["odometry", s(&dir), "--out", s(&out_dir), "--quiet"],
-        None,
-    );
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = odometry(Some(&dir), &out_dir, &[]);
+    assert_success(&out);
     let summary = String::from_utf8(out.stdout).expect("utf-8");
     eprintln!("{summary}");
     for f in [
@@ -309,15 +286,7 @@ fn kitti_run_writes_its_outputs() {
         summary.contains("smoothed (each frame's last window estimate)"),
         "{summary}"
     );
-    let v = json_of(&swarmpose(
-        &[
-            "evaluate",
-            s(&out_dir.join("trajectory.kitti.txt")),
-            s(&out_dir.join("groundtruth.kitti.txt")),
-            "--json",
-        ],
-        None,
-    ));
+    let v = evaluate_json(&out_dir, "trajectory.kitti.txt", "groundtruth.kitti.txt");
     let drift = v["final_drift_percent"].as_f64().expect("drift");
     let rms = v["eq20_rms"].as_f64().expect("rms");
     assert!(summary.contains(&format!("({drift:.3} %)")), "{summary}");
@@ -326,15 +295,7 @@ fn kitti_run_writes_its_outputs() {
         "drift {drift} %, RMS eq. (20) {rms}"
     );
     // The TUM files give the same ATE.
-    let t = json_of(&swarmpose(
-        &[
-            "evaluate",
-            s(&out_dir.join("trajectory.tum.txt")),
-            s(&out_dir.join("groundtruth.tum.txt")),
-            "--json",
-        ],
-        None,
-    ));
+    let t = evaluate_json(&out_dir, "trajectory.tum.txt", "groundtruth.tum.txt");
     let (a, b) = (
         v["ate_aligned"]["rmse"].as_f64().expect("ate"),
         t["ate_aligned"]["rmse"].as_f64().expect("ate"),
@@ -346,24 +307,11 @@ fn kitti_run_writes_its_outputs() {
 fn no_sequence_runs_the_built_in_synthetic_one() {
     let tmp = TempDir::new("odo-syn");
     let out_dir = tmp.0.join("out");
-    let out = swarmpose(&["odometry", "--out", s(&out_dir), "--quiet"], None);
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = odometry(None, &out_dir, &[]);
+    assert_success(&out);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("built-in synthetic"), "{stderr}");
-    let v = json_of(&swarmpose(
-        &[
-            "evaluate",
-            s(&out_dir.join("trajectory.kitti.txt")),
-            s(&out_dir.join("groundtruth.kitti.txt")),
-            "--json",
-        ],
-        None,
-    ));
+    let v = evaluate_json(&out_dir, "trajectory.kitti.txt", "groundtruth.kitti.txt");
     let drift = v["final_drift_percent"].as_f64().expect("drift");
     assert!(drift < 2.0, "synthetic drift {drift} %");
     assert!(out_dir.join("errors.png").is_file());
@@ -377,16 +325,8 @@ fn tum_rgbd_directory() {
         .write_tum_rgbd(&dir)
         .expect("write");
     let out_dir = tmp.0.join("out");
-    let out = swarmpose(
-        &["odometry", s(&dir), "--out", s(&out_dir), "--quiet"],
-        None,
-    );
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = odometry(Some(&dir), &out_dir, &[]);
+    assert_success(&out);
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(
         text.contains("TUM RGB-D") && text.contains("final drift"),

@@ -45,6 +45,25 @@ impl Method {
         }
     }
 
+    /// What the method does, in one line (the command line's help).
+    #[must_use]
+    pub fn summary(self) -> &'static str {
+        match self {
+            Method::Pso => {
+                "Robust PSO over unit quaternions on translation-free pairs, then SVD refinement"
+            }
+            Method::PsoPaper => {
+                "The paper's PSO/SVD, literally (all-point centroids); fragile with outliers"
+            }
+            Method::Svd => "Arun's SVD least squares on all points, no outlier rejection",
+            Method::Msac => "MSAC with 3-point samples and a final SVD refit",
+            Method::Wls => {
+                "Weighted least squares on all points (Mahalanobis with covariances), no outlier \
+                 rejection"
+            }
+        }
+    }
+
     /// The method of a command-line name.
     #[must_use]
     pub fn from_name(name: &str) -> Option<Method> {

@@ -18,33 +18,32 @@ impl Estimator for SvdEstimator {
         "svd"
     }
 
-    fn estimate(
-        &self,
-        data: &Correspondences,
-        _rng: &mut SeededRng,
-    ) -> Result<Estimate, PoseError> {
-        let start = Instant::now();
-        check_input(data)?;
-        let inliers: Vec<usize> = (0..data.len()).collect();
-        let transform = arun_on(data, &inliers)?;
-        Ok(fit_of_all_points(data, transform, start))
+    fn estimate(&self, data: &Correspondences, _: &mut SeededRng) -> Result<Estimate, PoseError> {
+        fit_of_all_points(data, |inliers| arun_on(data, inliers))
     }
 }
 
-/// The estimate of a fit to every correspondence (no rejection): all points are inliers,
-/// the cost is the sum of squared residuals, m², and the time runs from `start`.
+/// The estimate of the motion `fit` to every correspondence (no rejection; `fit` is given
+/// the indices of all of them), once the input is checked: all points are inliers, the
+/// cost is the sum of squared residuals, m², and the time is that of the whole call.
+///
+/// # Errors
+/// Those of the input check and of `fit`.
 pub(crate) fn fit_of_all_points(
     data: &Correspondences,
-    transform: nalgebra::Isometry3<f64>,
-    start: Instant,
-) -> Estimate {
+    fit: impl FnOnce(&[usize]) -> Result<nalgebra::Isometry3<f64>, PoseError>,
+) -> Result<Estimate, PoseError> {
+    let start = Instant::now();
+    check_input(data)?;
+    let inliers: Vec<usize> = (0..data.len()).collect();
+    let transform = fit(&inliers)?;
     let cost: f64 = data
         .src()
         .iter()
         .zip(data.dst())
         .map(|(s, d)| residual_sq(&transform, s, d))
         .sum();
-    Estimate {
+    Ok(Estimate {
         transform,
         diagnostics: Diagnostics {
             iterations: 1,
@@ -56,6 +55,6 @@ pub(crate) fn fit_of_all_points(
             runner_up: None,
             range_noise: None,
         },
-        inliers: (0..data.len()).collect(),
-    }
+        inliers,
+    })
 }

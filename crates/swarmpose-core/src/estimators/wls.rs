@@ -8,9 +8,7 @@
 //! exactly the true inliers (`bench`'s `oracle-weighted`) it is the maximum-likelihood
 //! motion, the ceiling of any method that ends with a fit to its inliers.
 
-use std::time::Instant;
-
-use super::consensus::{Tolerance, arun_within, check_input};
+use super::consensus::{Tolerance, arun_within};
 use super::mahalanobis::refine_mahalanobis;
 use super::svd::fit_of_all_points;
 use super::{Estimate, Estimator};
@@ -31,23 +29,18 @@ impl Estimator for WlsEstimator {
         "wls"
     }
 
-    fn estimate(
-        &self,
-        data: &Correspondences,
-        _rng: &mut SeededRng,
-    ) -> Result<Estimate, PoseError> {
-        let start = Instant::now();
-        check_input(data)?;
-        let inliers: Vec<usize> = (0..data.len()).collect();
-        let tol = data
-            .noise_sigma()
-            .map_or(Tolerance::Uniform(1.0), Tolerance::PerPoint);
-        let mut transform = arun_within(data, &inliers, tol)?;
-        if data.noise_covariance().is_some() {
+    fn estimate(&self, data: &Correspondences, _: &mut SeededRng) -> Result<Estimate, PoseError> {
+        fit_of_all_points(data, |inliers| {
+            let tol = data
+                .noise_sigma()
+                .map_or(Tolerance::Uniform(1.0), Tolerance::PerPoint);
+            let transform = arun_within(data, inliers, tol)?;
+            if data.noise_covariance().is_none() {
+                return Ok(transform);
+            }
             // No gate: every point counts.
-            transform = refine_mahalanobis(data, &transform, f64::MAX, ROUNDS)?.0;
-        }
-        Ok(fit_of_all_points(data, transform, start))
+            Ok(refine_mahalanobis(data, &transform, f64::MAX, ROUNDS)?.0)
+        })
     }
 }
 

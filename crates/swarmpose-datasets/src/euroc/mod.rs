@@ -380,17 +380,7 @@ impl EurocSequence {
 }
 
 impl StereoSequence for EurocSequence {
-    fn layout(&self) -> &'static str {
-        "euroc"
-    }
-
-    fn root(&self) -> &Path {
-        &self.root
-    }
-
-    fn len(&self) -> usize {
-        self.left.len()
-    }
+    crate::sequence_fields!("euroc");
 
     fn calibration(&self) -> RectifiedStereo {
         self.rectification.rig

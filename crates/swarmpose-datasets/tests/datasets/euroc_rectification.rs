@@ -6,7 +6,7 @@ use swarmpose_datasets::{StereoPair, StereoSequence};
 use swarmpose_vision::features::{Descriptor, FeatureExtractor};
 use swarmpose_vision::frontend::Frontend;
 use swarmpose_vision::orb::{OrbConfig, OrbExtractor};
-use swarmpose_vision::stereo::subpixel::row_offset;
+use swarmpose_vision::stereo::subpixel::{PairWindow, row_offset};
 use swarmpose_vision::temporal::{TemporalConfig, mutual_matches};
 
 /// Row differences (right - left, pixels) of mutual nearest-neighbour ORB matches
@@ -79,14 +79,14 @@ fn euroc_rectified_pairs_share_rows() {
         let p = seq.frame(i).expect("frame");
         let f = frontend.stereo_frame(p.left.view(), p.right.view());
         for (k, d) in f.left_keypoints.iter().zip(&f.disparities_px) {
-            if let Some(dy) = row_offset(
-                p.left.view(),
-                p.right.view(),
-                k.x.round() as usize,
-                k.y.round() as usize,
-                *d,
-                4,
-            ) {
+            let window = PairWindow {
+                left: p.left.view(),
+                right: p.right.view(),
+                xl: k.x.round() as usize,
+                y: k.y.round() as usize,
+                r: 4,
+            };
+            if let Some(dy) = row_offset(window, *d) {
                 dys.push(dy);
             }
         }

@@ -2,7 +2,7 @@
 //! measured where the patch of the frame where each began appears (with images), and the
 //! tracks that begin in it.
 
-use swarmpose_vision::temporal::template::PatchTemplate;
+use swarmpose_vision::temporal::template::{AlignLimits, PatchTemplate};
 
 use super::calibration::corrected;
 use super::{Images, Link, Window};
@@ -79,13 +79,12 @@ impl Window {
     /// its detected keypoint.
     fn continue_track(&mut self, t: u32, l: &Link, im: Images<'_>) -> (u32, StereoObservation) {
         let found = self.templates.get(&t).and_then(|tpl| {
-            tpl.align_affine(
-                im.current,
-                at(&l.current),
-                ALIGN_ITERATIONS,
-                ALIGN_MAX_MOVE_PX,
-                Some(ALIGN_MIN_NCC),
-            )
+            let limits = AlignLimits {
+                iterations: ALIGN_ITERATIONS,
+                max_move_px: ALIGN_MAX_MOVE_PX,
+                min_ncc: Some(ALIGN_MIN_NCC),
+            };
+            tpl.align_affine(im.current, at(&l.current), limits)
         });
         match found {
             Some((u, v)) => (

@@ -2,6 +2,7 @@
 types with ROS 2's DDS names (`pkg::msg::dds_::Name_`, final extensibility, XCDR1 as
 rmw_cyclonedds_cpp writes them). Topic names on the wire carry ROS 2's `rt` prefix."""
 
+import types
 from dataclasses import dataclass
 
 import cyclonedds.idl.types as t
@@ -14,156 +15,83 @@ def dds_topic(ros_topic: str) -> str:
     return "rt" + ros_topic if ros_topic.startswith("/") else "rt/" + ros_topic
 
 
-@dataclass
-class Time(IdlStruct, typename="builtin_interfaces::msg::dds_::Time_"):
-    sec: t.int32
-    nanosec: t.uint32
+# The messages, in the order they refer to each other: `package/Name: type field, ...`, in
+# wire order, with ROS 2's primitive names (`T[]` a sequence, `T[n]` an array).
+_MESSAGES = """
+builtin_interfaces/Time: int32 sec, uint32 nanosec
+std_msgs/Header: Time stamp, string frame_id
+sensor_msgs/Image: Header header, uint32 height, uint32 width, string encoding,
+    uint8 is_bigendian, uint32 step, uint8[] data
+sensor_msgs/RegionOfInterest: uint32 x_offset, uint32 y_offset, uint32 height, uint32 width,
+    bool do_rectify
+sensor_msgs/CameraInfo: Header header, uint32 height, uint32 width, string distortion_model,
+    float64[] d, float64[9] k, float64[9] r, float64[12] p, uint32 binning_x,
+    uint32 binning_y, RegionOfInterest roi
+geometry_msgs/Point: float64 x, float64 y, float64 z
+geometry_msgs/Vector3: float64 x, float64 y, float64 z
+geometry_msgs/Quaternion: float64 x, float64 y, float64 z, float64 w
+geometry_msgs/Pose: Point position, Quaternion orientation
+geometry_msgs/PoseWithCovariance: Pose pose, float64[36] covariance
+geometry_msgs/Twist: Vector3 linear, Vector3 angular
+geometry_msgs/TwistWithCovariance: Twist twist, float64[36] covariance
+nav_msgs/Odometry: Header header, string child_frame_id, PoseWithCovariance pose,
+    TwistWithCovariance twist
+geometry_msgs/PoseStamped: Header header, Pose pose
+nav_msgs/Path: Header header, PoseStamped[] poses
+geometry_msgs/Transform: Vector3 translation, Quaternion rotation
+geometry_msgs/TransformStamped: Header header, string child_frame_id, Transform transform
+tf2_msgs/TFMessage: TransformStamped[] transforms
+diagnostic_msgs/KeyValue: string key, string value
+diagnostic_msgs/DiagnosticStatus: uint8 level, string name, string message,
+    string hardware_id, KeyValue[] values
+diagnostic_msgs/DiagnosticArray: Header header, DiagnosticStatus[] status
+"""
+
+_PRIMITIVES = {
+    "bool": bool,
+    "string": str,
+    "int32": t.int32,
+    "uint8": t.uint8,
+    "uint32": t.uint32,
+    "float64": t.float64,
+}
 
 
-@dataclass
-class Header(IdlStruct, typename="std_msgs::msg::dds_::Header_"):
-    stamp: Time
-    frame_id: str
+def _field_type(name: str, known: dict):
+    """The IDL type of a field type of the table: a primitive, a message defined above it,
+    `T[]` or `T[n]`."""
+    if name.endswith("[]"):
+        return t.sequence[_field_type(name[:-2], known)]
+    if name.endswith("]"):
+        inner, n = name[:-1].split("[")
+        return t.array[_field_type(inner, known), int(n)]
+    return _PRIMITIVES.get(name) or known[name]
 
 
-@dataclass
-class Image(IdlStruct, typename="sensor_msgs::msg::dds_::Image_"):
-    header: Header
-    height: t.uint32
-    width: t.uint32
-    encoding: str
-    is_bigendian: t.uint8
-    step: t.uint32
-    data: t.sequence[t.uint8]
+def _message(package: str, name: str, fields: dict) -> type:
+    """`@dataclass class Name(IdlStruct, typename="package::msg::dds_::Name_")` with
+    `fields` (name to IDL type, in wire order)."""
+
+    def body(namespace: dict) -> None:
+        namespace.update(__annotations__=fields, __module__=__name__, __qualname__=name)
+
+    typename = f"{package}::msg::dds_::{name}_"
+    return dataclass(types.new_class(name, (IdlStruct,), {"typename": typename}, body))
 
 
-@dataclass
-class RegionOfInterest(IdlStruct, typename="sensor_msgs::msg::dds_::RegionOfInterest_"):
-    x_offset: t.uint32
-    y_offset: t.uint32
-    height: t.uint32
-    width: t.uint32
-    do_rectify: bool
+def _define_messages() -> dict:
+    """The classes of `_MESSAGES`, by name."""
+    known = {}
+    for line in _MESSAGES.replace(",\n", ", ").strip().splitlines():
+        head, spec = line.split(":", 1)
+        package, name = head.split("/")
+        pairs = (f.split() for f in spec.split(","))
+        fields = {field: _field_type(kind, known) for kind, field in pairs}
+        known[name] = _message(package, name, fields)
+    return known
 
 
-@dataclass
-class CameraInfo(IdlStruct, typename="sensor_msgs::msg::dds_::CameraInfo_"):
-    header: Header
-    height: t.uint32
-    width: t.uint32
-    distortion_model: str
-    d: t.sequence[t.float64]
-    k: t.array[t.float64, 9]
-    r: t.array[t.float64, 9]
-    p: t.array[t.float64, 12]
-    binning_x: t.uint32
-    binning_y: t.uint32
-    roi: RegionOfInterest
-
-
-@dataclass
-class Point(IdlStruct, typename="geometry_msgs::msg::dds_::Point_"):
-    x: t.float64
-    y: t.float64
-    z: t.float64
-
-
-@dataclass
-class Vector3(IdlStruct, typename="geometry_msgs::msg::dds_::Vector3_"):
-    x: t.float64
-    y: t.float64
-    z: t.float64
-
-
-@dataclass
-class Quaternion(IdlStruct, typename="geometry_msgs::msg::dds_::Quaternion_"):
-    x: t.float64
-    y: t.float64
-    z: t.float64
-    w: t.float64
-
-
-@dataclass
-class Pose(IdlStruct, typename="geometry_msgs::msg::dds_::Pose_"):
-    position: Point
-    orientation: Quaternion
-
-
-@dataclass
-class PoseWithCovariance(IdlStruct, typename="geometry_msgs::msg::dds_::PoseWithCovariance_"):
-    pose: Pose
-    covariance: t.array[t.float64, 36]
-
-
-@dataclass
-class Twist(IdlStruct, typename="geometry_msgs::msg::dds_::Twist_"):
-    linear: Vector3
-    angular: Vector3
-
-
-@dataclass
-class TwistWithCovariance(IdlStruct, typename="geometry_msgs::msg::dds_::TwistWithCovariance_"):
-    twist: Twist
-    covariance: t.array[t.float64, 36]
-
-
-@dataclass
-class Odometry(IdlStruct, typename="nav_msgs::msg::dds_::Odometry_"):
-    header: Header
-    child_frame_id: str
-    pose: PoseWithCovariance
-    twist: TwistWithCovariance
-
-
-@dataclass
-class PoseStamped(IdlStruct, typename="geometry_msgs::msg::dds_::PoseStamped_"):
-    header: Header
-    pose: Pose
-
-
-@dataclass
-class Path(IdlStruct, typename="nav_msgs::msg::dds_::Path_"):
-    header: Header
-    poses: t.sequence[PoseStamped]
-
-
-@dataclass
-class Transform(IdlStruct, typename="geometry_msgs::msg::dds_::Transform_"):
-    translation: Vector3
-    rotation: Quaternion
-
-
-@dataclass
-class TransformStamped(IdlStruct, typename="geometry_msgs::msg::dds_::TransformStamped_"):
-    header: Header
-    child_frame_id: str
-    transform: Transform
-
-
-@dataclass
-class TFMessage(IdlStruct, typename="tf2_msgs::msg::dds_::TFMessage_"):
-    transforms: t.sequence[TransformStamped]
-
-
-@dataclass
-class KeyValue(IdlStruct, typename="diagnostic_msgs::msg::dds_::KeyValue_"):
-    key: str
-    value: str
-
-
-@dataclass
-class DiagnosticStatus(IdlStruct, typename="diagnostic_msgs::msg::dds_::DiagnosticStatus_"):
-    level: t.uint8
-    name: str
-    message: str
-    hardware_id: str
-    values: t.sequence[KeyValue]
-
-
-@dataclass
-class DiagnosticArray(IdlStruct, typename="diagnostic_msgs::msg::dds_::DiagnosticArray_"):
-    header: Header
-    status: t.sequence[DiagnosticStatus]
+globals().update(_define_messages())
 
 
 def _bytes_as_one_block(cls, field: str):

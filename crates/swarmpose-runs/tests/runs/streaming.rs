@@ -2,9 +2,21 @@
 //! memory does not grow with the stream, the motion covariance is honest, frames
 //! without texture are marked and tracking recovers, bad timestamps are refused.
 
+use swarmpose_odometry::FrameResult;
+use swarmpose_odometry::tracker::Tracker;
 use swarmpose_odometry::{OdometryConfig, StageTimes, Status};
 use swarmpose_runs::synthetic::features::{FeatureSequence, FeatureSequenceConfig};
+use swarmpose_vision::features::BinaryDescriptor;
 use swarmpose_vision::frontend::StereoFrame;
+
+/// Frame `k` of `seq` tracked, at its time.
+fn track(tracker: &mut Tracker<BinaryDescriptor>, seq: &FeatureSequence, k: usize) -> FrameResult {
+    let frame = seq.frame(k);
+    let times = StageTimes::default();
+    tracker
+        .track(frame, None, seq.timestamp_s(k), times)
+        .expect("frame")
+}
 
 /// 2000 frames generated on the fly: the engine's state after 2000 frames is within 10 %
 /// of its largest size over the first 500, frame to frame and with a window of 10
@@ -23,14 +35,7 @@ fn memory_does_not_grow_over_2000_frames() {
         let mut first_500 = 0usize;
         let mut untracked = 0;
         for k in 0..2000 {
-            let r = tracker
-                .track(
-                    seq.frame(k),
-                    None,
-                    seq.timestamp_s(k),
-                    StageTimes::default(),
-                )
-                .expect("frame");
+            let r = track(&mut tracker, &seq, k);
             if !matches!(r.status, Status::First | Status::Tracked) {
                 untracked += 1;
             }
@@ -247,14 +252,7 @@ fn timestamps_must_increase() {
     let seq = FeatureSequence::new(FeatureSequenceConfig::default());
     let mut tracker = seq.tracker(OdometryConfig::default());
     for k in 0..3 {
-        tracker
-            .track(
-                seq.frame(k),
-                None,
-                seq.timestamp_s(k),
-                StageTimes::default(),
-            )
-            .expect("frame");
+        track(&mut tracker, &seq, k);
     }
     for bad in [
         seq.timestamp_s(2),
@@ -267,14 +265,7 @@ fn timestamps_must_increase() {
             .expect_err("refused");
         assert!(e.to_string().contains("timestamp"), "{e}");
     }
-    let r = tracker
-        .track(
-            seq.frame(3),
-            None,
-            seq.timestamp_s(3),
-            StageTimes::default(),
-        )
-        .expect("frame");
+    let r = track(&mut tracker, &seq, 3);
     assert_eq!(r.index, 3);
     assert!(r.status.is_tracked());
 }

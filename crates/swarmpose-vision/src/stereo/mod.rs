@@ -12,7 +12,7 @@ pub use rig::{
 };
 
 use crate::features::{Descriptor, Features, GrayView, Keypoint};
-use subpixel::{refine_disparity, refine_disparity_lk, row_offset};
+use subpixel::{PairWindow, refine_disparity, refine_disparity_lk, row_offset};
 
 /// Settings of [`match_stereo`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -257,27 +257,22 @@ fn match_stereo_in<D: Descriptor>(
                 lk.x.round().max(0.0) as usize,
                 lk.y.round().max(0.0) as usize,
             );
-            let r = config.subpixel_radius;
-            let Some(d) = refine_disparity(
-                left_img,
-                right_img,
+            let window = PairWindow {
+                left: left_img,
+                right: right_img,
                 xl,
                 y,
-                i64::from(coarse.round() as i32),
-                2,
-                r,
-            ) else {
+                r: config.subpixel_radius,
+            };
+            let Some(d) = refine_disparity(window, i64::from(coarse.round() as i32), 2) else {
                 continue;
             };
             // The disparity of the window at (xl, y) is that of the keypoint: a shift
             // within a constant-disparity window does not change it.
             let refined = match (config.gauss_newton, config.vertical_alignment) {
                 (false, _) => Some(d),
-                (true, true) => {
-                    subpixel::refine_disparity_lk_2d(left_img, right_img, xl, y, d, r, 8)
-                        .map(|(d, _)| d)
-                }
-                (true, false) => refine_disparity_lk(left_img, right_img, xl, y, d, r, 8),
+                (true, true) => subpixel::refine_disparity_lk_2d(window, d, 8).map(|(d, _)| d),
+                (true, false) => refine_disparity_lk(window, d, 8),
             };
             let Some(d) = refined else {
                 continue;
@@ -299,15 +294,14 @@ fn match_stereo_in<D: Descriptor>(
         }
         let measure = config.row_offset_stride > 0 && out.len() % config.row_offset_stride == 0;
         let row_offset_px = if measure {
-            row_offset(
-                left_img,
-                right_img,
-                lk.x.round().max(0.0) as usize,
-                lk.y.round().max(0.0) as usize,
-                disparity - config.disparity_offset_px,
-                config.subpixel_radius.max(2),
-            )
-            .unwrap_or(f32::NAN)
+            let window = PairWindow {
+                left: left_img,
+                right: right_img,
+                xl: lk.x.round().max(0.0) as usize,
+                y: lk.y.round().max(0.0) as usize,
+                r: config.subpixel_radius.max(2),
+            };
+            row_offset(window, disparity - config.disparity_offset_px).unwrap_or(f32::NAN)
         } else {
             f32::NAN
         };

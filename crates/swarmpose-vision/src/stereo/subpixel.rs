@@ -4,10 +4,39 @@
 use crate::features::GrayView;
 use crate::image::sample_patch;
 
-/// Sum of squared differences between the `(2 r + 1)²` window at left `(xl, y)` and at
-/// right `(xr, y)`. The caller keeps both windows inside.
+/// The `(2 r + 1)²` window centred on left pixel `(xl, y)` of a rectified pair, with the
+/// right image it is matched in (same rows, shifted left by the disparity).
+#[derive(Debug, Clone, Copy)]
+pub struct PairWindow<'a> {
+    /// The left image.
+    pub left: GrayView<'a>,
+    /// The right image.
+    pub right: GrayView<'a>,
+    /// Column of the window's centre in the left image, pixels.
+    pub xl: usize,
+    /// Row of the window's centre, pixels.
+    pub y: usize,
+    /// Half side of the window, pixels.
+    pub r: usize,
+}
+
+impl PairWindow<'_> {
+    /// Whether the left window, and its rows in the right image, lie inside the images.
+    fn rows_inside(&self) -> bool {
+        let (y, r) = (self.y, self.r);
+        y >= r
+            && y + r < self.left.height
+            && y + r < self.right.height
+            && self.xl >= r
+            && self.xl + r < self.left.width
+    }
+}
+
+/// Sum of squared differences between the window and the one at right `(xr, y)`. The
+/// caller keeps both windows inside.
 #[inline]
-fn ssd(left: GrayView<'_>, right: GrayView<'_>, xl: usize, xr: usize, y: usize, r: usize) -> u32 {
+fn ssd(window: PairWindow<'_>, xr: usize) -> u32 {
+    let (left, right, xl, y, r) = (window.left, window.right, window.xl, window.y, window.r);
     let mut s = 0u32;
     for yy in y - r..=y + r {
         let lrow = &left.data[yy * left.width + xl - r..=yy * left.width + xl + r];
@@ -25,22 +54,18 @@ fn ssd(left: GrayView<'_>, right: GrayView<'_>, xl: usize, xr: usize, y: usize, 
 /// search`, and a parabola through the minimum and its neighbours gives the sub-pixel
 /// offset. `None` when a window leaves an image or the minimum is at the search edge.
 #[must_use]
-pub fn refine_disparity(
-    left: GrayView<'_>,
-    right: GrayView<'_>,
-    xl: usize,
-    y: usize,
-    d0: i64,
-    search: i64,
-    r: usize,
-) -> Option<f32> {
-    if y < r || y + r >= left.height || y + r >= right.height || xl < r || xl + r >= left.width {
+pub fn refine_disparity(window: PairWindow<'_>, d0: i64, search: i64) -> Option<f32> {
+    if !window.rows_inside() {
         return None;
     }
+    let (xl, r) = (window.xl, window.r);
     let lo = d0 - search - 1;
     let hi = d0 + search + 1;
     // Right column xl - d must keep its window inside.
-    if (xl as i64 - hi) < r as i64 || (xl as i64 - lo) + r as i64 >= right.width as i64 || lo < 0 {
+    if (xl as i64 - hi) < r as i64
+        || (xl as i64 - lo) + r as i64 >= window.right.width as i64
+        || lo < 0
+    {
         return None;
     }
     let mut best = (u32::MAX, 0i64);
@@ -50,7 +75,7 @@ pub fn refine_disparity(
         return None;
     }
     for (k, d) in (lo..=hi).enumerate() {
-        let c = ssd(left, right, xl, (xl as i64 - d) as usize, y, r);
+        let c = ssd(window, (xl as i64 - d) as usize);
         costs[k] = c;
         if c < best.0 && d > lo && d < hi {
             best = (c, d);
@@ -82,25 +107,18 @@ pub fn refine_disparity(
 /// `None` when a window leaves the image, the texture has no horizontal gradient, or
 /// the estimate moves more than one pixel from `d0`.
 #[must_use]
-pub fn refine_disparity_lk(
-    left: GrayView<'_>,
-    right: GrayView<'_>,
-    xl: usize,
-    y: usize,
-    d0: f32,
-    r: usize,
-    iterations: usize,
-) -> Option<f32> {
-    if y < r || y + r >= left.height || xl < r || xl + r >= left.width || y + r >= right.height {
+pub fn refine_disparity_lk(window: PairWindow<'_>, d0: f32, iterations: usize) -> Option<f32> {
+    if !window.rows_inside() {
         return None;
     }
-    let mut d = d0;
-    for _ in 0..iterations {
-        let x0 = xl as f32 - d - r as f32 - 1.0;
-        let x1 = xl as f32 - d + r as f32 + 1.0;
-        if x0 < 0.0 || x1 + 1.0 >= right.width as f32 {
-            return None;
-        }
+    let PairWindow {
+        left,
+        right,
+        xl,
+        y,
+        r,
+    } = window;
+    gauss_newton_disparity(right.width, xl, r, d0, iterations, |d| {
         let (mut eg, mut gg) = (0f32, 0f32);
         for yy in y - r..=y + r {
             let lrow = &left.data[yy * left.width..(yy + 1) * left.width];
@@ -142,6 +160,30 @@ pub fn refine_disparity_lk(
                 gg += g * g;
             }
         }
+        (eg, gg)
+    })
+}
+
+/// The Gauss-Newton loop of [`refine_disparity_lk`] from `d0` pixels, `sums(d)` giving
+/// `(Σ e g, Σ g²)` over the window at disparity `d` (residual `e`, gradient `g` of the
+/// right image). `None` when the right window leaves the image (`right_width` pixels),
+/// `Σ g²` is too small, or `d` moves more than one pixel from `d0`.
+fn gauss_newton_disparity(
+    right_width: usize,
+    xl: usize,
+    r: usize,
+    d0: f32,
+    iterations: usize,
+    mut sums: impl FnMut(f32) -> (f32, f32),
+) -> Option<f32> {
+    let mut d = d0;
+    for _ in 0..iterations {
+        let x0 = xl as f32 - d - r as f32 - 1.0;
+        let x1 = xl as f32 - d + r as f32 + 1.0;
+        if x0 < 0.0 || x1 + 1.0 >= right_width as f32 {
+            return None;
+        }
+        let (eg, gg) = sums(d);
         if gg < 1e-3 {
             return None;
         }
@@ -164,15 +206,11 @@ pub fn refine_disparity_lk(
 /// than one pixel from `d0` or `dy` more than two.
 #[must_use]
 pub fn refine_disparity_lk_2d(
-    left: GrayView<'_>,
-    right: GrayView<'_>,
-    xl: usize,
-    y: usize,
+    window: PairWindow<'_>,
     d0: f32,
-    r: usize,
     iterations: usize,
 ) -> Option<(f32, f32)> {
-    align_window(left, right, (xl, y), d0, r, iterations, true)
+    align_window(window, d0, iterations, true)
 }
 
 /// Vertical offset, pixels, of the right image against the left around left pixel
@@ -181,15 +219,8 @@ pub fn refine_disparity_lk_2d(
 /// rectified pair; used to check rectification. `None` near the borders, on texture
 /// without vertical gradient, or beyond 2 pixels.
 #[must_use]
-pub fn row_offset(
-    left: GrayView<'_>,
-    right: GrayView<'_>,
-    xl: usize,
-    y: usize,
-    d: f32,
-    r: usize,
-) -> Option<f32> {
-    align_window(left, right, (xl, y), d, r, 10, false).map(|(_, dy)| dy)
+pub fn row_offset(window: PairWindow<'_>, d: f32) -> Option<f32> {
+    align_window(window, d, 10, false).map(|(_, dy)| dy)
 }
 
 /// Gauss-Newton on `Σ (L(x, y) - R(x - d, y + dy))²` over the `(2 r + 1)²` window at left
@@ -197,14 +228,18 @@ pub fn row_offset(
 /// `(d, dy)`; `None` near the borders, on texture that does not fix the unknowns, when
 /// `d` moves more than one pixel or `dy` more than two.
 fn align_window(
-    left: GrayView<'_>,
-    right: GrayView<'_>,
-    (xl, y): (usize, usize),
+    window: PairWindow<'_>,
     d0: f32,
-    r: usize,
     iterations: usize,
     disparity_free: bool,
 ) -> Option<(f32, f32)> {
+    let PairWindow {
+        left,
+        right,
+        xl,
+        y,
+        r,
+    } = window;
     const MAX_SIDE: usize = 13;
     let n = 2 * r + 1;
     let m = n + 2;
@@ -298,12 +333,23 @@ mod tests {
         )
     }
 
-    /// A view of `w x h` pixels.
-    fn view(w: usize, h: usize, data: &[u8]) -> GrayView<'_> {
-        GrayView {
+    /// The 7 x 7 window at left pixel `(xl, y)` of a pair of `w x h` images.
+    fn window<'a>(
+        (w, h): (usize, usize),
+        (left, right): (&'a [u8], &'a [u8]),
+        (xl, y): (usize, usize),
+    ) -> PairWindow<'a> {
+        let view = |data| GrayView {
             width: w,
             height: h,
             data,
+        };
+        PairWindow {
+            left: view(left),
+            right: view(right),
+            xl,
+            y,
+            r: 3,
         }
     }
 
@@ -314,29 +360,23 @@ mod tests {
         let f = |x: f32, _: f32| 128.0 + 60.0 * (x * 0.45).sin() + 30.0 * (x * 0.17 + 1.0).cos();
         for &true_d in &[10.0f32, 10.3, 10.5, 10.75] {
             let (left, right) = shifted_pair((w, h), f, true_d, 0.0);
-            let (l, r) = (view(w, h, &left), view(w, h, &right));
-            let p = refine_disparity(l, r, 40, 10, 10, 2, 3).expect("parabola");
-            let d = refine_disparity_lk(l, r, 40, 10, p, 3, 8).expect("lk");
+            let at = window((w, h), (&left, &right), (40, 10));
+            let p = refine_disparity(at, 10, 2).expect("parabola");
+            let d = refine_disparity_lk(at, p, 8).expect("lk");
             assert!((d - true_d).abs() < 0.05, "{true_d}: parabola {p}, lk {d}");
         }
     }
 
-    /// [`refine_disparity_lk`] with every sample taken on its own, as defined.
-    fn lk_by_definition(
-        left: GrayView<'_>,
-        right: GrayView<'_>,
-        xl: usize,
-        y: usize,
-        d0: f32,
-        r: usize,
-    ) -> Option<f32> {
-        let mut d = d0;
-        for _ in 0..8 {
-            let x0 = xl as f32 - d - r as f32 - 1.0;
-            let x1 = xl as f32 - d + r as f32 + 1.0;
-            if x0 < 0.0 || x1 + 1.0 >= right.width as f32 {
-                return None;
-            }
+    /// The sums of [`refine_disparity_lk`] with every sample taken on its own, as defined.
+    fn lk_by_definition(window: PairWindow<'_>, d0: f32) -> Option<f32> {
+        let PairWindow {
+            left,
+            right,
+            xl,
+            y,
+            r,
+        } = window;
+        gauss_newton_disparity(right.width, xl, r, d0, 8, |d| {
             let (mut eg, mut gg) = (0f32, 0f32);
             for yy in y - r..=y + r {
                 let rrow = &right.data[yy * right.width..(yy + 1) * right.width];
@@ -353,19 +393,8 @@ mod tests {
                     gg += g * g;
                 }
             }
-            if gg < 1e-3 {
-                return None;
-            }
-            let step = -eg / gg;
-            d += step;
-            if (d - d0).abs() > 1.0 {
-                return None;
-            }
-            if step.abs() < 1e-3 {
-                break;
-            }
-        }
-        Some(d)
+            (eg, gg)
+        })
     }
 
     /// Bit for bit the definition, also where `x − d ± 1` round (next to powers of two).
@@ -384,7 +413,6 @@ mod tests {
         let right: Vec<u8> = (0..w * h)
             .map(|i| (f((i % w) as f32 + 7.3) + noise()).round() as u8)
             .collect();
-        let (l, r) = (view(w, h, &left), view(w, h, &right));
         let mut found = 0;
         for xl in (5..w - 5)
             .step_by(3)
@@ -399,10 +427,11 @@ mod tests {
                 1.5,
                 xl as f32 - 4.000_000_5,
             ] {
-                let got = refine_disparity_lk(l, r, xl, 4, d0, 3, 8);
+                let at = window((w, h), (&left, &right), (xl, 4));
+                let got = refine_disparity_lk(at, d0, 8);
                 assert_eq!(
                     got.map(f32::to_bits),
-                    lk_by_definition(l, r, xl, 4, d0, 3).map(f32::to_bits),
+                    lk_by_definition(at, d0).map(f32::to_bits),
                     "xl {xl}, d0 {d0}"
                 );
                 found += usize::from(got.is_some());
@@ -420,8 +449,7 @@ mod tests {
         };
         for &true_dy in &[0.0f32, 0.3, -0.45, 1.1] {
             let (left, right) = shifted_pair((w, h), f, 7.0, true_dy);
-            let (l, r) = (view(w, h, &left), view(w, h, &right));
-            let dy = row_offset(l, r, 40, 20, 7.0, 3).expect("measured");
+            let dy = row_offset(window((w, h), (&left, &right), (40, 20)), 7.0).expect("measured");
             assert!((dy - true_dy).abs() < 0.05, "{true_dy}: {dy}");
         }
     }
@@ -438,14 +466,14 @@ mod tests {
         };
         for &(true_d, true_dy) in &[(7.0f32, 0.0f32), (7.3, 0.5), (6.8, -0.6), (7.5, 1.0)] {
             let (left, right) = shifted_pair((w, h), f, true_d, true_dy);
-            let (l, r) = (view(w, h, &left), view(w, h, &right));
-            let (d, dy) = refine_disparity_lk_2d(l, r, 40, 20, 7.0, 3, 10).expect("2d");
+            let at = window((w, h), (&left, &right), (40, 20));
+            let (d, dy) = refine_disparity_lk_2d(at, 7.0, 10).expect("2d");
             assert!(
                 (d - true_d).abs() < 0.05 && (dy - true_dy).abs() < 0.05,
                 "({true_d}, {true_dy}): ({d}, {dy})"
             );
             if true_dy.abs() >= 0.5 {
-                let d1 = refine_disparity_lk(l, r, 40, 20, 7.0, 3, 10).unwrap_or(f32::NAN);
+                let d1 = refine_disparity_lk(at, 7.0, 10).unwrap_or(f32::NAN);
                 assert!(
                     (d1 - true_d).abs() >= 0.2 || d1.is_nan(),
                     "the row alone should be pulled off: {d1} against {true_d}"

@@ -97,18 +97,14 @@ impl<D: Descriptor> crate::simd::Kernel for NearestBoth<'_, D> {
 
     #[inline(always)]
     fn run(self) -> Self::Output {
-        nearest_both_in(self.0, self.1, self.2, self.3, self.4)
+        nearest_both_in(self)
     }
 }
 
 /// [`nearest_both`], inlined into each instruction set's compilation.
 #[inline(always)]
 fn nearest_both_in<D: Descriptor>(
-    a_kps: &[Keypoint],
-    a: &[D],
-    b_kps: &[Keypoint],
-    b: &[D],
-    window: Option<f32>,
+    NearestBoth(a_kps, a, b_kps, b, window): NearestBoth<'_, D>,
 ) -> (Vec<Option<Best>>, Vec<Option<Best>>) {
     let (order_a, xs_a) = by_column(a_kps);
     let (order_b, xs_b) = by_column(b_kps);

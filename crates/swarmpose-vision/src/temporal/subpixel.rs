@@ -8,7 +8,7 @@
 //! bias. Aligning the patch itself (Lucas-Kanade, translation only) measures the
 //! displacement of what A saw.
 
-use super::template::PatchTemplate;
+use super::template::{AlignLimits, PatchTemplate};
 use crate::features::GrayView;
 
 /// Gauss-Newton (inverse compositional Lucas-Kanade, translation) alignment of the 9x9
@@ -26,7 +26,12 @@ pub fn align_patch(
     iterations: usize,
     max_move_px: f32,
 ) -> Option<(f32, f32)> {
-    PatchTemplate::sample(a, at_a)?.align(b, start_b, iterations, max_move_px, None)
+    let limits = AlignLimits {
+        iterations,
+        max_move_px,
+        min_ncc: None,
+    };
+    PatchTemplate::sample(a, at_a)?.align(b, start_b, limits)
 }
 
 #[cfg(test)]

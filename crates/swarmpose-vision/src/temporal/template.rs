@@ -26,6 +26,20 @@ const SIDE: usize = 2 * TEMPLATE_RADIUS + 3;
 /// Side of the aligned patch.
 const N: usize = 2 * TEMPLATE_RADIUS + 1;
 
+/// When an alignment ([`PatchTemplate::align`], [`PatchTemplate::align_affine`]) stops,
+/// and what it accepts.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AlignLimits {
+    /// Iterations at most; an alignment that has not settled (to 0.01 px) by then fails.
+    pub iterations: usize,
+    /// Largest distance of the position found from the start, pixels.
+    pub max_move_px: f32,
+    /// Smallest zero-mean normalised cross-correlation of the patch found with the
+    /// template (the appearance has changed since the template was taken below it);
+    /// `None`: not checked.
+    pub min_ncc: Option<f32>,
+}
+
 /// The image patch around a keypoint of the frame where a track began, with its
 /// gradients (inverse compositional Lucas-Kanade). The alignments are blind to a change
 /// of exposure between the frames (`I ≈ g T + b`): their steps see only the part of the
@@ -112,26 +126,22 @@ impl PatchTemplate {
     /// Where the patch appears in `image`, starting the search at `start` (pixels): the
     /// position minimising `min_{g,b} Σ (I(p + w) − g T(w) − b)²` (an exposure change
     /// between the images does not move it), or `None` when the patch leaves the
-    /// image, the iterations do not settle (to 0.01 px within `iterations`), the position
-    /// moves more than `max_move_px` from `start`, or, with `min_ncc`, the patch found
-    /// differs from the template more than its contrast allows (zero-mean normalised
-    /// cross-correlation below `min_ncc`: the appearance has changed since the template
-    /// was taken).
+    /// image, or beyond the `limits`: the iterations do not settle, the position moves
+    /// too far from `start`, or the patch found differs from the template more than its
+    /// contrast allows.
     #[must_use]
     pub fn align(
         &self,
         image: GrayView<'_>,
         start: (f32, f32),
-        iterations: usize,
-        max_move_px: f32,
-        min_ncc: Option<f32>,
+        limits: AlignLimits,
     ) -> Option<(f32, f32)> {
         let r = TEMPLATE_RADIUS as f32;
         let (hxx, hxy, hyy) = self.ptensor;
         let det = hxx * hyy - hxy * hxy;
         let mut patch = [0f32; N * N];
         let (mut px, mut py) = start;
-        for _ in 0..iterations {
+        for _ in 0..limits.iterations {
             sample_patch(image, px - r, py - r, N, &mut patch)?;
             let (mut ex, mut ey) = (0f32, 0f32);
             for (((p, t), gx), gy) in patch.iter().zip(&self.values).zip(&self.pgx).zip(&self.pgy) {
@@ -143,11 +153,11 @@ impl PatchTemplate {
             let dy = (hxx * ey - hxy * ex) / det;
             px -= dx;
             py -= dy;
-            if (px - start.0).hypot(py - start.1) > max_move_px {
+            if (px - start.0).hypot(py - start.1) > limits.max_move_px {
                 return None;
             }
             if dx.hypot(dy) < 0.01 {
-                let Some(min_ncc) = min_ncc else {
+                let Some(min_ncc) = limits.min_ncc else {
                     return Some((px, py));
                 };
                 sample_patch(image, px - r, py - r, N, &mut patch)?;
@@ -168,9 +178,7 @@ impl PatchTemplate {
         &self,
         image: GrayView<'_>,
         start: (f32, f32),
-        iterations: usize,
-        max_move_px: f32,
-        min_ncc: Option<f32>,
+        limits: AlignLimits,
     ) -> Option<(f32, f32)> {
         let r = TEMPLATE_RADIUS as f32;
         let coords = |k: usize| ((k % N) as f32 - r, (k / N) as f32 - r);
@@ -188,7 +196,7 @@ impl PatchTemplate {
         let h_inv = h.try_inverse()?;
         let mut m = Matrix3::<f32>::new(1.0, 0.0, start.0, 0.0, 1.0, start.1, 0.0, 0.0, 1.0);
         let mut patch = [0f32; N * N];
-        for _ in 0..iterations {
+        for _ in 0..limits.iterations {
             for (k, sample) in patch.iter_mut().enumerate() {
                 let (x, y) = coords(k);
                 let u = m[(0, 0)] * x + m[(0, 1)] * y + m[(0, 2)];
@@ -217,7 +225,7 @@ impl PatchTemplate {
                 return None;
             }
             let (px, py) = (m[(0, 2)], m[(1, 2)]);
-            if (px - start.0).hypot(py - start.1) > max_move_px {
+            if (px - start.0).hypot(py - start.1) > limits.max_move_px {
                 return None;
             }
             let linear = dp[0]
@@ -226,7 +234,7 @@ impl PatchTemplate {
                 .max(dp[2].abs())
                 .max(dp[3].abs());
             if dp[4].hypot(dp[5]) < 0.01 && linear * r < 0.01 {
-                let Some(min_ncc) = min_ncc else {
+                let Some(min_ncc) = limits.min_ncc else {
                     return Some((px, py));
                 };
                 return (ncc(&patch, &self.values) >= min_ncc).then_some((px, py));
@@ -291,35 +299,57 @@ fn ncc(a: &[f32; N * N], b: &[f32; N * N]) -> f32 {
 mod tests {
     use super::*;
 
-    fn view(data: &[u8], width: usize, height: usize) -> GrayView<'_> {
+    /// Width and height of the test images, pixels.
+    const W: usize = 80;
+    const H: usize = 60;
+
+    fn view(data: &[u8]) -> GrayView<'_> {
         GrayView {
-            width,
-            height,
+            width: W,
+            height: H,
             data,
         }
     }
 
-    fn image(w: usize, h: usize, shift: (f32, f32)) -> Vec<u8> {
-        let pattern = |x: f32, y: f32| {
+    /// A textured image whose pixel `(x, y)` shows the pattern at `source(x, y)`.
+    fn warped(source: impl Fn(f32, f32) -> (f32, f32)) -> Vec<u8> {
+        let pattern = |(x, y): (f32, f32)| {
             128.0 + 60.0 * (0.31 * x).sin() * (0.23 * y).cos() + 30.0 * (0.17 * (x + y)).sin()
         };
-        (0..h)
-            .flat_map(|y| (0..w).map(move |x| (x, y)))
-            .map(|(x, y)| pattern(x as f32 - shift.0, y as f32 - shift.1).round() as u8)
+        (0..H)
+            .flat_map(|y| (0..W).map(move |x| (x, y)))
+            .map(|(x, y)| pattern(source(x as f32, y as f32)).round() as u8)
             .collect()
+    }
+
+    /// The pattern shifted by `shift` pixels.
+    fn image(shift: (f32, f32)) -> Vec<u8> {
+        warped(|x, y| (x - shift.0, y - shift.1))
+    }
+
+    /// Alignment limits with the cross-correlation checked at 0.9.
+    fn limits(iterations: usize, max_move_px: f32) -> AlignLimits {
+        AlignLimits {
+            iterations,
+            max_move_px,
+            min_ncc: Some(0.9),
+        }
+    }
+
+    /// The template at the centre `(40, 30)` of the unshifted pattern.
+    fn centre_template() -> PatchTemplate {
+        PatchTemplate::sample(view(&image((0.0, 0.0))), (40.0, 30.0)).expect("textured")
     }
 
     /// A template taken in one image is found, to a fraction of a pixel, in images
     /// shifted by known amounts, each time from the template (no chaining).
     #[test]
     fn shifted_copies_are_found_from_the_first_patch() {
-        let (w, h) = (80usize, 60usize);
-        let first = image(w, h, (0.0, 0.0));
-        let t = PatchTemplate::sample(view(&first, w, h), (40.0, 30.0)).expect("textured");
+        let t = centre_template();
         for shift in [(0.3f32, -0.2f32), (1.37, -0.62), (-1.1, 0.9)] {
-            let img = image(w, h, shift);
+            let img = image(shift);
             let (x, y) = t
-                .align(view(&img, w, h), (40.0, 30.0), 20, 2.0, Some(0.9))
+                .align(view(&img), (40.0, 30.0), limits(20, 2.0))
                 .expect("found");
             assert!(
                 (x - 40.0 - shift.0).abs() < 0.05 && (y - 30.0 - shift.1).abs() < 0.05,
@@ -333,20 +363,18 @@ mod tests {
     /// exposure out of their steps.
     #[test]
     fn an_exposure_change_does_not_move_the_patch() {
-        let (w, h) = (80usize, 60usize);
-        let first = image(w, h, (0.0, 0.0));
-        let t = PatchTemplate::sample(view(&first, w, h), (40.0, 30.0)).expect("textured");
+        let t = centre_template();
         let shift = (1.37f32, -0.62f32);
         for (gain, offset) in [(1.15f32, -20.0f32), (0.7, 15.0)] {
-            let img: Vec<u8> = image(w, h, shift)
+            let img: Vec<u8> = image(shift)
                 .iter()
                 .map(|&v| (gain * f32::from(v) + offset).round().clamp(0.0, 255.0) as u8)
                 .collect();
             for affine in [false, true] {
                 let found = if affine {
-                    t.align_affine(view(&img, w, h), (41.0, 30.0), 30, 3.0, Some(0.9))
+                    t.align_affine(view(&img), (41.0, 30.0), limits(30, 3.0))
                 } else {
-                    t.align(view(&img, w, h), (41.0, 30.0), 30, 3.0, Some(0.9))
+                    t.align(view(&img), (41.0, 30.0), limits(30, 3.0))
                 };
                 let (x, y) = found.expect("found");
                 assert!(
@@ -361,29 +389,18 @@ mod tests {
     /// alignment, to a fraction of a pixel, from a start one pixel off.
     #[test]
     fn an_affine_copy_is_found() {
-        let (w, h) = (80usize, 60usize);
-        let pattern = |x: f32, y: f32| {
-            128.0 + 60.0 * (0.31 * x).sin() * (0.23 * y).cos() + 30.0 * (0.17 * (x + y)).sin()
-        };
-        let first: Vec<u8> = (0..h)
-            .flat_map(|y| (0..w).map(move |x| pattern(x as f32, y as f32).round() as u8))
-            .collect();
         // The second image shows the first through x' = c + A (x - c) + t.
         let (c, t) = ((40.0f32, 30.0f32), (0.7f32, -0.4f32));
         let a = [[1.08f32, 0.03], [-0.02, 1.06]];
         let det = a[0][0] * a[1][1] - a[0][1] * a[1][0];
-        let second: Vec<u8> = (0..h)
-            .flat_map(|y| (0..w).map(move |x| (x as f32, y as f32)))
-            .map(|(x, y)| {
-                let (dx, dy) = (x - c.0 - t.0, y - c.1 - t.1);
-                let sx = (a[1][1] * dx - a[0][1] * dy) / det + c.0;
-                let sy = (-a[1][0] * dx + a[0][0] * dy) / det + c.1;
-                pattern(sx, sy).round() as u8
-            })
-            .collect();
-        let tpl = PatchTemplate::sample(view(&first, w, h), c).expect("textured");
-        let (x, y) = tpl
-            .align_affine(view(&second, w, h), (c.0 + 1.5, c.1), 30, 3.0, Some(0.9))
+        let second = warped(|x, y| {
+            let (dx, dy) = (x - c.0 - t.0, y - c.1 - t.1);
+            let sx = (a[1][1] * dx - a[0][1] * dy) / det + c.0;
+            let sy = (-a[1][0] * dx + a[0][0] * dy) / det + c.1;
+            (sx, sy)
+        });
+        let (x, y) = centre_template()
+            .align_affine(view(&second), (c.0 + 1.5, c.1), limits(30, 3.0))
             .expect("found");
         assert!(
             (x - c.0 - t.0).abs() < 0.05 && (y - c.1 - t.1).abs() < 0.05,
@@ -397,16 +414,14 @@ mod tests {
     /// near the border is not sampled.
     #[test]
     fn flat_absent_or_clipped_patches_are_refused() {
-        let (w, h) = (80usize, 60usize);
-        let flat = vec![100u8; w * h];
-        assert!(PatchTemplate::sample(view(&flat, w, h), (40.0, 30.0)).is_none());
-        let first = image(w, h, (0.0, 0.0));
-        let t = PatchTemplate::sample(view(&first, w, h), (40.0, 30.0)).expect("textured");
-        let noise: Vec<u8> = (0..w * h).map(|i| ((i * 7919) % 251) as u8).collect();
+        let flat = vec![100u8; W * H];
+        assert!(PatchTemplate::sample(view(&flat), (40.0, 30.0)).is_none());
+        let t = centre_template();
+        let noise: Vec<u8> = (0..W * H).map(|i| ((i * 7919) % 251) as u8).collect();
         assert!(
-            t.align(view(&noise, w, h), (40.0, 30.0), 20, 2.0, Some(0.9))
+            t.align(view(&noise), (40.0, 30.0), limits(20, 2.0))
                 .is_none()
         );
-        assert!(PatchTemplate::sample(view(&first, w, h), (2.0, 2.0)).is_none());
+        assert!(PatchTemplate::sample(view(&image((0.0, 0.0))), (2.0, 2.0)).is_none());
     }
 }

@@ -5,10 +5,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
-/// The path as a `&str` (temp paths are UTF-8).
-pub fn s(p: &Path) -> &str {
-    p.to_str().expect("utf-8 path")
-}
+pub use crate::common::s;
 
 /// Checks the exit status and that standard error's first line starts with `start`;
 /// returns standard error.
@@ -30,34 +27,11 @@ pub fn expect(out: &Output, code: i32, start: &str) -> String {
 }
 
 /// `correspondences` on frames 0 and 1 of `seq`, writing into `tmp`.
-pub fn corr(
-    tmp: &crate::common::TempDir,
-    seq: &std::path::Path,
-    extra: &[&str],
-) -> std::process::Output {
-    let out = tmp.0.join("c.csv");
-    let mut args = vec![
-        "correspondences",
-        s(seq),
-        "--frames",
-        "0",
-        "1",
-        "--out",
-        s(&out),
-    ];
-    args.extend_from_slice(extra);
-    crate::common::swarmpose(&args, None)
+pub fn corr(tmp: &crate::common::TempDir, seq: &Path, extra: &[&str]) -> Output {
+    crate::common::correspondences(seq, ("0", "1"), &tmp.0.join("c.csv"), extra)
 }
 
-/// Checks exit status 0, showing standard error otherwise.
-pub fn succeeded(out: &Output) {
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
+pub use crate::common::assert_success as succeeded;
 
 fn copy(from: &Path, to: &Path) {
     if let Some(d) = to.parent() {

@@ -3,6 +3,7 @@
 #![allow(dead_code)] // each test crate uses its own subset
 
 use std::io::Write;
+use std::path::Path;
 use std::process::{Command, Output, Stdio};
 
 use nalgebra::Point3;
@@ -12,6 +13,11 @@ use serde_json::Value;
 pub const HEADER: &str = "src_x,src_y,src_z,dst_x,dst_y,dst_z";
 
 pub use swarmpose_testdata::TempDir;
+
+/// The path as a `&str` (temp paths are UTF-8).
+pub fn s(p: &Path) -> &str {
+    p.to_str().expect("utf-8 path")
+}
 
 /// Runs the binary with `args`, feeding `stdin` if given; backtraces are switched on so
 /// that one would show if anything panicked.
@@ -59,6 +65,45 @@ pub fn assert_success(out: &Output) {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+}
+
+/// Runs `swarmpose odometry [SEQUENCE] --out OUT_DIR --quiet EXTRA...` (the built-in
+/// synthetic sequence without a `sequence`).
+pub fn odometry(sequence: Option<&Path>, out_dir: &Path, extra: &[&str]) -> Output {
+    let mut args = vec!["odometry"];
+    args.extend(sequence.map(s));
+    args.extend(["--out", s(out_dir), "--quiet"]);
+    args.extend_from_slice(extra);
+    swarmpose(&args, None)
+}
+
+/// Runs `swarmpose correspondences SEQUENCE --frames A B --out OUT EXTRA...`.
+pub fn correspondences(
+    sequence: &Path,
+    (a, b): (&str, &str),
+    out: &Path,
+    extra: &[&str],
+) -> Output {
+    let mut args = vec![
+        "correspondences",
+        s(sequence),
+        "--frames",
+        a,
+        b,
+        "--out",
+        s(out),
+    ];
+    args.extend_from_slice(extra);
+    swarmpose(&args, None)
+}
+
+/// `swarmpose evaluate ESTIMATE TRUTH --json` of two files of `dir`, its JSON.
+pub fn evaluate_json(dir: &Path, estimate: &str, truth: &str) -> Value {
+    let (estimate, truth) = (dir.join(estimate), dir.join(truth));
+    json_of(&swarmpose(
+        &["evaluate", s(&estimate), s(&truth), "--json"],
+        None,
+    ))
 }
 
 /// A correspondence CSV; values written in Rust's shortest round-trip form.

@@ -11,16 +11,21 @@ pub(super) fn scene_scale(points: &[Point3<f64>]) -> f64 {
         return 0.0;
     }
     let mut column: Vec<f64> = Vec::with_capacity(points.len());
+    let centre = median_centre(points, &mut column);
+    column.clear();
+    column.extend(points.iter().map(|p| (p - centre).norm()));
+    median(&mut column)
+}
+
+/// The coordinate-wise median of `points`, with `column` as the scratch space.
+fn median_centre(points: &[Point3<f64>], column: &mut Vec<f64>) -> Point3<f64> {
     let mut centre = [0.0; 3];
     for (k, c) in centre.iter_mut().enumerate() {
         column.clear();
         column.extend(points.iter().map(|p| p[k]));
-        *c = median(&mut column);
+        *c = median(column);
     }
-    let centre = Point3::from(centre);
-    column.clear();
-    column.extend(points.iter().map(|p| (p - centre).norm()));
-    median(&mut column)
+    Point3::from(centre)
 }
 
 /// Points farther than this many scene scales from the centre are left out of the
@@ -44,13 +49,7 @@ pub(super) fn check_core(
         return Err(coincident);
     }
     let mut column: Vec<f64> = Vec::with_capacity(points.len());
-    let mut centre = [0.0; 3];
-    for (k, c) in centre.iter_mut().enumerate() {
-        column.clear();
-        column.extend(points.iter().map(|p| p[k]));
-        *c = median(&mut column);
-    }
-    let centre = Point3::from(centre);
+    let centre = median_centre(points, &mut column);
     let core = points
         .iter()
         .filter(|p| (*p - centre).norm() <= CORE_RADIUS * scale);
