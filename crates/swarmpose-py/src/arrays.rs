@@ -105,43 +105,31 @@ pub(crate) fn matrices(
     })
 }
 
+/// The 4x4 matrices of an (N, 4, 4) array.
+fn matrices4_of<T: Copy + Into<f64>>(
+    name: &str,
+    v: ArrayViewD<'_, T>,
+) -> PyResult<Vec<Matrix4<f64>>> {
+    let shape = v.shape().to_vec();
+    match v.into_dimensionality::<Ix3>() {
+        Ok(v) if v.shape()[1..] == [4, 4] => Ok(v
+            .outer_iter()
+            .map(|m| Matrix4::from_fn(|r, c| m[[r, c]].into()))
+            .collect()),
+        _ => Err(PyValueError::new_err(format!(
+            "{name} has shape {}: (N, 4, 4) expected",
+            shape_text(&shape)
+        ))),
+    }
+}
+
 /// A (N, 4, 4) float array of rigid transforms: the last row `0 0 0 1` and the 3x3 block
 /// a rotation to within rounding ([`swarmpose_eval::trajectory::check_rotation`], as for
 /// trajectory files), projected to the nearest proper one.
 pub(crate) fn poses(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Vec<Isometry3<f64>>> {
-    let shape_error = |shape: &[usize]| {
-        PyValueError::new_err(format!(
-            "{name} has shape {}: (N, 4, 4) expected",
-            shape_text(shape)
-        ))
-    };
-    let m: Vec<Matrix4<f64>> = match floats(name, obj)? {
-        Floats::F64(a) => {
-            let v = a.as_array();
-            let shape = v.shape().to_vec();
-            let v = v
-                .into_dimensionality::<Ix3>()
-                .map_err(|_| shape_error(&shape))?;
-            if v.shape()[1..] != [4, 4] {
-                return Err(shape_error(&shape));
-            }
-            v.outer_iter()
-                .map(|m| Matrix4::from_fn(|r, c| m[[r, c]]))
-                .collect()
-        }
-        Floats::F32(a) => {
-            let v = a.as_array();
-            let shape = v.shape().to_vec();
-            let v = v
-                .into_dimensionality::<Ix3>()
-                .map_err(|_| shape_error(&shape))?;
-            if v.shape()[1..] != [4, 4] {
-                return Err(shape_error(&shape));
-            }
-            v.outer_iter()
-                .map(|m| Matrix4::from_fn(|r, c| f64::from(m[[r, c]])))
-                .collect()
-        }
+    let m = match floats(name, obj)? {
+        Floats::F64(a) => matrices4_of(name, a.as_array())?,
+        Floats::F32(a) => matrices4_of(name, a.as_array())?,
     };
     m.iter()
         .enumerate()
