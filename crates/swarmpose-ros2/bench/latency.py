@@ -165,11 +165,11 @@ def main():
         for hz in (10.0, None):
             rows, dropped, n, err = run(binary, kitti, threads, hz, args.pairs, 150 + threads * 2 + (hz is None))
             lat, node_ms, eng, write = rows[:, 0], rows[:, 1], rows[:, 2], rows[:, 3]
-            transport = lat - node_ms
+            trans = lat - node_ms
             rate = "10 Hz" if hz else "full rate"
             lines.append(
                 f"| {threads} | {rate} | {len(rows)} | {dropped} | {pct(lat, 50):.1f} | {pct(lat, 99):.1f} "
-                f"| {pct(eng, 50):.1f} | {pct(node_ms, 50):.1f} | {pct(transport, 50):.1f} | {pct(transport, 99):.1f} "
+                f"| {pct(eng, 50):.1f} | {pct(node_ms, 50):.1f} | {pct(trans, 50):.1f} | {pct(trans, 99):.1f} "
                 f"| {pct(write, 50):.1f} |"
             )
             print(lines[-1], flush=True)
