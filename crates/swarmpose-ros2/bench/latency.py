@@ -1,7 +1,7 @@
 """Latency of swarmpose-ros2, from a stereo pair published to its nav_msgs/Odometry
 received, over Cyclone DDS on the loopback interface (not a timed test: a benchmark).
 
-Usage: python latency.py [--pairs N] [--out RESULTS.md]
+Usage: python latency.py [--pairs N] [--out RESULTS.md] [--no-sweep]
 
 Runs the node (target/release/swarmpose-ros2, built by `cargo build --release -p
 swarmpose-ros2`) with 1 and 2 threads, publishing KITTI's 1241x376 mono8 pairs
@@ -16,7 +16,11 @@ Odometry's way back).
 Then the transport alone: the example `echo` (`cargo build --release -p swarmpose-ros2
 --example echo`) takes each image through the node's RustDDS setup and sends its header
 back; one image (466 kB) and back is timed at 10 Hz, with RustDDS's socket buffers at
-their default (8 MiB) and at 1 MiB and 32 MiB (`SOCKET_BUFFER_BYTES`)."""
+their default (8 MiB) and at 1 MiB and 32 MiB (`SOCKET_BUFFER_BYTES`).
+
+Last (unless --no-sweep), `transport.py`'s sweep: the round trip against the image's size
+for RustDDS and Cyclone DDS echo peers. Rewrites the sections after `<!-- latency -->`
+and `<!-- transport -->` in RESULTS.md."""
 
 import argparse
 import os
@@ -32,6 +36,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "tests" / "py"))
 
 from dds_peer import Kitti, Peer, stamp_ns  # noqa: E402
+import transport  # noqa: E402
 
 REPO = HERE.parents[2]
 BASE_NS = 1_700_000_000 * 10**9
@@ -150,6 +155,7 @@ def main():
     ap.add_argument("--pairs", type=int, default=100)
     ap.add_argument("--out", type=Path, default=HERE.parent / "RESULTS.md")
     ap.add_argument("--profile", default="release", help="cargo profile folder of the binaries")
+    ap.add_argument("--no-sweep", action="store_true", help="without transport.py's size sweep")
     args = ap.parse_args()
     data = Path(os.environ.get("SWARMPOSE_DATA", REPO.parent / "shared" / "data"))
     kitti = Kitti(data / "kitti_vo_seq2")
@@ -159,11 +165,11 @@ def main():
         for hz in (10.0, None):
             rows, dropped, n, err = run(binary, kitti, threads, hz, args.pairs, 150 + threads * 2 + (hz is None))
             lat, node_ms, eng, write = rows[:, 0], rows[:, 1], rows[:, 2], rows[:, 3]
-            transport = lat - node_ms
+            trans = lat - node_ms
             rate = "10 Hz" if hz else "full rate"
             lines.append(
                 f"| {threads} | {rate} | {len(rows)} | {dropped} | {pct(lat, 50):.1f} | {pct(lat, 99):.1f} "
-                f"| {pct(eng, 50):.1f} | {pct(node_ms, 50):.1f} | {pct(transport, 50):.1f} | {pct(transport, 99):.1f} "
+                f"| {pct(eng, 50):.1f} | {pct(node_ms, 50):.1f} | {pct(trans, 50):.1f} | {pct(trans, 99):.1f} "
                 f"| {pct(write, 50):.1f} |"
             )
             print(lines[-1], flush=True)
@@ -186,10 +192,11 @@ def main():
         "| RustDDS socket buffers | images | round trip p50 ms | p99 ms | max ms |",
         "|---|---|---|---|---|",
     ]
-    note = [f"Binaries of the `{args.profile}` profile; {args.pairs} pairs a row; the machine was busy.", ""]
+    note = [f"Binaries of the `{args.profile}` profile; {args.pairs} pairs a row; {transport.busy_note()}.", ""]
     text = "\n".join(note + header + lines + echo_header + echo_lines) + "\n"
-    args.out.write_text(args.out.read_text().split("<!-- latency -->")[0] + "<!-- latency -->\n" + text
-                        if args.out.exists() else "<!-- latency -->\n" + text)
+    transport.write_section(args.out, "<!-- latency -->", text)
+    if not args.no_sweep:
+        transport.write_section(args.out, transport.MARKER, transport.sweep(args.pairs, args.profile))
     print(f"written to {args.out}")
 
 

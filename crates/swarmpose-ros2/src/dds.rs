@@ -79,7 +79,7 @@ impl Network {
 }
 
 /// Sensor data QoS (best effort, volatile, keep last `depth`).
-fn sensor_qos(depth: usize) -> QosProfile {
+pub(crate) fn sensor_qos(depth: usize) -> QosProfile {
     QosProfile::subscription_default().history(History::KeepLast { depth })
 }
 
@@ -172,7 +172,8 @@ impl RosNode {
             .map_err(|e| NodeError::dds(topic, e))
     }
 
-    fn publisher<M: RosMessage + Serialize>(
+    /// A publisher of `topic` with `qos`.
+    pub(crate) fn publisher<M: RosMessage + Serialize>(
         &mut self,
         topic: &str,
         qos: QosProfile,
