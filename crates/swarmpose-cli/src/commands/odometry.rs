@@ -385,7 +385,11 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
         Some(dir) => {
             let opened = open_input(dir, &bag_options).map_err(odometry_error)?;
             bag = opened.bag;
-            let title = format!("{} ({})", dir.display(), opened.input.layout());
+            let layout = match opened.input.layout() {
+                "tum rgb-d" => "TUM RGB-D",
+                other => other,
+            };
+            let title = format!("{} ({layout})", dir.display());
             match opened.input {
                 Input::Stereo(seq) => {
                     for note in seq.notes() {
