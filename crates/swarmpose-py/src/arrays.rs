@@ -1,6 +1,6 @@
 //! numpy arrays in and out: (N, 3) points and (N, 3, 3) covariances of float32 or
 //! float64 in any memory order (read in place, no intermediate copy), 4x4 poses, and
-//! 8-bit images.
+//! images (8-bit gray, float32 depth).
 
 use std::borrow::Cow;
 
@@ -194,13 +194,13 @@ pub(crate) fn transforms<'py>(
     Array3::from_shape_fn((poses.len(), 4, 4), |(i, r, c)| h[i][(r, c)]).into_pyarray(py)
 }
 
-/// An (H, W) image array, row-major.
-pub(crate) fn gray_image<'py>(
+/// An (H, W) image array of `data`, row-major (8-bit gray, or float32 depth).
+pub(crate) fn image_array<'py, T: numpy::Element + Clone>(
     py: Python<'py>,
     width: usize,
     height: usize,
-    data: &[u8],
-) -> PyResult<Bound<'py, PyArray2<u8>>> {
+    data: &[T],
+) -> PyResult<Bound<'py, PyArray2<T>>> {
     let a = Array2::from_shape_vec((height, width), data.to_vec())
         .map_err(|e| PyValueError::new_err(format!("image of {width}x{height}: {e}")))?;
     Ok(a.into_pyarray(py))

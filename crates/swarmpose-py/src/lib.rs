@@ -11,8 +11,8 @@
 //! | `OdometryConfig` | [`swarmpose_odometry::OdometryConfig`] |
 //! | `Odometry`, `Odometry.track` | [`swarmpose_odometry::Odometry`], [`swarmpose_odometry::Odometry::track`] |
 //! | `Odometry.rgbd`, `Odometry.track_rgbd` | [`swarmpose_odometry::Odometry::track_rgbd`] |
-//! | `odometry` | [`swarmpose_runs::batch::run_sequence`] |
-//! | `Sequence` | [`swarmpose_datasets::open`] |
+//! | `odometry` | [`swarmpose_runs::batch::run_sequence`], [`swarmpose_runs::batch::run_rgbd_sequence`] |
+//! | `Sequence` | [`swarmpose_cli::commands::odometry_input::open_input`] (the command line's front door) |
 //! | `evaluate` | [`swarmpose_eval::evaluate`] |
 //! | `batch.run`, `batch.merge` | [`swarmpose_cli::batch`] |
 //!

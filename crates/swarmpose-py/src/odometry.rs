@@ -9,7 +9,6 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use swarmpose_odometry::frontend::RgbdNoise;
 use swarmpose_odometry::{DepthView, RgbdInput, StereoCamera, StereoInput};
-use swarmpose_runs::batch::camera_of;
 use swarmpose_runs::output::calibration_json;
 use swarmpose_vision::features::GrayView;
 use swarmpose_vision::stereo::RectifiedStereo;
@@ -86,9 +85,10 @@ impl Odometry {
         Ok(Self::of(config.get().build(camera, None)?))
     }
 
-    /// An engine for the camera of a sequence directory (its calibration and image
-    /// size); settings as for ``Odometry(...)``: ``config`` or ``OdometryConfig``'s
-    /// keywords.
+    /// An engine for the camera of a sequence directory or bag (its calibration and image
+    /// size; an RGB-D input's engine takes ``track_rgbd`` frames, as from
+    /// ``Odometry.rgbd``); settings as for ``Odometry(...)``: ``config`` or
+    /// ``OdometryConfig``'s keywords.
     #[staticmethod]
     #[pyo3(signature = (sequence_dir, *, config = None, **options))]
     fn from_sequence<'py>(
@@ -99,9 +99,7 @@ impl Odometry {
     ) -> PyResult<Self> {
         let config = OdometryConfig::resolve(py, "Odometry.from_sequence", config, options)?;
         let seq = Sequence::open(&sequence_dir, BagArgs::default())?;
-        Ok(Self::of(
-            config.get().build(camera_of(seq.inner.as_ref()), None)?,
-        ))
+        Ok(Self::of(seq.engine(config.get())?))
     }
 
     /// Takes the next stereo pair (rectified, (height, width) uint8 arrays of the

@@ -9,7 +9,6 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use swarmpose_odometry::FrameResult;
-use swarmpose_runs::batch::{camera_of, run_sequence};
 use swarmpose_runs::config::MAX_FRAME_PERIOD_S;
 use swarmpose_runs::output::{Summary, calibration_json};
 
@@ -20,9 +19,10 @@ use crate::frame::Frame;
 use crate::options::OdometryConfig;
 use crate::sequence::{BagArgs, Sequence};
 
-/// Runs the odometry over a whole stereo sequence directory (KITTI, Karlsruhe or
-/// EuRoC) or ROS 2 bag, frame ``i`` at its timestamp (or ``i * frame_period`` seconds
-/// without one), exactly as ``swarmpose odometry`` does; a bag's ``left``, ``right`` and
+/// Runs the odometry over a whole sequence directory (KITTI, Karlsruhe, EuRoC or TUM
+/// RGB-D) or ROS 2 bag (stereo or RGB-D), frame ``i`` at its timestamp (or ``i *
+/// frame_period`` seconds without one; RGB-D frames always have one), exactly as
+/// ``swarmpose odometry`` does; a bag's ``left``, ``right``, ``depth`` and
 /// ``stamp_tolerance`` (milliseconds) as for ``Sequence``; settings as for
 /// ``Odometry(...)``: ``config`` (an ``OdometryConfig``) or its keywords. Returns an ``OdometryRun``. The GIL is released
 /// during the run; Ctrl-C stops it between frames. A frame that cannot be read stops the
@@ -32,7 +32,7 @@ use crate::sequence::{BagArgs, Sequence};
 /// raises ``NotUsableError`` (the command line's exit status 3), its ``run`` the whole run.
 #[pyfunction]
 #[pyo3(signature = (sequence_dir, *, frame_period = None, left = None, right = None,
-                    stamp_tolerance = 0.0, config = None, **options))]
+                    depth = None, stamp_tolerance = 0.0, config = None, **options))]
 #[allow(clippy::too_many_arguments)] // Python's keywords
 pub(crate) fn odometry<'py>(
     py: Python<'py>,
@@ -40,6 +40,7 @@ pub(crate) fn odometry<'py>(
     frame_period: Option<f64>,
     left: Option<String>,
     right: Option<String>,
+    depth: Option<String>,
     stamp_tolerance: f64,
     config: Option<Bound<'py, OdometryConfig>>,
     options: Option<&Bound<'py, PyDict>>,
@@ -58,14 +59,15 @@ pub(crate) fn odometry<'py>(
         BagArgs {
             left,
             right,
+            depth,
             stamp_tolerance,
         },
     )?;
-    let mut engine = config.get().build(camera_of(seq.inner.as_ref()), None)?;
+    let mut engine = seq.engine(config.get())?;
     let mut frames: Vec<FrameResult> = Vec::with_capacity(seq.inner.len());
     let mut interrupted: Option<PyErr> = None;
     let ended = py.detach(|| {
-        run_sequence(seq.inner.as_ref(), &mut engine, frame_period, &mut |r| {
+        seq.run(&mut engine, frame_period, &mut |r| {
             frames.push(r.clone());
             match Python::attach(|py| py.check_signals()) {
                 Ok(()) => ControlFlow::Continue(()),

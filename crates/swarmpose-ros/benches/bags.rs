@@ -18,21 +18,19 @@
 use std::collections::BTreeMap;
 use std::fs::File;
 use std::hint::black_box;
-use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use mcap::records::MessageHeader;
-use mcap::{Compression, WriteOptions};
+use mcap::Compression;
 use nalgebra::{Isometry3, Matrix6, Translation3, UnitQuaternion};
 use swarmpose_datasets::{StereoSequence, open};
 use swarmpose_ros::convert::{FrameNames, Measurement, odometry};
 use swarmpose_ros::msg::{
     CameraInfo, DiagnosticArray, DiagnosticStatus, Header, Image, Pose, RosMessage, Time, encode,
-    schema_text,
 };
 use swarmpose_ros::write::{FrameMessages, OdometryMcap};
 use swarmpose_ros::{BagSequence, StereoOptions};
+use swarmpose_testdata::bags::write_mcap_messages;
 
 /// Frames of the clip.
 const FRAMES: usize = 10;
@@ -109,39 +107,15 @@ fn messages(seq: &dyn StereoSequence) -> Messages {
     out
 }
 
-/// Writes `messages` as an MCAP bag at `path`.
+/// Writes `messages` as an MCAP bag at `path` (swarmpose-testdata's writer).
 fn write_mcap(messages: &Messages, path: &Path, compression: Option<Compression>) {
-    let file = BufWriter::new(File::create(path).expect("bag file"));
-    let mut w = WriteOptions::new()
-        .profile("ros2")
-        .compression(compression)
-        .create(file)
-        .expect("mcap writer");
-    let mut channels: BTreeMap<String, u16> = BTreeMap::new();
-    for (sequence, (topic, ty, t, data)) in messages.iter().enumerate() {
-        let ch = match channels.get(topic) {
-            Some(&ch) => ch,
-            None => {
-                let text = schema_text(ty).expect("schema");
-                let schema = w
-                    .add_schema(ty, "ros2msg", text.as_bytes())
-                    .expect("schema");
-                let ch = w
-                    .add_channel(schema, topic, "cdr", &BTreeMap::new())
-                    .expect("channel");
-                channels.insert(topic.clone(), ch);
-                ch
-            }
-        };
-        let h = MessageHeader {
-            channel_id: ch,
-            sequence: sequence as u32,
-            log_time: *t as u64,
-            publish_time: *t as u64,
-        };
-        w.write_to_known_channel(&h, data).expect("write");
-    }
-    w.finish().expect("finish");
+    write_mcap_messages(
+        path,
+        messages
+            .iter()
+            .map(|(topic, ty, t, data)| (topic.as_str(), *ty, *t, data.as_slice())),
+        compression,
+    );
 }
 
 /// Writes `messages` as a rosbag2 SQLite file at `path` (the tables `ros2 bag record`

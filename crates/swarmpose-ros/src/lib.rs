@@ -24,5 +24,5 @@ pub mod write;
 pub use bag::{Bag, Topic};
 pub use error::{CdrError, RosError};
 pub use rgbd::BagRgbdSequence;
-pub use source::{BagInfo, Input, Opened, OpenedInput, is_bag, open_input, open_stereo};
+pub use source::{BagInfo, Input, OpenedInput, is_bag, open_input};
 pub use stereo::{BagSequence, StereoOptions};

@@ -15,7 +15,6 @@
 
 use std::path::Path;
 
-use nalgebra::Isometry3;
 use swarmpose_datasets::{DatasetError, DepthSequence, Intrinsics, RgbdFrame};
 use swarmpose_vision::image::GrayImage;
 
@@ -23,7 +22,8 @@ use crate::bag::{Bag, Topic};
 use crate::error::RosError;
 use crate::image::{DEPTH_ENCODINGS, image_to_depth_m};
 use crate::msg::{CameraInfo, Image, RosMessage};
-use crate::stereo::pairing::{UnpairedImage, pair_frames};
+use crate::stereo::frames::{BagFrames, bag_sequence_methods};
+use crate::stereo::pairing::pair_frames;
 use crate::stereo::scan::scan;
 use crate::stereo::topics::{CameraTopics, cameras};
 use crate::stereo::{StereoOptions, calib_error, gray, named_camera, to_dataset, topics_error};
@@ -31,17 +31,9 @@ use crate::stereo::{StereoOptions, calib_error, gray, named_camera, to_dataset, 
 /// An RGB-D sequence read from a ROS 2 bag.
 #[derive(Debug)]
 pub struct BagRgbdSequence {
-    bag: Bag,
-    colour: Topic,
-    depth: Topic,
-    /// `(colour message, depth message, colour header stamp ns)` of each frame.
-    frames: Vec<(usize, usize, i64)>,
+    /// The colour and depth topics paired into frames.
+    frames: BagFrames,
     intrinsics: Intrinsics,
-    size: (usize, usize),
-    colour_info: CameraInfo,
-    frame_id: String,
-    unpaired: Vec<UnpairedImage>,
-    notes: Vec<String>,
 }
 
 /// The encoding of the first image of `topic`, when it is a `sensor_msgs/Image` that
@@ -273,53 +265,15 @@ impl BagRgbdSequence {
             return Err(calib(why));
         }
         Ok(Self {
-            frames: paired.frames,
-            unpaired: paired.unpaired,
-            notes: paired.notes,
+            frames: BagFrames::new(bag, [ct, dt], paired, size, (info, cs.frame_id)),
             intrinsics: k,
-            size,
-            colour_info: info,
-            frame_id: cs.frame_id,
-            colour: ct,
-            depth: dt,
-            bag,
         })
     }
 
-    /// The bag.
+    /// The bag, its colour and depth topics and their frames.
     #[must_use]
-    pub fn bag(&self) -> &Bag {
-        &self.bag
-    }
-
-    /// The colour and depth image topics.
-    #[must_use]
-    pub fn topics(&self) -> (&str, &str) {
-        (&self.colour.name, &self.depth.name)
-    }
-
-    /// The header stamp of each frame's colour image, nanoseconds.
-    #[must_use]
-    pub fn stamps_ns(&self) -> Vec<i64> {
-        self.frames.iter().map(|f| f.2).collect()
-    }
-
-    /// The colour camera's `camera_info` (its first message).
-    #[must_use]
-    pub fn camera_info(&self) -> &CameraInfo {
-        &self.colour_info
-    }
-
-    /// The colour images' `frame_id`.
-    #[must_use]
-    pub fn frame_id(&self) -> &str {
-        &self.frame_id
-    }
-
-    /// The images left without a partner, in stamp order.
-    #[must_use]
-    pub fn unpaired(&self) -> &[UnpairedImage] {
-        &self.unpaired
+    pub fn frames(&self) -> &BagFrames {
+        &self.frames
     }
 
     /// Frame `i`: the colour image as gray and the depth, metres.
@@ -327,64 +281,29 @@ impl BagRgbdSequence {
     /// # Errors
     /// [`RosError`] naming the topic and message.
     pub fn read_frame(&self, i: usize) -> Result<(GrayImage, Vec<f32>), RosError> {
-        let &(c, d, _) = self.frames.get(i).ok_or_else(|| RosError::Container {
-            path: self.bag.path().to_owned(),
-            message: format!("frame {i} out of range ({} frames)", self.frames.len()),
-        })?;
-        let g = gray(&self.bag, &self.colour, c)?;
-        let (depth, dw, dh) = depth_m(&self.bag, &self.depth, d)?;
-        for (topic, k, w, h) in [
-            (&self.colour, c, g.width, g.height),
-            (&self.depth, d, dw, dh),
-        ] {
-            if (w, h) != self.size {
-                return Err(RosError::Image {
-                    path: self.bag.path().to_owned(),
-                    topic: topic.name.clone(),
-                    index: k,
-                    message: format!(
-                        "a {w}x{h} image in a {}x{} stream",
-                        self.size.0, self.size.1
-                    ),
-                });
-            }
-        }
+        let [c, d] = self.frames.messages(i)?;
+        let bag = self.frames.bag();
+        let g = gray(bag, c.0, c.1)?;
+        let (depth, dw, dh) = depth_m(bag, d.0, d.1)?;
+        self.frames.check_size(c, (g.width, g.height))?;
+        self.frames.check_size(d, (dw, dh))?;
         Ok((g, depth))
     }
 }
 
 impl DepthSequence for BagRgbdSequence {
+    bag_sequence_methods!();
+
     fn layout(&self) -> &'static str {
         "ros2 bag, rgb-d"
     }
 
-    fn root(&self) -> &Path {
-        self.bag.path()
-    }
-
-    fn len(&self) -> usize {
-        self.frames.len()
-    }
-
     fn camera(&self) -> Result<(Intrinsics, (usize, usize)), DatasetError> {
-        Ok((self.intrinsics, self.size))
+        Ok((self.intrinsics, self.frames.image_size()))
     }
 
     fn frame(&self, i: usize) -> Result<RgbdFrame, DatasetError> {
         let (gray, depth_m) = self.read_frame(i).map_err(|e| to_dataset(&e))?;
         Ok(RgbdFrame { gray, depth_m })
-    }
-
-    fn notes(&self) -> &[String] {
-        &self.notes
-    }
-
-    fn ground_truth(&self) -> Option<&[Isometry3<f64>]> {
-        None
-    }
-
-    fn timestamp_s(&self, i: usize) -> Option<f64> {
-        let first = self.frames.first()?.2;
-        Some(crate::convert::seconds_since(first, self.frames.get(i)?.2))
     }
 }

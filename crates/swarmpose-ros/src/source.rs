@@ -1,9 +1,12 @@
-//! One front door for every input but a TUM RGB-D folder: a ROS 2 bag (an `.mcap` or
-//! `.db3` file, or a folder with `metadata.yaml`; stereo or RGB-D) or a stereo dataset
-//! folder ([`swarmpose_datasets::open`]).
+//! One front door for every input but a TUM RGB-D folder (whose reader is
+//! swarmpose-runs', put before this door by the command line's `odometry_input`, which
+//! Python uses too): a ROS 2 bag (an `.mcap` or `.db3` file, or a folder with
+//! `metadata.yaml`; stereo or RGB-D) or a stereo dataset folder
+//! ([`swarmpose_datasets::open`]).
 
 use std::path::Path;
 
+use nalgebra::Isometry3;
 use swarmpose_datasets::{DatasetError, DepthSequence, StereoSequence};
 
 use crate::bag::Bag;
@@ -40,22 +43,6 @@ pub struct BagInfo {
     pub stopped: Option<String>,
 }
 
-/// The [`BagInfo`] of a [`BagSequence`] or a [`BagRgbdSequence`] (the same accessors).
-macro_rules! bag_info {
-    ($seq:expr) => {{
-        let seq = &$seq;
-        let (a, b) = seq.topics();
-        BagInfo {
-            frame_id: seq.frame_id().to_owned(),
-            camera_info: seq.camera_info().clone(),
-            stamps_ns: seq.stamps_ns(),
-            topics: (a.to_owned(), b.to_owned()),
-            unpaired: seq.unpaired().to_vec(),
-            stopped: seq.bag().stopped().map(str::to_owned),
-        }
-    }};
-}
-
 /// The frames of an input.
 pub enum Input {
     /// Stereo pairs.
@@ -86,6 +73,25 @@ impl Input {
         match self {
             Self::Stereo(s) => s.layout(),
             Self::Rgbd(s) => s.layout(),
+        }
+    }
+
+    /// The folder or bag read.
+    #[must_use]
+    pub fn root(&self) -> &Path {
+        match self {
+            Self::Stereo(s) => s.root(),
+            Self::Rgbd(s) => s.root(),
+        }
+    }
+
+    /// The ground-truth poses of the (left, colour) camera in the first frame's, when
+    /// the input has them.
+    #[must_use]
+    pub fn ground_truth(&self) -> Option<&[Isometry3<f64>]> {
+        match self {
+            Self::Stereo(s) => s.ground_truth(),
+            Self::Rgbd(s) => s.ground_truth(),
         }
     }
 }
@@ -132,59 +138,16 @@ pub fn open_input(path: &Path, opts: &StereoOptions) -> Result<OpenedInput, Data
     let bag = Bag::open(path).map_err(ros)?;
     if let Some((colour, depth)) = rgbd_cameras(&bag, opts).map_err(ros)? {
         let seq = BagRgbdSequence::from_bag(bag, &colour, &depth, opts).map_err(ros)?;
-        let info = bag_info!(seq);
+        let info = seq.frames().info();
         return Ok(OpenedInput {
             input: Input::Rgbd(Box::new(seq)),
             bag: Some(info),
         });
     }
     let seq = BagSequence::from_bag(bag, opts).map_err(ros)?;
-    let info = bag_info!(seq);
+    let info = seq.frames().info();
     Ok(OpenedInput {
         input: Input::Stereo(Box::new(seq)),
         bag: Some(info),
     })
-}
-
-/// An opened stereo input.
-pub struct Opened {
-    /// The frames.
-    pub sequence: Box<dyn StereoSequence>,
-    /// For a bag, what it adds.
-    pub bag: Option<BagInfo>,
-}
-
-impl std::fmt::Debug for Opened {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Opened")
-            .field("layout", &self.sequence.layout())
-            .field("frames", &self.sequence.len())
-            .field("bag", &self.bag)
-            .finish()
-    }
-}
-
-/// Opens `path` as [`open_input`] does, for a stereo input only.
-///
-/// # Errors
-/// As [`open_input`]; an RGB-D bag is refused in one line naming its topics.
-pub fn open_stereo(path: &Path, opts: &StereoOptions) -> Result<Opened, DatasetError> {
-    let opened = open_input(path, opts)?;
-    match opened.input {
-        Input::Stereo(sequence) => Ok(Opened {
-            sequence,
-            bag: opened.bag,
-        }),
-        Input::Rgbd(seq) => Err(DatasetError::Parse {
-            path: seq.root().to_owned(),
-            line: 0,
-            message: format!(
-                "an RGB-D bag ({}): this reader takes stereo pairs; `swarmpose odometry` runs it",
-                opened.bag.map_or_else(String::new, |b| format!(
-                    "colour {}, depth {}",
-                    b.topics.0, b.topics.1
-                ))
-            ),
-        }),
-    }
 }

@@ -58,21 +58,25 @@ fn info(t: i64, w: u32, h: u32, tx: f64) -> Vec<u8> {
     .expect("encode")
 }
 
+/// 3 images of 32x24 pixels in `encoding` at 10 Hz, the first at 1 s + `offset_ns`.
+fn images(encoding: &str, offset_ns: i64) -> Vec<(i64, Vec<u8>)> {
+    (0..3)
+        .map(|k| {
+            let t = 1_000_000_000 + offset_ns + k * 100_000_000;
+            (t, image(t, encoding, 32, 24))
+        })
+        .collect()
+}
+
 /// Stereo topics of two 32x24 mono8 cameras, 3 frames at 10 Hz, with changes made by
 /// `edit` (which gets the topics to alter).
 fn stereo(edit: impl FnOnce(&mut Vec<TopicData>)) -> Vec<TopicData> {
     let stamps: Vec<i64> = (0..3).map(|k| 1_000_000_000 + k * 100_000_000).collect();
-    let imgs = |_: &str| {
-        stamps
-            .iter()
-            .map(|&t| (t, image(t, "mono8", 32, 24)))
-            .collect()
-    };
     let infos = |tx: f64| stamps.iter().map(|&t| (t, info(t, 32, 24, tx))).collect();
     let mut v: Vec<TopicData> = vec![
-        ("/cam/left/image_raw", Image::TYPE, imgs("left")),
+        ("/cam/left/image_raw", Image::TYPE, images("mono8", 0)),
         ("/cam/left/camera_info", CameraInfo::TYPE, infos(0.0)),
-        ("/cam/right/image_raw", Image::TYPE, imgs("right")),
+        ("/cam/right/image_raw", Image::TYPE, images("mono8", 0)),
         ("/cam/right/camera_info", CameraInfo::TYPE, infos(0.1)),
     ];
     edit(&mut v);
@@ -102,7 +106,10 @@ fn a_good_bag_opens() {
     let p = d.join("good.mcap");
     write_mcap(&p, &stereo(|_| {}));
     let s = BagSequence::open(&p, &StereoOptions::default()).expect("open");
-    assert_eq!(s.topics(), ("/cam/left/image_raw", "/cam/right/image_raw"));
+    assert_eq!(
+        s.frames().topics(),
+        ("/cam/left/image_raw", "/cam/right/image_raw")
+    );
     use swarmpose_datasets::StereoSequence;
     assert_eq!(s.len(), 3);
     assert!((s.calibration().baseline_m - 0.1).abs() < 1e-15);
@@ -129,12 +136,7 @@ fn one_camera_only() {
 #[test]
 fn unsynchronised_stamps() {
     let t = stereo(|v| {
-        v[2].2 = (0..3)
-            .map(|k| {
-                let t = 1_005_000_000 + k * 100_000_000;
-                (t, image(t, "mono8", 32, 24))
-            })
-            .collect();
+        v[2].2 = images("mono8", 5_000_000);
     });
     let e = open_err(&dir("bad_input_sync"), "sync", &t);
     assert!(
@@ -184,12 +186,7 @@ fn missing_or_inconsistent_camera_info() {
 #[test]
 fn unknown_encoding() {
     let t = stereo(|v| {
-        v[0].2 = (0..3)
-            .map(|k| {
-                let t = 1_000_000_000 + k * 100_000_000;
-                (t, image(t, "yuv422", 32, 24))
-            })
-            .collect();
+        v[0].2 = images("yuv422", 0);
     });
     let e = open_err(&dir("bad_input_enc"), "enc", &t);
     assert!(

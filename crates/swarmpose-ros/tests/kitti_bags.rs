@@ -120,7 +120,7 @@ fn kitti_bags_read_as_the_folder() {
         let bag = BagSequence::open(&out, &opts).unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(bag.len(), FRAMES, "{storage} {extra:?}");
         assert!(bag.notes().is_empty(), "{:?}", bag.notes());
-        assert_eq!(bag.frame_id(), "camera_left_optical");
+        assert_eq!(bag.frames().frame_id(), "camera_left_optical");
         same_frames(&bag, &seq, FRAMES);
         // The file alone reads as the folder.
         let file = BagSequence::open(&file_in(&out, ext), &opts).unwrap_or_else(|e| panic!("{e}"));
@@ -144,7 +144,7 @@ fn a_cut_mcap_gives_every_whole_frame_before_the_cut() {
             std::fs::write(&cut, &whole[..(whole.len() as f64 * share) as usize]).expect("write");
             let bag = BagSequence::open(&cut, &StereoOptions::default())
                 .unwrap_or_else(|e| panic!("{e}"));
-            let stopped = bag.bag().stopped().expect("says where it stopped");
+            let stopped = bag.frames().bag().stopped().expect("says where it stopped");
             assert!(
                 stopped.contains("cut at byte")
                     && stopped.contains("read up to its last whole message"),

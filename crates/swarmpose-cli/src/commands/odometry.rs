@@ -19,7 +19,7 @@ use swarmpose_odometry::{
     CorrectionModel, Decision, FrameResult, Odometry, OdometryConfig, RunEnd,
 };
 use swarmpose_ros::convert::FrameNames;
-use swarmpose_ros::{BagInfo, Input, StereoOptions as BagOptions, open_input};
+use swarmpose_ros::{BagInfo, Input, StereoOptions as BagOptions};
 use swarmpose_runs::RunError;
 use swarmpose_runs::batch::{
     camera_of, rgbd_camera, run_rgbd_sequence, run_sequence, run_sequence_two_threads,
@@ -28,10 +28,10 @@ use swarmpose_runs::config::{InputConfig, RunConfig};
 use swarmpose_runs::output::{Smoothed, Summary, calibration_json};
 use swarmpose_runs::output_dir::FrameFiles;
 use swarmpose_runs::plots::{PlotTrack, render_plots};
-use swarmpose_runs::rgbd::RgbdSequence;
 use swarmpose_runs::synthetic::SyntheticSequence;
 use swarmpose_vision::image::GrayImage;
 
+use super::odometry_input::open_input;
 use super::odometry_mcap::McapOutput;
 use super::odometry_output::OutputDir;
 use super::odometry_split::SplitLog;
@@ -382,15 +382,14 @@ pub fn run_command(args: &OdometryArgs) -> Result<(), CliError> {
             let gt = seq.ground_truth().map(<[_]>::to_vec);
             Source::Stereo(Box::new(seq), "built-in synthetic sequence".into(), gt)
         }
-        Some(dir) if swarmpose_runs::rgbd::detect(dir) => {
-            let seq = RgbdSequence::open(dir).map_err(odometry_error)?;
-            Source::Rgbd(Box::new(seq), format!("{} (TUM RGB-D)", dir.display()))
-        }
         Some(dir) => {
-            let opened =
-                open_input(dir, &bag_options).map_err(|e| CliError::usage(e.to_string()))?;
+            let opened = open_input(dir, &bag_options).map_err(odometry_error)?;
             bag = opened.bag;
-            let title = format!("{} ({})", dir.display(), opened.input.layout());
+            let layout = match opened.input.layout() {
+                "tum rgb-d" => "TUM RGB-D",
+                other => other,
+            };
+            let title = format!("{} ({layout})", dir.display());
             match opened.input {
                 Input::Stereo(seq) => {
                     for note in seq.notes() {

@@ -20,5 +20,6 @@ mod kitti_register;
 mod odometry;
 mod odometry_split;
 mod register;
+mod rgbd_bags;
 mod ros_bags;
 mod simulate;

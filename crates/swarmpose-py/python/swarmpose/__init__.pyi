@@ -325,32 +325,51 @@ def odometry(
     frame_period: Optional[float] = None,
     left: Optional[str] = None,
     right: Optional[str] = None,
+    depth: Optional[str] = None,
     stamp_tolerance: float = 0.0,
     config: Optional[OdometryConfig] = None,
     **options: Unpack[_OdometryOptions],
 ) -> OdometryRun:
-    """Runs a whole KITTI, Karlsruhe or EuRoC sequence directory or a ROS 2 bag (``.mcap``,
-    ``.db3`` or a rosbag2 folder; ``left``/``right`` topics found when not given,
-    ``stamp_tolerance`` in milliseconds), as ``swarmpose odometry``.
+    """Runs a whole KITTI, Karlsruhe, EuRoC or TUM RGB-D sequence directory or a ROS 2 bag
+    (``.mcap``, ``.db3`` or a rosbag2 folder; stereo, or RGB-D: one colour and one depth
+    camera; ``left``/``right`` topics, or ``left`` (colour) and ``depth`` topics, found
+    when not given; ``stamp_tolerance`` in milliseconds), as ``swarmpose odometry``.
     Settings: ``config`` or ``OdometryConfig``'s keywords, not both. A frame that cannot be
     read (or Ctrl-C) stops the run: the exception's ``run`` attribute is the
     ``OdometryRun`` of the frames done."""
 
 class Sequence:
-    """A recorded stereo sequence or ROS 2 bag: ``seq[i]`` is the (left, right) uint8
-    images of frame i."""
+    """A recorded sequence directory or ROS 2 bag, stereo or RGB-D.
+
+    Stereo (KITTI, Karlsruhe, EuRoC, a stereo bag): ``seq[i]`` is frame i's rectified
+    ``(left, right)`` images, each a (height, width) ``uint8`` array.
+
+    RGB-D (a TUM RGB-D folder, an RGB-D bag: ``rgbd`` is True): ``seq[i]`` is frame i's
+    ``(gray, depth)``: the colour image as gray, a (height, width) ``uint8`` array, and
+    the depth registered to it, a (height, width) ``float32`` array in metres along the
+    optical axis (0 where there is no depth; a bag's ``16UC1`` millimetres and ``32FC1``
+    metres, a TUM folder's 5000 units per metre, all converted to metres). ``camera``'s
+    ``baseline`` is then ``None``."""
     def __init__(
         self,
         path: _Path,
         *,
         left: Optional[str] = None,
         right: Optional[str] = None,
+        depth: Optional[str] = None,
         stamp_tolerance: float = 0.0,
     ) -> None: ...
     def __len__(self) -> int: ...
-    def __getitem__(self, i: int) -> Tuple[npt.NDArray[np.uint8], npt.NDArray[np.uint8]]: ...
+    def __getitem__(
+        self, i: int
+    ) -> Union[
+        Tuple[npt.NDArray[np.uint8], npt.NDArray[np.uint8]],
+        Tuple[npt.NDArray[np.uint8], npt.NDArray[np.float32]],
+    ]: ...
     @property
     def layout(self) -> str: ...
+    @property
+    def rgbd(self) -> bool: ...
     @property
     def stamps_ns(self) -> Optional[List[int]]: ...
     @property
@@ -360,7 +379,7 @@ class Sequence:
     @property
     def root(self) -> pathlib.Path: ...
     @property
-    def camera(self) -> Dict[str, float]: ...
+    def camera(self) -> Dict[str, Optional[float]]: ...
     @property
     def ground_truth(self) -> Optional[npt.NDArray[np.float64]]: ...
 

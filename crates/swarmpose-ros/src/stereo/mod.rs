@@ -6,13 +6,13 @@
 //! streams) rectified when asked for.
 
 pub mod calib;
+pub mod frames;
 pub mod pairing;
 pub(crate) mod scan;
 pub mod topics;
 
 use std::path::Path;
 
-use nalgebra::Isometry3;
 use swarmpose_datasets::{DatasetError, RectifiedStereo, StereoPair, StereoSequence};
 use swarmpose_vision::image::GrayImage;
 use swarmpose_vision::rectify::remap;
@@ -20,9 +20,10 @@ use swarmpose_vision::rectify::remap;
 use crate::bag::{Bag, Topic};
 use crate::error::RosError;
 use crate::image::{compressed_to_gray, image_to_gray};
-use crate::msg::{CameraInfo, CompressedImage, Image, RosMessage};
+use crate::msg::{CompressedImage, Image, RosMessage};
 use calib::{Rig, rig_from_camera_info};
-use pairing::{UnpairedImage, pair_frames};
+use frames::{BagFrames, bag_sequence_methods};
+use pairing::pair_frames;
 use scan::scan;
 use topics::{CameraTopics, cameras, info_topic_of, is_image_type};
 
@@ -69,17 +70,9 @@ impl StereoOptions {
 /// A stereo sequence read from a ROS 2 bag.
 #[derive(Debug)]
 pub struct BagSequence {
-    bag: Bag,
-    left: Topic,
-    right: Topic,
-    /// `(left message, right message, left header stamp ns)` of each frame.
-    frames: Vec<(usize, usize, i64)>,
+    /// The left and right topics paired into frames.
+    frames: BagFrames,
     rig: Rig,
-    size: (usize, usize),
-    left_info: CameraInfo,
-    frame_id: String,
-    unpaired: Vec<UnpairedImage>,
-    notes: Vec<String>,
 }
 
 pub(crate) fn topics_error(bag: &Bag, message: String) -> RosError {
@@ -271,54 +264,17 @@ impl BagSequence {
         let (l0, r0) = (gray(&bag, &left, first_l)?, gray(&bag, &right, first_r)?);
         let rig = rig_from_camera_info(&li, &ri, (l0.width, l0.height), (r0.width, r0.height))
             .map_err(|m| calib_error(&bag, format!("{} and {}: {m}", lc.info, rc.info)))?;
+        let size = (l0.width, l0.height);
         Ok(Self {
-            size: (l0.width, l0.height),
-            bag,
-            left,
-            right,
-            frames: paired.frames,
+            frames: BagFrames::new(bag, [left, right], paired, size, (li, frame_id)),
             rig,
-            left_info: li,
-            frame_id,
-            unpaired: paired.unpaired,
-            notes: paired.notes,
         })
     }
 
-    /// The bag.
+    /// The bag, its left and right topics and their frames.
     #[must_use]
-    pub fn bag(&self) -> &Bag {
-        &self.bag
-    }
-
-    /// The left and right image topics.
-    #[must_use]
-    pub fn topics(&self) -> (&str, &str) {
-        (&self.left.name, &self.right.name)
-    }
-
-    /// The header stamp of each frame's left image, nanoseconds.
-    #[must_use]
-    pub fn stamps_ns(&self) -> Vec<i64> {
-        self.frames.iter().map(|f| f.2).collect()
-    }
-
-    /// The left camera's `camera_info` (its first message).
-    #[must_use]
-    pub fn camera_info(&self) -> &CameraInfo {
-        &self.left_info
-    }
-
-    /// The left images' `frame_id` (the camera's optical frame).
-    #[must_use]
-    pub fn frame_id(&self) -> &str {
-        &self.frame_id
-    }
-
-    /// The images left without a partner, in stamp order.
-    #[must_use]
-    pub fn unpaired(&self) -> &[UnpairedImage] {
-        &self.unpaired
+    pub fn frames(&self) -> &BagFrames {
+        &self.frames
     }
 
     /// The rig: rectified images as they are, or raw ones with their remap tables.
@@ -332,27 +288,11 @@ impl BagSequence {
     /// # Errors
     /// [`RosError`] naming the topic and message.
     pub fn read_frame(&self, i: usize) -> Result<StereoPair, RosError> {
-        let &(l, r, _) = self.frames.get(i).ok_or_else(|| RosError::Container {
-            path: self.bag.path().to_owned(),
-            message: format!("frame {i} out of range ({} frames)", self.frames.len()),
-        })?;
-        let (left, right) = (
-            gray(&self.bag, &self.left, l)?,
-            gray(&self.bag, &self.right, r)?,
-        );
-        for (img, topic, k) in [(&left, &self.left, l), (&right, &self.right, r)] {
-            if (img.width, img.height) != self.size {
-                return Err(RosError::Image {
-                    path: self.bag.path().to_owned(),
-                    topic: topic.name.clone(),
-                    index: k,
-                    message: format!(
-                        "a {}x{} image in a {}x{} stream",
-                        img.width, img.height, self.size.0, self.size.1
-                    ),
-                });
-            }
-        }
+        let [l, r] = self.frames.messages(i)?;
+        let bag = self.frames.bag();
+        let (left, right) = (gray(bag, l.0, l.1)?, gray(bag, r.0, r.1)?);
+        self.frames.check_size(l, (left.width, left.height))?;
+        self.frames.check_size(r, (right.width, right.height))?;
         Ok(match &self.rig {
             Rig::Rectified(_) => StereoPair { left, right },
             Rig::Raw {
@@ -380,16 +320,10 @@ pub(crate) fn to_dataset(e: &RosError) -> DatasetError {
 }
 
 impl StereoSequence for BagSequence {
+    bag_sequence_methods!();
+
     fn layout(&self) -> &'static str {
         "ros2 bag"
-    }
-
-    fn root(&self) -> &Path {
-        self.bag.path()
-    }
-
-    fn len(&self) -> usize {
-        self.frames.len()
     }
 
     fn calibration(&self) -> RectifiedStereo {
@@ -397,23 +331,10 @@ impl StereoSequence for BagSequence {
     }
 
     fn image_size(&self) -> (usize, usize) {
-        self.size
+        self.frames.image_size()
     }
 
     fn frame(&self, i: usize) -> Result<StereoPair, DatasetError> {
         self.read_frame(i).map_err(|e| to_dataset(&e))
-    }
-
-    fn notes(&self) -> &[String] {
-        &self.notes
-    }
-
-    fn ground_truth(&self) -> Option<&[Isometry3<f64>]> {
-        None
-    }
-
-    fn timestamp_s(&self, i: usize) -> Option<f64> {
-        let first = self.frames.first()?.2;
-        Some(crate::convert::seconds_since(first, self.frames.get(i)?.2))
     }
 }

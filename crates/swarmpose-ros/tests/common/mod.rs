@@ -1,14 +1,10 @@
 //! Shared by the tests: the Python with `rosbags` that makes and reads bags independently
-//! of this crate.
+//! of this crate, and the MCAP writer (swarmpose-testdata's).
 
 #![allow(dead_code)]
 
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
-
-use mcap::records::MessageHeader;
-use swarmpose_ros::msg::schema_text;
 
 /// The Python interpreter with `rosbags` (`$SWARMPOSE_PYTHON`, else `python3`), or `None`
 /// after printing why the test is skipped (a failure under `CI=true`, where .ci/run
@@ -61,37 +57,5 @@ pub fn scratch(name: &str) -> PathBuf {
     dir
 }
 
-/// A topic to write: name, type, and (stamp ns, bytes) messages.
-pub type TopicData = (&'static str, &'static str, Vec<(i64, Vec<u8>)>);
-
-/// Writes `topics` as an MCAP bag (`ros2` profile, schemas in `ros2msg`) with the `mcap`
-/// crate's writer (chunked, with its summary).
-pub fn write_mcap(path: &Path, topics: &[TopicData]) {
-    let f = std::io::BufWriter::new(std::fs::File::create(path).expect("create"));
-    let mut w = mcap::WriteOptions::new()
-        .profile("ros2")
-        .create(f)
-        .expect("writer");
-    for (name, ty, msgs) in topics {
-        let schema = w
-            .add_schema(
-                ty,
-                "ros2msg",
-                schema_text(ty).unwrap_or_default().as_bytes(),
-            )
-            .expect("schema");
-        let ch = w
-            .add_channel(schema, name, "cdr", &BTreeMap::new())
-            .expect("channel");
-        for (k, (t, data)) in msgs.iter().enumerate() {
-            let header = MessageHeader {
-                channel_id: ch,
-                sequence: k as u32,
-                log_time: *t as u64,
-                publish_time: *t as u64,
-            };
-            w.write_to_known_channel(&header, data).expect("write");
-        }
-    }
-    w.finish().expect("finish");
-}
+#[allow(unused_imports)] // each test file uses its own subset
+pub use swarmpose_testdata::bags::{TopicData, write_mcap};
