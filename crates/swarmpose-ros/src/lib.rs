@@ -24,5 +24,6 @@ pub mod write;
 pub use bag::{Bag, Topic};
 pub use error::{CdrError, RosError};
 pub use rgbd::BagRgbdSequence;
-pub use source::{BagInfo, Input, OpenedInput, is_bag, open_input};
+pub use source::{Input, OpenedInput, is_bag, open_input};
+pub use stereo::frames::BagInfo;
 pub use stereo::{BagSequence, StereoOptions};

@@ -10,9 +10,8 @@ use nalgebra::Isometry3;
 use swarmpose_datasets::{DatasetError, DepthSequence, StereoSequence};
 
 use crate::bag::Bag;
-use crate::msg::CameraInfo;
 use crate::rgbd::{BagRgbdSequence, rgbd_cameras};
-use crate::stereo::pairing::UnpairedImage;
+use crate::stereo::frames::BagInfo;
 use crate::stereo::{BagSequence, StereoOptions, to_dataset};
 
 /// True when `path` is a ROS 2 bag: an `.mcap` or `.db3` file, or a folder with
@@ -24,23 +23,6 @@ pub fn is_bag(path: &Path) -> bool {
     }
     path.extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("mcap") || e.eq_ignore_ascii_case("db3"))
-}
-
-/// What a bag adds to a sequence for the ROS 2 outputs.
-#[derive(Debug, Clone, PartialEq)]
-pub struct BagInfo {
-    /// The left (RGB-D: colour) images' `frame_id`.
-    pub frame_id: String,
-    /// The left (RGB-D: colour) camera's `camera_info`.
-    pub camera_info: CameraInfo,
-    /// The header stamp of each frame, nanoseconds.
-    pub stamps_ns: Vec<i64>,
-    /// The left and right image topics (RGB-D: the colour and depth ones).
-    pub topics: (String, String),
-    /// The images left without a partner (in no frame), in stamp order.
-    pub unpaired: Vec<UnpairedImage>,
-    /// Where reading stopped early (a cut bag), if it did.
-    pub stopped: Option<String>,
 }
 
 /// The frames of an input.

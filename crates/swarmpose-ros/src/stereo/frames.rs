@@ -9,7 +9,23 @@ use super::pairing::{Paired, UnpairedImage};
 use crate::bag::{Bag, Topic};
 use crate::error::RosError;
 use crate::msg::CameraInfo;
-use crate::source::BagInfo;
+
+/// What a bag adds to a sequence for the ROS 2 outputs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BagInfo {
+    /// The left (RGB-D: colour) images' `frame_id`.
+    pub frame_id: String,
+    /// The left (RGB-D: colour) camera's `camera_info`.
+    pub camera_info: CameraInfo,
+    /// The header stamp of each frame, nanoseconds.
+    pub stamps_ns: Vec<i64>,
+    /// The left and right image topics (RGB-D: the colour and depth ones).
+    pub topics: (String, String),
+    /// The images left without a partner (in no frame), in stamp order.
+    pub unpaired: Vec<UnpairedImage>,
+    /// Where reading stopped early (a cut bag), if it did.
+    pub stopped: Option<String>,
+}
 
 /// A bag's two image topics paired into frames.
 #[derive(Debug)]
