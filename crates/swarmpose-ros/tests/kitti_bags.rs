@@ -106,6 +106,7 @@ fn kitti_bags_read_as_the_folder() {
     for (storage, extra, ext) in [
         ("mcap", &[][..], "mcap"),
         ("mcap-zstd", &[][..], "mcap"),
+        ("mcap-lz4", &[][..], "mcap"),
         ("sqlite3", &[][..], "db3"),
         ("mcap", &["png"][..], "mcap"),
         ("sqlite3", &["rgb8"][..], "db3"),

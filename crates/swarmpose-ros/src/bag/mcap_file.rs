@@ -126,22 +126,19 @@ fn decompress(c: &ChunkParts<'_>) -> Result<Vec<u8>, String> {
             Ok(d) => read_prefix(d, c.uncompressed_size),
             Err(_) => Vec::new(),
         },
-        ("lz4", whole) => match lz4::Decoder::new(c.data) {
-            Ok(d) => {
-                let mut d = d;
-                if whole {
-                    let mut out = Vec::new();
-                    (&mut d)
-                        .take(c.uncompressed_size)
-                        .read_to_end(&mut out)
-                        .map_err(|e| format!("lz4 chunk: {e}"))?;
-                    out
-                } else {
-                    read_prefix(d, c.uncompressed_size)
-                }
-            }
-            Err(e) => return Err(format!("lz4 chunk: {e}")),
-        },
+        // The LZ4 frame format (the MCAP specification's `lz4`), decoded in Rust.
+        ("lz4", true) => {
+            let mut out = Vec::with_capacity(c.uncompressed_size as usize);
+            lz4_flex::frame::FrameDecoder::new(c.data)
+                .take(c.uncompressed_size)
+                .read_to_end(&mut out)
+                .map_err(|e| format!("lz4 chunk: {e}"))?;
+            out
+        }
+        ("lz4", false) => read_prefix(
+            lz4_flex::frame::FrameDecoder::new(c.data),
+            c.uncompressed_size,
+        ),
         (other, _) => {
             return Err(format!(
                 "chunk compression '{other}' is not zstd, lz4 or none"

@@ -5,7 +5,8 @@ Usage: python make_stereo_bag.py FRAMES_DIR OUT STORAGE [OPTION...]
 FRAMES_DIR holds meta.json ({"width", "height", "p_left": [12], "p_right": [12],
 "stamps_ns": [...]}) and, per frame k, left_K.raw and right_K.raw (8-bit gray, row-major)
 or left_K.png and right_K.png with the `png` option. STORAGE: mcap (plain), mcap-zstd
-(zstd chunks) or sqlite3. OUT is the bag folder to create (metadata.yaml and one file).
+(zstd chunks), mcap-lz4 (the plain bag rewritten by Foxglove's `mcap` writer with LZ4
+chunks: rosbags writes no LZ4) or sqlite3. OUT is the bag folder to create (metadata.yaml and one file).
 
 Options: png (CompressedImage PNG instead of Image mono8), no-info (no camera_info
 topics), right-stamp-offset=NS (shift the right images' stamps), rgb8 (the gray pixels
@@ -124,5 +125,33 @@ def main() -> None:
                     writer.write(conns[side + "_info"], stamp, STORE.serialize_cdr(ci, ci.__msgtype__))
 
 
+def rewrite_lz4(bag: Path) -> None:
+    """Rewrites the bag folder's MCAP file with LZ4-compressed chunks (Foxglove's writer)."""
+    from mcap.reader import make_reader
+    from mcap.writer import CompressionType
+    from mcap.writer import Writer as McapWriter
+
+    path = next(bag.glob("*.mcap"))
+    plain = path.with_suffix(".plain")
+    path.rename(plain)
+    with plain.open("rb") as src, path.open("wb") as dst:
+        out = McapWriter(dst, compression=CompressionType.LZ4)
+        out.start(profile="ros2", library="make_stereo_bag.py")
+        schemas, channels = {}, {}
+        for schema, channel, msg in make_reader(src).iter_messages(log_time_order=False):
+            if schema.id not in schemas:
+                schemas[schema.id] = out.register_schema(schema.name, schema.encoding, schema.data)
+            if channel.id not in channels:
+                channels[channel.id] = out.register_channel(
+                    channel.topic, channel.message_encoding, schemas[schema.id], channel.metadata
+                )
+            out.add_message(channels[channel.id], msg.log_time, msg.data, msg.publish_time,
+                            msg.sequence)
+        out.finish()
+    plain.unlink()
+
+
 if __name__ == "__main__":
     main()
+    if sys.argv[3] == "mcap-lz4":
+        rewrite_lz4(Path(sys.argv[2]))
