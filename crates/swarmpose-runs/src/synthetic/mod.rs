@@ -122,6 +122,18 @@ impl SyntheticSequence {
         }
     }
 
+    /// The same scene and path with other textures: every plane's texture seed offset by
+    /// `seed` (0 leaves the sequence as it is). Each seed renders an independent draw of
+    /// the texture (and of its rendering error), to tell a figure of one sequence from the
+    /// sampling noise of a short one.
+    #[must_use]
+    pub fn with_texture_seed(mut self, seed: u64) -> Self {
+        for (k, plane) in self.planes.iter_mut().enumerate() {
+            plane.seed = plane.seed.wrapping_add(seed.wrapping_mul(1_000 + k as u64));
+        }
+        self
+    }
+
     /// The same sequence rendered with a right camera that is not the calibrated one.
     #[must_use]
     pub fn with_right_camera_error(mut self, error: RightCameraError) -> Self {
