@@ -83,12 +83,13 @@ ROS_WORKSPACE_DEPS = ["swarmpose-vision", "swarmpose-datasets", "swarmpose-odome
 
 
 def cpu_seconds(args, env):
-    """User + system CPU seconds of a command and its children (`/usr/bin/time`)."""
-    out = subprocess.run(["/usr/bin/time", "-f", "CPU %U %S", *args], cwd=ROOT, env=env,
+    """User + system CPU seconds of a command and its children, and its wall seconds
+    (`/usr/bin/time`)."""
+    out = subprocess.run(["/usr/bin/time", "-f", "CPU %U %S %e", *args], cwd=ROOT, env=env,
                          capture_output=True, text=True, check=True)
     line = [l for l in out.stderr.splitlines() if l.startswith("CPU ")][-1]
-    user, system = (float(x) for x in line.split()[1:3])
-    return user + system
+    user, system, wall = (float(x) for x in line.split()[1:4])
+    return user + system, wall
 
 
 def measure_build_cost(target):
@@ -96,14 +97,18 @@ def measure_build_cost(target):
     scratch = tempfile.mkdtemp(prefix="swarmpose-ros-build-cost-")
     env = dict(os.environ, CARGO_TARGET_DIR=scratch)
     try:
-        base = cpu_seconds(["cargo", "build", "--release", "--quiet",
-                            *(a for p in ROS_WORKSPACE_DEPS for a in ("-p", p))], env)
-        with_ros = cpu_seconds(["cargo", "build", "--release", "--quiet", "-p", "swarmpose-ros"], env)
+        base, base_wall = cpu_seconds(["cargo", "build", "--release", "--quiet",
+                                       *(a for p in ROS_WORKSPACE_DEPS for a in ("-p", p))], env)
+        with_ros, with_ros_wall = cpu_seconds(
+            ["cargo", "build", "--release", "--quiet", "-p", "swarmpose-ros"], env)
         os.utime(os.path.join(ROOT, "crates", "swarmpose-ros", "src", "lib.rs"))
-        ros_alone = cpu_seconds(["cargo", "build", "--release", "--quiet", "-p", "swarmpose-ros"], env)
+        ros_alone, ros_alone_wall = cpu_seconds(
+            ["cargo", "build", "--release", "--quiet", "-p", "swarmpose-ros"], env)
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
     cost = {"base_s": base, "with_ros_s": with_ros, "ros_alone_s": ros_alone,
+            "base_wall_s": base_wall, "with_ros_wall_s": with_ros_wall,
+            "ros_alone_wall_s": ros_alone_wall,
             "load": " / ".join(f"{v:.1f}" for v in os.getloadavg())}
     with open(os.path.join(target, "ros_bench_build_cost.json"), "w", encoding="utf-8") as f:
         json.dump(cost, f)
@@ -179,8 +184,16 @@ def main():
             f"(building swarmpose-ros and what it brings after its workspace dependencies: "
             f"{cost['with_ros_s']:.0f} s, of which swarmpose-ros itself {cost['ros_alone_s']:.0f} s; "
             f"the workspace dependencies before: {cost['base_s']:.0f} s). Measured with `--build-cost` "
-            f"while the machine was shared with other builds (load average {cost['load']}).",
+            f"while the machine was shared with other builds (load average {cost['load']}), one clean "
+            "build each.",
         ]
+        if "with_ros_wall_s" in cost:
+            wall = cost["with_ros_wall_s"] - cost["ros_alone_wall_s"]
+            lines.append(
+                f"Wall time, secondary (2 cores shared with other builds, so it says more about the "
+                f"load than the build): {wall:.0f} s added ({cost['with_ros_wall_s']:.0f} s with "
+                f"swarmpose-ros itself, which took {cost['ros_alone_wall_s']:.0f} s; "
+                f"{cost['base_wall_s']:.0f} s for the workspace dependencies before).")
     if a.timings:
         secs = compile_seconds(a.timings, added)
         lines.append(f"Their compile time, summed over the units of `{os.path.basename(a.timings)}` "

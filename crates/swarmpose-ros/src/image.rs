@@ -92,7 +92,10 @@ pub fn image_to_gray(img: &Image) -> Result<GrayImage, String> {
     let (w, h) = (img.width as usize, img.height as usize);
     match img.encoding.as_str() {
         "mono8" | "8UC1" => {
-            let data: Vec<u8> = rows(img, 1)?.flatten().copied().collect();
+            let mut data = Vec::with_capacity(w * h);
+            for row in rows(img, 1)? {
+                data.extend_from_slice(row);
+            }
             GrayImage::from_raw(w, h, data).ok_or_else(|| "bad image size".to_owned())
         }
         "mono16" => {
@@ -110,6 +113,22 @@ pub fn image_to_gray(img: &Image) -> Result<GrayImage, String> {
             GRAY_ENCODINGS.join(", ")
         )),
     }
+}
+
+/// An [`Image`] as 8-bit gray, as [`image_to_gray`]; a `mono8` image whose rows are
+/// packed (`step` = `width`) gives its pixels without a copy.
+///
+/// # Errors
+/// As [`image_to_gray`].
+pub fn image_into_gray(img: Image) -> Result<GrayImage, String> {
+    let (w, h) = (img.width as usize, img.height as usize);
+    if matches!(img.encoding.as_str(), "mono8" | "8UC1") && img.step as usize == w {
+        rows(&img, 1).map(|_| ())?;
+        let mut data = img.data;
+        data.truncate(w * h);
+        return GrayImage::from_raw(w, h, data).ok_or_else(|| "bad image size".to_owned());
+    }
+    image_to_gray(&img)
 }
 
 /// A depth [`Image`] in metres (0 where there is none).
@@ -181,4 +200,34 @@ pub fn compressed_to_gray(img: &CompressedImage) -> Result<GrayImage, String> {
         "CompressedImage format '{}' is neither png nor jpeg",
         img.format
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn mono8(width: u32, step: u32, height: u32, len: usize) -> Image {
+        Image {
+            width,
+            height,
+            step,
+            encoding: "mono8".to_owned(),
+            data: (0..len).map(|i| (i * 7 % 251) as u8).collect(),
+            ..Image::default()
+        }
+    }
+
+    #[test]
+    fn owned_gray_is_the_borrowed_one() {
+        // Packed rows (moved), padded rows (copied row by row), extra bytes after the last
+        // row (dropped), and too few bytes (refused by both).
+        for img in [mono8(5, 5, 3, 15), mono8(5, 8, 3, 21), mono8(5, 5, 3, 17)] {
+            let borrowed = image_to_gray(&img).expect("gray");
+            assert_eq!(borrowed.data.len(), 15);
+            assert_eq!(image_into_gray(img).expect("gray"), borrowed);
+        }
+        let short = mono8(5, 5, 3, 14);
+        let err = image_to_gray(&short).expect_err("too short");
+        assert_eq!(image_into_gray(short).expect_err("too short"), err);
+    }
 }

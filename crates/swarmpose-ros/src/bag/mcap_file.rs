@@ -4,6 +4,7 @@
 //! and channel records parsed by the `mcap` crate, chunks decompressed here (zstd, lz4 or
 //! none) so that a chunk cut by a dying recorder still gives the messages it holds whole.
 
+use std::borrow::Cow;
 use std::fs::File;
 use std::io::{Read, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
@@ -37,7 +38,21 @@ pub(crate) struct McapFile {
     path: PathBuf,
     file: Mutex<File>,
     /// The last chunk decompressed: its offset and records.
-    cache: Mutex<Option<(u64, Arc<Vec<u8>>)>>,
+    cache: Mutex<Option<(u64, Arc<ChunkRecords>)>>,
+}
+
+/// The records of a chunk: `buf[range]` (an uncompressed chunk keeps the record's body as
+/// read from the file, not copied).
+#[derive(Debug)]
+struct ChunkRecords {
+    buf: Vec<u8>,
+    range: std::ops::Range<usize>,
+}
+
+impl ChunkRecords {
+    fn bytes(&self) -> &[u8] {
+        self.buf.get(self.range.clone()).unwrap_or_default()
+    }
 }
 
 /// What indexing needs besides the sink: the channel map of the file.
@@ -73,6 +88,8 @@ struct ChunkParts<'a> {
     uncompressed_crc: u32,
     compression: String,
     data: &'a [u8],
+    /// Where `data` starts in the record's body.
+    data_start: usize,
     /// True when the compressed bytes are all there.
     whole: bool,
 }
@@ -93,6 +110,7 @@ fn chunk_parts(body: &[u8]) -> Option<ChunkParts<'_>> {
         uncompressed_crc,
         compression: compression.to_owned(),
         data,
+        data_start: at + 8,
         whole,
     })
 }
@@ -110,8 +128,9 @@ fn read_prefix(reader: impl Read, limit: u64) -> Vec<u8> {
     }
 }
 
-/// The records of a chunk, decompressed; a cut chunk gives what its bytes hold.
-fn decompress(c: &ChunkParts<'_>) -> Result<Vec<u8>, String> {
+/// The records of a chunk, decompressed (an uncompressed chunk's borrowed, not copied); a
+/// cut chunk gives what its bytes hold.
+fn decompress<'a>(c: &ChunkParts<'a>) -> Result<Cow<'a, [u8]>, String> {
     if c.uncompressed_size > MAX_CHUNK {
         return Err(format!(
             "a chunk of {} bytes decompressed (at most {MAX_CHUNK} accepted)",
@@ -119,7 +138,7 @@ fn decompress(c: &ChunkParts<'_>) -> Result<Vec<u8>, String> {
         ));
     }
     let out = match (c.compression.as_str(), c.whole) {
-        ("", _) => c.data.to_vec(),
+        ("", _) => return check_records(c, Cow::Borrowed(c.data)),
         ("zstd", true) => zstd::bulk::decompress(c.data, c.uncompressed_size as usize)
             .map_err(|e| format!("zstd chunk: {e}"))?,
         ("zstd", false) => match zstd::stream::read::Decoder::with_buffer(c.data) {
@@ -145,6 +164,12 @@ fn decompress(c: &ChunkParts<'_>) -> Result<Vec<u8>, String> {
             ));
         }
     };
+    check_records(c, Cow::Owned(out))
+}
+
+/// `out`, the records of chunk `c`, checked against its header's size and CRC when the
+/// chunk is whole.
+fn check_records<'a>(c: &ChunkParts<'_>, out: Cow<'a, [u8]>) -> Result<Cow<'a, [u8]>, String> {
     if c.whole {
         if out.len() as u64 != c.uncompressed_size {
             return Err(format!(
@@ -347,10 +372,10 @@ impl McapFile {
                     .ok_or_else(|| missing(format!("byte {offset}")))
             }
             Location::McapChunk { chunk, inner, .. } => {
-                let buf = self.chunk_records(chunk)?;
+                let records = self.chunk_records(chunk)?;
                 usize::try_from(inner)
                     .ok()
-                    .and_then(|i| first_record(buf.get(i..)?))
+                    .and_then(|i| first_record(records.bytes().get(i..)?))
                     .filter(|r| r.0 == OP_MESSAGE)
                     .and_then(|r| message_data(r.1))
                     .map(f)
@@ -362,28 +387,51 @@ impl McapFile {
 
     /// The decompressed records of the chunk at `offset` (cached: frames of one chunk
     /// are read one after the other).
-    fn chunk_records(&self, offset: u64) -> Result<Arc<Vec<u8>>, RosError> {
-        let mut cache = self
-            .cache
-            .lock()
-            .map_err(|_| container(&self.path, "chunk cache poisoned"))?;
-        if let Some((o, buf)) = cache.as_ref()
-            && *o == offset
-        {
-            return Ok(Arc::clone(buf));
+    fn chunk_records(&self, offset: u64) -> Result<Arc<ChunkRecords>, RosError> {
+        if let Some(records) = self.cached(offset)? {
+            return Ok(records);
         }
         let (op, body) = self.record_at(offset, true)?;
         if op != OP_CHUNK {
             return Err(container(&self.path, format!("no chunk at byte {offset}")));
         }
-        let parts = chunk_parts(&body)
-            .ok_or_else(|| container(&self.path, format!("chunk at byte {offset}: too short")))?;
-        let buf = Arc::new(
-            decompress(&parts)
-                .map_err(|e| container(&self.path, format!("chunk at byte {offset}: {e}")))?,
-        );
-        *cache = Some((offset, Arc::clone(&buf)));
-        Ok(buf)
+        let bad = |e: String| container(&self.path, format!("chunk at byte {offset}: {e}"));
+        let parts = chunk_parts(&body).ok_or_else(|| bad("too short".to_owned()))?;
+        let start = parts.data_start;
+        let records = match decompress(&parts).map_err(bad)? {
+            Cow::Borrowed(b) => Err(start..start + b.len()),
+            Cow::Owned(v) => Ok(v),
+        };
+        let records = Arc::new(match records {
+            Ok(buf) => ChunkRecords {
+                range: 0..buf.len(),
+                buf,
+            },
+            Err(range) => ChunkRecords { buf: body, range },
+        });
+        self.keep(offset, Arc::clone(&records))?;
+        Ok(records)
+    }
+
+    /// The records of the chunk at `offset` when it is the cached one.
+    fn cached(&self, offset: u64) -> Result<Option<Arc<ChunkRecords>>, RosError> {
+        let cache = self
+            .cache
+            .lock()
+            .map_err(|_| container(&self.path, "chunk cache poisoned"))?;
+        Ok(cache
+            .as_ref()
+            .filter(|(o, _)| *o == offset)
+            .map(|(_, records)| Arc::clone(records)))
+    }
+
+    /// Keeps `records`, of the chunk at `offset`, as the cached chunk.
+    fn keep(&self, offset: u64, records: Arc<ChunkRecords>) -> Result<(), RosError> {
+        *self
+            .cache
+            .lock()
+            .map_err(|_| container(&self.path, "chunk cache poisoned"))? = Some((offset, records));
+        Ok(())
     }
 
     /// The opcode and body of the record at `offset` (cut short at the end of the file

@@ -261,6 +261,20 @@ impl Bag {
     /// [`RosError::Container`] for an index out of range or bytes that cannot be read
     /// again; [`RosError::Io`].
     pub fn read(&self, topic: &Topic, index: usize) -> Result<Vec<u8>, RosError> {
+        self.with_message(topic, index, <[u8]>::to_vec)
+    }
+
+    /// `f` of the bytes of message `index` of `topic`, borrowed where they are (a chunk's
+    /// records), not copied.
+    ///
+    /// # Errors
+    /// As [`Bag::read`].
+    fn with_message<R>(
+        &self,
+        topic: &Topic,
+        index: usize,
+        f: impl FnOnce(&[u8]) -> R,
+    ) -> Result<R, RosError> {
         let entry = topic
             .entries
             .get(index)
@@ -272,7 +286,7 @@ impl Bag {
                     topic.entries.len()
                 ),
             })?;
-        self.with_bytes(entry.location, <[u8]>::to_vec)
+        self.with_bytes(entry.location, f)
     }
 
     /// `f` of the bytes at `location`.
@@ -355,7 +369,6 @@ impl Bag {
         if topic.msg_type != T::TYPE || topic.encoding != "cdr" {
             return self.decode_bytes(topic, index, &[]);
         }
-        let bytes = self.read(topic, index)?;
-        self.decode_bytes(topic, index, &bytes)
+        self.with_message(topic, index, |bytes| self.decode_bytes(topic, index, bytes))?
     }
 }

@@ -19,7 +19,7 @@ use swarmpose_vision::rectify::remap;
 
 use crate::bag::{Bag, Topic};
 use crate::error::RosError;
-use crate::image::{compressed_to_gray, image_to_gray};
+use crate::image::{compressed_to_gray, image_into_gray};
 use crate::msg::{CompressedImage, Image, RosMessage};
 use calib::{Rig, rig_from_camera_info};
 use frames::{BagFrames, bag_sequence_methods};
@@ -211,7 +211,7 @@ pub(crate) fn gray(bag: &Bag, topic: &Topic, index: usize) -> Result<GrayImage, 
         compressed_to_gray(&m).map_err(image_error)
     } else {
         let m: Image = bag.decode(topic, index)?;
-        image_to_gray(&m).map_err(image_error)
+        image_into_gray(m).map_err(image_error)
     }
 }
 
