@@ -155,8 +155,10 @@ def main():
     total = cli_crate_count()
     lines = [
         "Speed of the ROS 2 input and output (`cargo bench -p swarmpose-ros --bench bags`, "
-        f"medians, one thread; generated {provenance()}; the machine was shared with other "
-        "builds while it ran, so the times are not quiet).",
+        + ("medians, one thread, of an earlier run read with `--no-run` (its commit and load "
+           f"are not recorded); this text generated {provenance()}; "
+           if a.no_run else f"medians, one thread; generated {provenance()}; ")
+        + "the machine was shared with other builds while it ran, so the times are not quiet).",
         "",
         f"Reading one stereo frame of the first {FRAMES} KITTI frames (1241 x 376, "
         "`sensor_msgs/Image` mono8 with `camera_info`):",
