@@ -7,6 +7,7 @@
 
 use std::ffi::OsStr;
 use std::fmt::Display;
+use std::str::FromStr;
 
 use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use clap::{Arg, Args, Command};
@@ -54,13 +55,14 @@ pub struct EstimatorOptions {
     pub threshold: Option<f64>,
 
     /// Swarm size.
-    #[arg(long, value_name = "N", value_parser = swarm_size, help_heading = PSO_HEADING,
-          allow_negative_numbers = true, help = pso_help("Swarm size", |c| c.swarm_size))]
+    #[arg(long, value_name = "N", value_parser = whole_number(1, MAX_SWARM_SIZE),
+          help_heading = PSO_HEADING, allow_negative_numbers = true,
+          help = pso_help("Swarm size", |c| c.swarm_size))]
     pub particles: Option<usize>,
 
     /// Iteration budget after the initial evaluation.
-    #[arg(long, value_name = "N", value_parser = iterations, help_heading = PSO_HEADING,
-          allow_negative_numbers = true,
+    #[arg(long, value_name = "N", value_parser = whole_number(0, MAX_ITERATIONS),
+          help_heading = PSO_HEADING, allow_negative_numbers = true,
           help = pso_help("Iteration budget after the initial evaluation", |c| c.max_iterations))]
     pub iterations: Option<usize>,
 
@@ -84,8 +86,8 @@ pub struct EstimatorOptions {
     pub stall: Option<Stall>,
 
     /// Particles started from 3-point minimal samples (pso only).
-    #[arg(long, value_name = "N", value_parser = seeded_particles, help_heading = PSO_HEADING,
-          allow_negative_numbers = true, help = format!(
+    #[arg(long, value_name = "N", value_parser = whole_number(0, MAX_SWARM_SIZE),
+          help_heading = PSO_HEADING, allow_negative_numbers = true, help = format!(
               "Particles started from 3-point minimal samples, pso only [default: {}]",
               PsoEstimatorConfig::default().seeded_particles))]
     pub seeded_particles: Option<usize>,
@@ -98,8 +100,8 @@ pub struct EstimatorOptions {
     pub confidence: Option<f64>,
 
     /// Cap on the number of MSAC samples.
-    #[arg(long, value_name = "N", value_parser = samples, help_heading = MSAC_HEADING,
-          allow_negative_numbers = true, help = format!(
+    #[arg(long, value_name = "N", value_parser = whole_number(1, MAX_SAMPLES),
+          help_heading = MSAC_HEADING, allow_negative_numbers = true, help = format!(
               "Cap on the number of samples [default: {}]",
               MsacConfig::default().max_iterations))]
     pub max_samples: Option<usize>,
@@ -157,64 +159,61 @@ fn pso_help<T: Display + PartialEq>(what: &str, field: impl Fn(&PsoConfig) -> T)
     format!("{what} {note}")
 }
 
-fn positive_metres(s: &str) -> Result<f64, String> {
-    match s.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
-        _ => Err("must be a positive, finite number of metres".into()),
+/// `s` as a `T` for which `ok` holds, else the error `message` (clap prints it after the
+/// option's name).
+fn parse_where<T: FromStr>(
+    s: &str,
+    ok: impl Fn(&T) -> bool,
+    message: impl FnOnce() -> String,
+) -> Result<T, String> {
+    s.trim().parse::<T>().ok().filter(ok).ok_or_else(message)
+}
+
+/// The parser of a whole number from `lo` to `hi` (`--iterations`, `--max-samples`,
+/// `--particles`, `--seeded-particles`: bounded work per estimate).
+fn whole_number(
+    lo: usize,
+    hi: usize,
+) -> impl Fn(&str) -> Result<usize, String> + Clone + Send + Sync + 'static {
+    move |s: &str| {
+        parse_where(
+            s,
+            |n| (lo..=hi).contains(n),
+            || format!("must be a whole number from {lo} to {hi}"),
+        )
     }
+}
+
+fn positive_metres(s: &str) -> Result<f64, String> {
+    parse_where(
+        s,
+        |v: &f64| v.is_finite() && *v > 0.0,
+        || "must be a positive, finite number of metres".into(),
+    )
 }
 
 fn non_negative(s: &str) -> Result<f64, String> {
-    match s.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
-        _ => Err("must be a finite number >= 0".into()),
-    }
+    parse_where(
+        s,
+        |v: &f64| v.is_finite() && *v >= 0.0,
+        || "must be a finite number >= 0".into(),
+    )
 }
 
 fn probability(s: &str) -> Result<f64, String> {
-    match s.trim().parse::<f64>() {
-        Ok(v) if v > 0.0 && v < 1.0 => Ok(v),
-        _ => Err("must be a number strictly between 0 and 1".into()),
-    }
-}
-
-/// `--iterations`: 0 to [`MAX_ITERATIONS`] (bounded work per estimate).
-fn iterations(s: &str) -> Result<usize, String> {
-    match s.trim().parse::<usize>() {
-        Ok(n) if n <= MAX_ITERATIONS => Ok(n),
-        _ => Err(format!("must be a whole number from 0 to {MAX_ITERATIONS}")),
-    }
-}
-
-/// `--max-samples`: 1 to [`MAX_SAMPLES`] (bounded work per estimate).
-fn samples(s: &str) -> Result<usize, String> {
-    match s.trim().parse::<usize>() {
-        Ok(n) if (1..=MAX_SAMPLES).contains(&n) => Ok(n),
-        _ => Err(format!("must be a whole number from 1 to {MAX_SAMPLES}")),
-    }
+    parse_where(
+        s,
+        |v: &f64| *v > 0.0 && *v < 1.0,
+        || "must be a number strictly between 0 and 1".into(),
+    )
 }
 
 fn at_least_one(s: &str) -> Result<usize, String> {
-    match s.trim().parse::<usize>() {
-        Ok(n) if n >= 1 => Ok(n),
-        _ => Err("must be a whole number >= 1".into()),
-    }
-}
-
-/// `--particles`: 1 to [`MAX_SWARM_SIZE`] (more were allocated at once and aborted).
-fn swarm_size(s: &str) -> Result<usize, String> {
-    match s.trim().parse::<usize>() {
-        Ok(n) if (1..=MAX_SWARM_SIZE).contains(&n) => Ok(n),
-        _ => Err(format!("must be a whole number from 1 to {MAX_SWARM_SIZE}")),
-    }
-}
-
-/// `--seeded-particles`: 0 to [`MAX_SWARM_SIZE`].
-fn seeded_particles(s: &str) -> Result<usize, String> {
-    match s.trim().parse::<usize>() {
-        Ok(n) if n <= MAX_SWARM_SIZE => Ok(n),
-        _ => Err(format!("must be a whole number from 0 to {MAX_SWARM_SIZE}")),
-    }
+    parse_where(
+        s,
+        |n: &usize| *n >= 1,
+        || "must be a whole number >= 1".into(),
+    )
 }
 
 fn stall(s: &str) -> Result<Stall, String> {
@@ -377,9 +376,11 @@ mod tests {
         assert!(positive_metres("inf").is_err());
         assert_eq!(positive_metres("0.05"), Ok(0.05));
         assert!(at_least_one("0").is_err());
+        let iterations = whole_number(0, MAX_ITERATIONS);
         assert!(iterations("-1").is_err());
         assert_eq!(iterations("100000"), Ok(100_000));
         assert!(iterations("100001").is_err());
+        let samples = whole_number(1, MAX_SAMPLES);
         assert!(samples("0").is_err());
         assert!(samples("1000000000000000000").is_err());
         assert!(probability("1").is_err());

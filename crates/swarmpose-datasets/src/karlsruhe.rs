@@ -13,7 +13,7 @@ use nalgebra::Isometry3;
 use crate::error::DatasetError;
 use crate::frames::ListedPairs;
 use crate::projection::{Calibration, Row, projection_numbers, rectified_pair};
-use crate::text::{KeyLines, numbers, parse_error, read_text, rows_per_frame, strip_bom};
+use crate::text::{KeyLines, numbers_at_least, parse_error, read_text, rows_per_frame, strip_bom};
 use crate::{RectifiedStereo, StereoPair, StereoSequence};
 
 fn is_left(name: &str) -> bool {
@@ -95,14 +95,9 @@ pub fn read_ins_positions(path: &Path) -> Result<Vec<(u64, [f64; 3])>, DatasetEr
         if line.trim().is_empty() {
             continue;
         }
-        let v = numbers(line, path, k + 1)?;
-        if v.len() < 10 {
-            return Err(parse_error(
-                path,
-                k + 1,
-                format!("expected 10 columns, found {}", v.len()),
-            ));
-        }
+        let v = numbers_at_least(line, path, k + 1, 10, |n| {
+            format!("expected 10 columns, found {n}")
+        })?;
         let ts = line
             .split_whitespace()
             .next()

@@ -61,6 +61,21 @@ pub(crate) fn numbers(text: &str, path: &Path, line: usize) -> Result<Vec<f64>, 
         .collect()
 }
 
+/// [`numbers`], at least `min` of them; fewer is the error `expected(count)`.
+pub(crate) fn numbers_at_least(
+    text: &str,
+    path: &Path,
+    line: usize,
+    min: usize,
+    expected: impl FnOnce(usize) -> String,
+) -> Result<Vec<f64>, DatasetError> {
+    let v = numbers(text, path, line)?;
+    if v.len() < min {
+        return Err(parse_error(path, line, expected(v.len())));
+    }
+    Ok(v)
+}
+
 /// True for a `.png` file name (any case).
 pub(crate) fn is_png(name: &str) -> bool {
     name.to_ascii_lowercase().ends_with(".png")

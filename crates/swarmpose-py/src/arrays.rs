@@ -13,6 +13,8 @@ use numpy::{
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use swarmpose_eval::trajectory::check_rotation;
+use swarmpose_odometry::DepthView;
+use swarmpose_vision::features::GrayView;
 
 /// A float array borrowed from Python, read-only, in its own dtype.
 enum Floats<'py> {
@@ -231,18 +233,48 @@ impl<'py, T: numpy::Element + Copy> ImageArray<'py, T> {
         }
     }
 
-    /// Width and height, pixels.
-    pub(crate) fn size(&self) -> (usize, usize) {
+    /// The size and pixels, row-major: borrowed when the array is C-contiguous, else
+    /// copied.
+    pub(crate) fn pixels(&self) -> Pixels<'_, T> {
         let s = self.array.shape();
-        (s[1], s[0])
-    }
-
-    /// The pixels, row-major: borrowed when the array is C-contiguous, else copied.
-    pub(crate) fn pixels(&self) -> Cow<'_, [T]> {
         // `as_slice` also accepts Fortran order, whose memory is column-major.
-        match self.array.as_slice() {
+        let data = match self.array.as_slice() {
             Ok(s) if self.array.is_c_contiguous() => Cow::Borrowed(s),
             _ => Cow::Owned(self.array.as_array().iter().copied().collect()),
+        };
+        Pixels {
+            width: s[1],
+            height: s[0],
+            data,
+        }
+    }
+}
+
+/// An image's pixels, row-major, with its size (pixels): what the engine's views borrow.
+pub(crate) struct Pixels<'a, T: Clone> {
+    width: usize,
+    height: usize,
+    data: Cow<'a, [T]>,
+}
+
+impl Pixels<'_, u8> {
+    /// A gray image view of the pixels.
+    pub(crate) fn gray(&self) -> GrayView<'_> {
+        GrayView {
+            width: self.width,
+            height: self.height,
+            data: &self.data,
+        }
+    }
+}
+
+impl Pixels<'_, f32> {
+    /// A depth view of the pixels (metres).
+    pub(crate) fn depth(&self) -> DepthView<'_> {
+        DepthView {
+            width: self.width,
+            height: self.height,
+            data: &self.data,
         }
     }
 }

@@ -8,9 +8,8 @@ use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use swarmpose_odometry::frontend::RgbdNoise;
-use swarmpose_odometry::{DepthView, RgbdInput, StereoCamera, StereoInput};
+use swarmpose_odometry::{FrameResult, OdometryError, RgbdInput, StereoCamera, StereoInput};
 use swarmpose_runs::output::calibration_json;
-use swarmpose_vision::features::GrayView;
 use swarmpose_vision::stereo::RectifiedStereo;
 
 use crate::arrays::ImageArray;
@@ -31,6 +30,29 @@ pub(crate) struct Odometry {
     inner: Mutex<swarmpose_odometry::Odometry>,
 }
 
+/// The camera of a constructor's arguments: focal lengths and principal point, pixels;
+/// the baseline, metres; the image size (width, height), pixels.
+fn camera(
+    fx: f64,
+    fy: f64,
+    cx: f64,
+    cy: f64,
+    baseline_m: f64,
+    size: (usize, usize),
+) -> StereoCamera {
+    StereoCamera {
+        rig: RectifiedStereo {
+            fx,
+            fy,
+            cx,
+            cy,
+            baseline_m,
+        },
+        width: size.0,
+        height: size.1,
+    }
+}
+
 impl Odometry {
     fn of(engine: swarmpose_odometry::Odometry) -> Self {
         Self {
@@ -45,6 +67,19 @@ impl Odometry {
                 "this Odometry stopped in the middle of a frame (a panic): make a new one",
             )
         })
+    }
+
+    /// The `Frame` of one frame given to the engine by `track` (`track` or `track_rgbd`),
+    /// with the GIL released while it works.
+    fn run<F>(&self, py: Python<'_>, track: F) -> PyResult<Frame>
+    where
+        F: FnOnce(&mut swarmpose_odometry::Odometry) -> Result<FrameResult, OdometryError> + Send,
+    {
+        let result = py.detach(move || {
+            let mut engine = self.engine()?;
+            track(&mut engine).map_err(|e| odometry_error(&e))
+        })?;
+        Ok(Frame { result })
     }
 }
 
@@ -71,17 +106,7 @@ impl Odometry {
         options: Option<&Bound<'py, PyDict>>,
     ) -> PyResult<Self> {
         let config = OdometryConfig::resolve(py, "Odometry", config, options)?;
-        let camera = StereoCamera {
-            rig: RectifiedStereo {
-                fx,
-                fy,
-                cx,
-                cy,
-                baseline_m: baseline,
-            },
-            width,
-            height,
-        };
+        let camera = camera(fx, fy, cx, cy, baseline, (width, height));
         Ok(Self::of(config.get().build(camera, None)?))
     }
 
@@ -116,24 +141,13 @@ impl Odometry {
     ) -> PyResult<Frame> {
         let l = ImageArray::<u8>::new("left", left, "uint8")?;
         let r = ImageArray::<u8>::new("right", right, "uint8")?;
-        let ((lw, lh), (rw, rh)) = (l.size(), r.size());
         let (lp, rp) = (l.pixels(), r.pixels());
         let input = StereoInput {
-            left: GrayView {
-                width: lw,
-                height: lh,
-                data: &lp,
-            },
-            right: GrayView {
-                width: rw,
-                height: rh,
-                data: &rp,
-            },
+            left: lp.gray(),
+            right: rp.gray(),
             timestamp_s: timestamp,
         };
-        let result =
-            py.detach(move || self.engine()?.track(input).map_err(|e| odometry_error(&e)))?;
-        Ok(Frame { result })
+        self.run(py, move |engine| engine.track(input))
     }
 
     /// An engine for an RGB-D camera (focal lengths and principal point in pixels,
@@ -162,17 +176,7 @@ impl Odometry {
         let config = OdometryConfig::resolve(py, "Odometry.rgbd", config, options)?;
         let mut noise = RgbdNoise::default();
         noise.depth_coefficient = depth_coefficient.unwrap_or(noise.depth_coefficient);
-        let camera = StereoCamera {
-            rig: RectifiedStereo {
-                fx,
-                fy,
-                cx,
-                cy,
-                baseline_m: noise.virtual_baseline_m,
-            },
-            width,
-            height,
-        };
+        let camera = camera(fx, fy, cx, cy, noise.virtual_baseline_m, (width, height));
         Ok(Self::of(config.get().build(camera, Some(noise))?))
     }
 
@@ -189,27 +193,13 @@ impl Odometry {
     ) -> PyResult<Frame> {
         let g = ImageArray::<u8>::new("gray", gray, "uint8")?;
         let d = ImageArray::<f32>::new("depth", depth, "float32")?;
-        let ((gw, gh), (dw, dh)) = (g.size(), d.size());
         let (gp, dp) = (g.pixels(), d.pixels());
         let input = RgbdInput {
-            gray: GrayView {
-                width: gw,
-                height: gh,
-                data: &gp,
-            },
-            depth: DepthView {
-                width: dw,
-                height: dh,
-                data: &dp,
-            },
+            gray: gp.gray(),
+            depth: dp.depth(),
             timestamp_s: timestamp,
         };
-        let result = py.detach(move || {
-            self.engine()?
-                .track_rgbd(input)
-                .map_err(|e| odometry_error(&e))
-        })?;
-        Ok(Frame { result })
+        self.run(py, move |engine| engine.track_rgbd(input))
     }
 
     /// The camera: fx, fy, cx, cy (pixels), baseline (metres), width, height.

@@ -5,6 +5,7 @@ both converted as crates/swarmpose-ros/src/convert.rs documents (odom has ROS bo
 x = optical z, y = -optical x, z = -optical y; covariance J C J^T, J = diag(R, R)); and
 evo_ape on the MCAP's topics gives the ATE of `swarmpose evaluate`."""
 
+import csv
 import json
 import shutil
 import subprocess
@@ -171,9 +172,8 @@ def test_mcap_images_every_nth_frame(kitti_seq2, swarmpose_bin, tmp_path):
     subprocess.run([str(swarmpose_bin), "odometry", str(folder), "--out", str(out), "--quiet",
                     "--mcap-images", "3"], check=True, capture_output=True)
     assert json.loads((out / "config.json").read_text())["output"]["mcap_images"] == 3
-    header = (out / "frames.csv").read_text().splitlines()[0].split(",")
-    rows = [l.split(",") for l in (out / "frames.csv").read_text().splitlines()[1:]]
-    inliers = [int(r[header.index("inliers")]) for r in rows]
+    with open(out / "frames.csv", newline="") as f:
+        inliers = [int(r["inliers"]) for r in csv.DictReader(f)]
     assert all(n >= 20 for n in inliers[1:]), inliers
     with open(out / "odometry.mcap", "rb") as f:
         reader = make_reader(f, decoder_factories=[DecoderFactory()])

@@ -11,8 +11,6 @@
 //!
 //! And at the end, the summary ([`Summary`]).
 
-use std::fmt::Write as _;
-
 use nalgebra::Isometry3;
 use swarmpose_core::geometry::quaternion_wxyz;
 use swarmpose_eval::trajectory::{kitti_text, stamp_text, tum_text};
@@ -26,60 +24,77 @@ estimate_ms,refine_ms,calibrate_ms,window_ms,total_ms,tx,ty,tz,qw,qx,qy,qz,x,y,z
 correction_offset_px,correction_quadratic_px,correction_linear_px,focal_correction_px,keyframe,\
 ambiguous";
 
-/// One row of `frames.csv` (no line end): the frame, its timestamp, status
+/// One row of `frames.csv`, its fields: the frame, its timestamp, status
 /// (`first`, `tracked`, `constant-velocity (why)`, `lost (why)`), the frame its motion
 /// was measured from, counts, time per stage (ms), the motion from the previous frame
 /// (`T_{k-1,k}`: translation metres and quaternion), the position of the camera, and the
 /// disparity correction (its constant, `x²` and `x` terms) and the change of the focal
 /// length (pixels of `fx`) applied, and
 /// whether the frame is a keyframe (1 or 0, [`FrameResult::keyframe`]) and whether its
-/// motion was ambiguous (1 or 0, [`FrameResult::ambiguous`]).
+/// motion was ambiguous (1 or 0, [`FrameResult::ambiguous`]). Written as a CSV record
+/// ([`csv_record`]).
 #[must_use]
-pub fn frames_row(r: &FrameResult) -> String {
+pub fn frames_row(r: &FrameResult) -> Vec<String> {
     let t = r.motion.translation.vector;
-    let [qw, qx, qy, qz] = quaternion_wxyz(&r.motion.rotation);
     let p = r.pose.translation.vector;
-    let tm = &r.times;
-    let c = &r.counts;
-    let status = r.status.text().replace('"', "'");
-    let reference = r.reference.map_or_else(String::new, |i| i.to_string());
-    format!(
-        "{},{},\"{status}\",{reference},{},{},{},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},\
-         {:.6},{:.6},{:.6},{:.9},{:.9},{:.9},{:.9},{:.6},{:.6},{:.6},{},{:.4},{:.4},{:.4},{:.4},{},{}",
-        r.index,
+    let (tm, c, k) = (&r.times, &r.counts, &r.correction);
+    let mut row = vec![
+        r.index.to_string(),
         stamp_text(r.timestamp_s),
+        r.status.text(),
+        r.reference.map_or_else(String::new, |i| i.to_string()),
+    ];
+    let counts = [
         c.left_features,
         c.right_features,
         c.stereo_points,
         c.matches,
         c.inliers,
+    ];
+    row.extend(counts.map(|n| n.to_string()));
+    let stages = [
         tm.load_ms,
         tm.features_ms,
         tm.stereo_ms,
         tm.match_ms,
         tm.estimate_ms,
-        tm.refine_ms,
-        tm.calibrate_ms,
-        tm.window_ms,
-        tm.total_ms(),
-        t.x,
-        t.y,
-        t.z,
-        qw,
-        qx,
-        qy,
-        qz,
-        p.x,
-        p.y,
-        p.z,
-        r.correction_model.name(),
-        r.correction.offset_px,
-        r.correction.quadratic_px,
-        r.correction.linear_x_px,
-        r.focal_px,
-        u8::from(r.keyframe),
-        u8::from(r.ambiguous),
-    )
+    ];
+    row.extend(fixed(stages, 3));
+    let stages = [tm.refine_ms, tm.calibrate_ms, tm.window_ms, tm.total_ms()];
+    row.extend(fixed(stages, 3));
+    row.extend(fixed([t.x, t.y, t.z], 6));
+    row.extend(fixed(quaternion_wxyz(&r.motion.rotation), 9));
+    row.extend(fixed([p.x, p.y, p.z], 6));
+    row.push(r.correction_model.name().to_owned());
+    let correction = [k.offset_px, k.quadratic_px, k.linear_x_px, r.focal_px];
+    row.extend(fixed(correction, 4));
+    row.extend([r.keyframe, r.ambiguous].map(|b| u8::from(b).to_string()));
+    row
+}
+
+/// `values` written with `decimals` decimals.
+fn fixed<const N: usize>(values: [f64; N], decimals: usize) -> [String; N] {
+    values.map(|v| format!("{v:.decimals$}"))
+}
+
+/// One CSV record of `fields`, without its line end: a field is quoted only when it holds
+/// a comma, a quote (written twice) or a line break, as the `csv` crate (and every CSV
+/// reader) does it.
+///
+/// # Errors
+/// None in practice: the record is written to memory, and the fields are text.
+pub fn csv_record<I>(fields: I) -> Result<String, csv::Error>
+where
+    I: IntoIterator,
+    I::Item: AsRef<[u8]>,
+{
+    let mut w = csv::Writer::from_writer(Vec::new());
+    w.write_record(fields)?;
+    let mut bytes = w
+        .into_inner()
+        .map_err(|e| csv::Error::from(e.into_error()))?;
+    bytes.pop(); // the record's `\n`
+    String::from_utf8(bytes).map_err(|e| csv::Error::from(std::io::Error::other(e)))
 }
 
 /// The header of `motion_covariance.csv`.
@@ -93,22 +108,20 @@ i <= j, 0-based).\n\
 frame,reference,tx,ty,tz,qw,qx,qy,qz,c00,c01,c02,c03,c04,c05,c11,c12,c13,c14,c15,c22,c23,\
 c24,c25,c33,c34,c35,c44,c45,c55";
 
-/// One row of `motion_covariance.csv` (no line end), for a frame with a covariance.
+/// One row of `motion_covariance.csv`, its fields, for a frame with a covariance.
 #[must_use]
-pub fn covariance_row(r: &FrameResult) -> Option<String> {
+pub fn covariance_row(r: &FrameResult) -> Option<Vec<String>> {
     let c = r.covariance?;
     let t = r.measured_motion.translation.vector;
-    let [qw, qx, qy, qz] = quaternion_wxyz(&r.measured_motion.rotation);
-    let mut s = format!(
-        "{},{},{:.6},{:.6},{:.6},{:.9},{:.9},{:.9},{:.9}",
-        r.index, r.reference?, t.x, t.y, t.z, qw, qx, qy, qz
-    );
+    let mut row = vec![r.index.to_string(), r.reference?.to_string()];
+    row.extend(fixed([t.x, t.y, t.z], 6));
+    row.extend(fixed(quaternion_wxyz(&r.measured_motion.rotation), 9));
     for i in 0..6 {
         for j in i..6 {
-            let _ = write!(s, ",{:e}", c[(i, j)]);
+            row.push(format!("{:e}", c[(i, j)]));
         }
     }
-    Some(s)
+    Some(row)
 }
 
 /// The KITTI line of a pose (no line end).

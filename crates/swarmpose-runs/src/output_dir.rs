@@ -12,7 +12,7 @@ use swarmpose_odometry::FrameResult;
 
 use crate::error::RunError;
 use crate::output::{
-    COVARIANCE_HEADER, FRAMES_HEADER, covariance_row, frames_row, kitti_line, tum_line,
+    COVARIANCE_HEADER, FRAMES_HEADER, covariance_row, csv_record, frames_row, kitti_line, tum_line,
 };
 
 /// An error writing `path`, naming it once.
@@ -277,6 +277,19 @@ impl StreamFile {
             }
         }
     }
+
+    /// Appends one CSV record of `fields` ([`csv_record`]) as a line, flushed.
+    ///
+    /// # Errors
+    /// An error naming the file.
+    pub fn record<I>(&mut self, fields: I) -> Result<(), RunError>
+    where
+        I: IntoIterator,
+        I::Item: AsRef<[u8]>,
+    {
+        let line = csv_record(fields).map_err(|e| write_error(&self.path, &e))?;
+        self.line(&line)
+    }
 }
 
 /// The files a run streams frame by frame: `trajectory.kitti.txt`,
@@ -316,7 +329,7 @@ impl FrameFiles {
     pub fn frame(&mut self, r: &FrameResult) -> Result<(), RunError> {
         self.kitti.line(&kitti_line(&r.pose))?;
         self.tum.line(&tum_line(r.timestamp_s, &r.pose))?;
-        self.frames.line(&frames_row(r))?;
-        covariance_row(r).map_or(Ok(()), |row| self.covariance.line(&row))
+        self.frames.record(frames_row(r))?;
+        covariance_row(r).map_or(Ok(()), |row| self.covariance.record(row))
     }
 }

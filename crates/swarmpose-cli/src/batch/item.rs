@@ -137,8 +137,11 @@ fn lock(dir: &Path) -> Result<Option<File>, CliError> {
 fn frame_counts(dir: &Path) -> [usize; 4] {
     let text = std::fs::read_to_string(dir.join("frames.csv")).unwrap_or_default();
     let mut c = [0; 4];
-    for line in text.lines().skip(1) {
-        let status = line.split(',').nth(2).unwrap_or("").trim_start_matches('"');
+    let mut reader = csv::ReaderBuilder::new()
+        .flexible(true)
+        .from_reader(text.as_bytes());
+    for record in reader.records() {
+        let status = record.as_ref().ok().and_then(|r| r.get(2)).unwrap_or("");
         c[0] += 1;
         let k = [(1, "tracked"), (2, "constant-velocity"), (3, "lost")]
             .into_iter()

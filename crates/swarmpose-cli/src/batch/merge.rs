@@ -117,7 +117,10 @@ pub fn run(args: &MergeArgs) -> Result<(), CliError> {
     }
     let rows = collect(&args.dirs)?;
     let to = args.out.clone().unwrap_or_else(|| args.dirs[0].clone());
-    write_bytes(&to.join("batch.csv"), csv(&rows).as_bytes())?;
+    let table_path = to.join("batch.csv");
+    let table = csv(&rows)
+        .map_err(|e| CliError::failure(format!("cannot write {}: {e}", table_path.display())))?;
+    write_bytes(&table_path, &table)?;
     write_bytes(&to.join("batch.md"), markdown(&rows).as_bytes())?;
     for line in aggregates(&rows) {
         out(&line)?;

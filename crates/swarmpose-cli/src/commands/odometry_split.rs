@@ -44,20 +44,11 @@ impl SplitLog {
         };
         let d = &s.difference;
         self.nees.push(s.nees);
-        Ok(self.file.line(&format!(
-            "{},{:.6},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{:.6}",
-            r.index,
-            s.nees,
-            d[0],
-            d[1],
-            d[2],
-            d[3],
-            d[4],
-            d[5],
-            s.inliers[0],
-            s.inliers[1],
-            s.model_nees
-        ))?)
+        let mut row = vec![r.index.to_string(), format!("{:.6}", s.nees)];
+        row.extend(d.iter().map(|v| format!("{v:e}")));
+        row.extend(s.inliers.map(|n| n.to_string()));
+        row.push(format!("{:.6}", s.model_nees));
+        Ok(self.file.record(row)?)
     }
 
     /// The summary line: mean and median NEES over the pairs checked.

@@ -25,9 +25,10 @@ pub struct Unpaired {
 
 /// The `frames.csv` row of an unpaired image whose stamp is `t` seconds from the first
 /// frame's.
-fn row(u: &UnpairedImage, t: f64) -> String {
-    let empty = FRAMES_HEADER.split(',').count() - 3;
-    format!(",{t:.6},unpaired ({u}){}", ",".repeat(empty))
+fn row(u: &UnpairedImage, t: f64) -> Vec<String> {
+    let mut row = vec![String::new(), format!("{t:.6}"), format!("unpaired ({u})")];
+    row.resize(FRAMES_HEADER.split(',').count(), String::new());
+    row
 }
 
 impl Unpaired {
@@ -51,7 +52,7 @@ impl Unpaired {
         while self.pending.front().is_some_and(|u| u.stamp_ns < stamp_ns) {
             if let Some(u) = self.pending.pop_front() {
                 let t = (u.stamp_ns - self.first_stamp_ns) as f64 * 1e-9;
-                frames.line(&row(&u, t)).map_err(CliError::from)?;
+                frames.record(row(&u, t)).map_err(CliError::from)?;
             }
         }
         Ok(())
@@ -93,7 +94,7 @@ mod tests {
             message: 3,
             stamp_ns: 1_500_000_000,
         };
-        let r = row(&u, 0.5);
+        let r = swarmpose_runs::output::csv_record(row(&u, 0.5)).expect("a record");
         assert_eq!(r.split(',').count(), FRAMES_HEADER.split(',').count());
         assert!(r.starts_with(",0.500000,unpaired (/right/image message 3 (stamp 1500000000 ns))"));
     }

@@ -250,26 +250,16 @@ fn kitti_run_writes_its_outputs() {
     }
     let csv = std::fs::read_to_string(out_dir.join("frames.csv")).expect("frames.csv");
     assert_eq!(csv.lines().count(), 52);
-    // Every row has the header's fields (the status is quoted and may hold commas), and
-    // the correction's terms are where the header says.
-    let fields = |line: &str| -> Vec<String> {
-        let (mut out, mut cur, mut quoted) = (Vec::new(), String::new(), false);
-        for ch in line.chars() {
-            match ch {
-                '"' => quoted = !quoted,
-                ',' if !quoted => out.push(std::mem::take(&mut cur)),
-                _ => cur.push(ch),
-            }
-        }
-        out.push(cur);
-        out
-    };
-    let header = fields(csv.lines().next().expect("header"));
+    // Every row has the header's fields (a status with a comma is quoted), and the
+    // correction's terms are where the header says.
+    let mut reader = csv::Reader::from_reader(csv.as_bytes());
+    let header = reader.headers().expect("header").clone();
     let column = |name: &str| header.iter().position(|h| h == name).expect(name);
-    for line in csv.lines().skip(1) {
-        assert_eq!(fields(line).len(), header.len(), "{line}");
-    }
-    let last = fields(csv.lines().last().expect("a row"));
+    let rows: Vec<csv::StringRecord> = reader
+        .records()
+        .map(|r| r.expect("a row with the header's fields"))
+        .collect();
+    let last = rows.last().expect("a row");
     for term in [
         "correction_offset_px",
         "correction_quadratic_px",

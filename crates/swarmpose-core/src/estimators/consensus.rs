@@ -1,8 +1,11 @@
 //! Pieces shared by the estimators: residuals, inlier sets, the truncated cost and the
 //! final SVD refinement on inliers.
 
+use std::time::Instant;
+
 use nalgebra::{Isometry3, Point3};
 
+use super::{Diagnostics, Estimate};
 use crate::arun::arun_pairs;
 use crate::error::PoseError;
 use crate::geometry::{Correspondences, MIN_CORRESPONDENCES, check_spread};
@@ -106,6 +109,32 @@ pub fn residual_rms(data: &Correspondences, t: &Isometry3<f64>, indices: &[usize
         .map(|&i| residual_sq(t, &data.src()[i], &data.dst()[i]))
         .sum();
     (sum / indices.len() as f64).sqrt()
+}
+
+/// The estimate of a method with a fixed inlier threshold (metres): `transform`, fitted
+/// on `inliers`, after `(iterations, cost evaluations)` of work started at `start`.
+pub(crate) fn thresholded_estimate(
+    data: &Correspondences,
+    transform: Isometry3<f64>,
+    inliers: Vec<usize>,
+    threshold_m: f64,
+    (iterations, cost_evaluations): (usize, u64),
+    start: Instant,
+) -> Estimate {
+    Estimate {
+        diagnostics: Diagnostics {
+            iterations,
+            cost_evaluations,
+            final_cost: truncated_cost(data, &transform, threshold_m),
+            residual_rms_m: residual_rms(data, &transform, &inliers),
+            threshold_m: Some(threshold_m),
+            elapsed: start.elapsed(),
+            runner_up: None,
+            range_noise: None,
+        },
+        transform,
+        inliers,
+    }
 }
 
 /// Arun on the correspondences at `indices` (equal weights).

@@ -163,7 +163,7 @@ mod tests {
 
     use super::*;
     use crate::arun::arun;
-    use crate::estimators::test_scenes::stereo_scene;
+    use crate::estimators::test_scenes::{moved_after, stereo_scene};
     use crate::geometry::rotation_angle_between;
 
     #[test]
@@ -217,17 +217,7 @@ mod tests {
             Err(PoseError::InvalidConfig(_))
         ));
         let cov = vec![Matrix3::identity() * 1e-4; 5];
-        let far: Vec<Point3<f64>> = pts
-            .iter()
-            .enumerate()
-            .map(|(k, q)| {
-                if k < 2 {
-                    *q
-                } else {
-                    q + Vector3::new(9.0, 0.0, 0.0)
-                }
-            })
-            .collect();
+        let far = moved_after(&pts, 2, |_| Vector3::new(9.0, 0.0, 0.0));
         let data = Correspondences::new(pts, far)
             .and_then(|c| c.with_noise_covariance(cov.clone(), cov))
             .expect("valid");

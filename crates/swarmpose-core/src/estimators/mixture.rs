@@ -139,6 +139,7 @@ mod tests {
 
     use super::*;
     use crate::arun::arun;
+    use crate::estimators::test_scenes::moved_after;
     use crate::geometry::rotation_angle_between;
     use crate::synthetic::SyntheticSpec;
 
@@ -220,17 +221,7 @@ mod tests {
         let src: Vec<Point3<f64>> = (0..12)
             .map(|k| Point3::new(f64::from(k), f64::from(k * k % 7), f64::from(k % 3)))
             .collect();
-        let dst: Vec<Point3<f64>> = src
-            .iter()
-            .enumerate()
-            .map(|(k, p)| {
-                if k < 3 {
-                    *p
-                } else {
-                    p + Vector3::new(5.0 + k as f64, -3.0, 2.0)
-                }
-            })
-            .collect();
+        let dst = moved_after(&src, 3, |k| Vector3::new(5.0 + k as f64, -3.0, 2.0));
         let data = Correspondences::new(src, dst).expect("valid");
         let start = Isometry3::identity();
         let mut w = Vec::new();

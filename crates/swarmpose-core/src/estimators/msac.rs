@@ -5,10 +5,8 @@ use std::time::Instant;
 use nalgebra::Isometry3;
 use rand::seq::index::sample_array;
 
-use super::consensus::{
-    check_input, check_threshold, refine, residual_rms, residual_sq, truncated_cost,
-};
-use super::{Diagnostics, Estimate, Estimator};
+use super::consensus::{check_input, check_threshold, refine, residual_sq, thresholded_estimate};
+use super::{Estimate, Estimator};
 use crate::arun::arun_pairs;
 use crate::error::PoseError;
 use crate::geometry::Correspondences;
@@ -194,20 +192,14 @@ impl Estimator for MsacEstimator {
             cfg.refine_rounds,
             &mut inliers,
         )?;
-        Ok(Estimate {
-            diagnostics: Diagnostics {
-                iterations,
-                cost_evaluations: evaluations,
-                final_cost: truncated_cost(data, &transform, cfg.threshold_m),
-                residual_rms_m: residual_rms(data, &transform, &inliers),
-                threshold_m: Some(cfg.threshold_m),
-                elapsed: start.elapsed(),
-                runner_up: None,
-                range_noise: None,
-            },
+        Ok(thresholded_estimate(
+            data,
             transform,
             inliers,
-        })
+            cfg.threshold_m,
+            (iterations, evaluations),
+            start,
+        ))
     }
 }
 

@@ -6,9 +6,9 @@ use std::time::Instant;
 use nalgebra::{Matrix3, Vector3};
 
 use super::consensus::{
-    arun_on, check_input, check_support, check_threshold, residual_rms, truncated_cost,
+    arun_on, check_input, check_support, check_threshold, thresholded_estimate,
 };
-use super::{Diagnostics, Estimate, Estimator};
+use super::{Estimate, Estimator};
 use crate::error::PoseError;
 use crate::geometry::{Correspondences, rotation_from_particle, wrap_rotation_vector};
 use crate::pso::{ParticleSwarm, PsoConfig};
@@ -143,19 +143,13 @@ impl Estimator for PsoPaperEstimator {
         }
         check_support(data, &inliers)?;
         let transform = arun_on(data, &inliers)?;
-        Ok(Estimate {
-            diagnostics: Diagnostics {
-                iterations: out.iterations,
-                cost_evaluations: out.evaluations,
-                final_cost: truncated_cost(data, &transform, cfg.threshold_m),
-                residual_rms_m: residual_rms(data, &transform, &inliers),
-                threshold_m: Some(cfg.threshold_m),
-                elapsed: start.elapsed(),
-                runner_up: None,
-                range_noise: None,
-            },
+        Ok(thresholded_estimate(
+            data,
             transform,
             inliers,
-        })
+            cfg.threshold_m,
+            (out.iterations, out.evaluations),
+            start,
+        ))
     }
 }

@@ -69,3 +69,17 @@ pub(crate) fn stereo_scene(
         .expect("valid");
     (data, truth, inlier)
 }
+
+/// `points` with each one from index `kept` on moved by `offset(index)` (metres): wrong
+/// matches after `kept` right ones.
+pub(crate) fn moved_after(
+    points: &[Point3<f64>],
+    kept: usize,
+    offset: impl Fn(usize) -> Vector3<f64>,
+) -> Vec<Point3<f64>> {
+    points
+        .iter()
+        .enumerate()
+        .map(|(k, p)| if k < kept { *p } else { p + offset(k) })
+        .collect()
+}

@@ -18,7 +18,9 @@ use swarmpose_vision::rectify::{
 
 use crate::error::DatasetError;
 use crate::frames::check_pairs;
-use crate::text::{check_baseline, check_plausible, numbers, parse_error, read_text, strip_bom};
+use crate::text::{
+    check_baseline, check_plausible, numbers_at_least, parse_error, read_text, strip_bom,
+};
 use crate::{RectifiedStereo, StereoPair, StereoSequence, load_indexed_pair};
 
 pub use yaml::{SensorYaml, parse_sensor_yaml, read_sensor_yaml};
@@ -141,17 +143,9 @@ pub fn parse_groundtruth(
         if line.is_empty() || line.starts_with('#') {
             continue;
         }
-        let v = numbers(line, path, k + 1)?;
-        if v.len() < 8 {
-            return Err(parse_error(
-                path,
-                k + 1,
-                format!(
-                    "expected timestamp, position (3), quaternion wxyz (4); found {} numbers",
-                    v.len()
-                ),
-            ));
-        }
+        let v = numbers_at_least(line, path, k + 1, 8, |n| {
+            format!("expected timestamp, position (3), quaternion wxyz (4); found {n} numbers")
+        })?;
         let q = Quaternion::new(v[4], v[5], v[6], v[7]);
         // A quaternion of norm 0 (or far from 1) is no rotation: normalising it gave NaN
         // poses and NaN metrics.

@@ -6,6 +6,7 @@ use nalgebra::SMatrix;
 
 use super::K;
 use super::rows::RowDecision;
+use super::subset::{solve_on, sub_matrix};
 use crate::refine::evidence::{MatrixK, QuadraticCost, VectorK};
 
 /// The minimiser of `q` over `base + Σ z_k e_k` for the coefficients `free`.
@@ -16,25 +17,9 @@ pub(super) fn fit_on_base(q: &QuadraticCost, base: &VectorK, free: &[usize]) -> 
         return out;
     }
     let rhs = q.b - q.a * base;
-    let mut a = SMatrix::<f64, K, K>::identity();
-    let mut b = VectorK::zeros();
-    for (i, &ki) in free.iter().enumerate() {
-        b[i] = rhs[ki];
-        for (j, &kj) in free.iter().enumerate() {
-            a[(i, j)] = q.a[(ki, kj)];
-        }
-    }
-    let scale = (0..n).map(|i| a[(i, i)].abs()).fold(0.0, f64::max);
-    if scale <= 0.0 {
-        return out;
-    }
-    for i in 0..n {
-        a[(i, i)] += 1e-12 * scale;
-    }
-    if let Some(chol) = a.cholesky() {
-        let z = chol.solve(&b);
-        for (i, &ki) in free.iter().enumerate() {
-            out[ki] += z[i];
+    if let Some(z) = solve_on(&q.a, &rhs, free) {
+        for (&k, z) in free.iter().zip(z.iter()) {
+            out[k] += z;
         }
     }
     out
@@ -48,13 +33,7 @@ pub(super) fn covariance_on(q: &QuadraticCost, free: &[usize]) -> MatrixK {
     if n == 0 {
         return out;
     }
-    let mut a = SMatrix::<f64, K, K>::identity();
-    for (i, &ki) in free.iter().enumerate() {
-        for (j, &kj) in free.iter().enumerate() {
-            a[(i, j)] = q.a[(ki, kj)];
-        }
-    }
-    let Some(chol) = a.cholesky() else {
+    let Some(chol) = sub_matrix(&q.a, free).cholesky() else {
         return out;
     };
     let inv = chol.inverse();

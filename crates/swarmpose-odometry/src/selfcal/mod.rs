@@ -53,6 +53,7 @@ mod causes;
 mod fit;
 pub mod rows;
 pub mod scene;
+mod subset;
 
 pub use causes::CorrectionModel;
 pub use fit::applied_fraction;

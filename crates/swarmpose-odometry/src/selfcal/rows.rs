@@ -24,6 +24,8 @@ use nalgebra::{SMatrix, SVector};
 use swarmpose_vision::frontend::DisparityCorrection;
 use swarmpose_vision::stereo::RectifiedStereo;
 
+use super::subset::{solve_on, sub_matrix};
+
 /// Terms of the row-offset fit: `[1, x, y, x y, y², x², x² y, y³]`.
 const R: usize = 8;
 /// Row offsets larger than this are not used, pixels (wrong stereo matches).
@@ -88,13 +90,7 @@ impl Normal {
         let n = terms.len();
         let dof = self.n.saturating_sub(n).max(1) as f64;
         let variance = self.rss(c) / dof;
-        let mut a = MatrixR::identity();
-        for (i, &ki) in terms.iter().enumerate() {
-            for (j, &kj) in terms.iter().enumerate() {
-                a[(i, j)] = self.a[(ki, kj)];
-            }
-        }
-        let Some(inv) = a.cholesky().map(|c| c.inverse()) else {
+        let Some(inv) = sub_matrix(&self.a, terms).cholesky().map(|c| c.inverse()) else {
             return out;
         };
         let rotation = [(YAW, -1.0), (ROLL, -1.0), (PITCH, 1.0)];
@@ -114,27 +110,10 @@ impl Normal {
 
     /// Least squares over the terms in `terms` (the others 0).
     fn fit(&self, terms: &[usize]) -> VectorR {
-        let n = terms.len();
-        let mut a = MatrixR::identity();
-        let mut b = VectorR::zeros();
-        for (i, &ki) in terms.iter().enumerate() {
-            b[i] = self.b[ki];
-            for (j, &kj) in terms.iter().enumerate() {
-                a[(i, j)] = self.a[(ki, kj)];
-            }
-        }
         let mut out = VectorR::zeros();
-        let scale = (0..n).map(|i| a[(i, i)]).fold(0.0, f64::max);
-        if n == 0 || scale <= 0.0 {
-            return out;
-        }
-        for i in 0..n {
-            a[(i, i)] += 1e-12 * scale;
-        }
-        if let Some(chol) = a.cholesky() {
-            let x = chol.solve(&b);
-            for (i, &ki) in terms.iter().enumerate() {
-                out[ki] = x[i];
+        if let Some(x) = solve_on(&self.a, &self.b, terms) {
+            for (&k, x) in terms.iter().zip(x.iter()) {
+                out[k] = *x;
             }
         }
         out

@@ -156,13 +156,17 @@ fn a_larger_camera_is_halved_to_the_same_result() {
 
     let seq = SyntheticSequence::new(8, 0.8, 1f64.to_radians());
     let small = camera_of(&seq);
-    let mut large = small;
-    large.rig.fx *= 2.0;
-    large.rig.fy *= 2.0;
-    large.rig.cx = 2.0 * small.rig.cx + 0.5;
-    large.rig.cy = 2.0 * small.rig.cy + 0.5;
-    large.width *= 2;
-    large.height *= 2;
+    let large = small.doubled();
+    // Pixel centres: x_large + 0.5 = 2 (x_small + 0.5), the relation of `doubled` below.
+    assert_eq!(
+        (large.rig.fx, large.rig.cx, large.rig.cy, large.width),
+        (
+            2.0 * small.rig.fx,
+            2.0 * small.rig.cx + 0.5,
+            2.0 * small.rig.cy + 0.5,
+            2 * small.width
+        )
+    );
     let doubled = |img: &GrayImage| {
         let w = img.width * 2;
         let data = (0..w * img.height * 2)

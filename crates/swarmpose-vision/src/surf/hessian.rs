@@ -71,23 +71,6 @@ pub(crate) struct Search {
     pub finest_layer: bool,
 }
 
-/// Detects scale-space maxima of `det(H_approx)` above the threshold over all octaves of
-/// one integral image (no per-octave smoothing) and appends them to `out`.
-#[cfg(test)]
-pub(crate) fn detect(
-    integral: &IntegralImage,
-    octaves: usize,
-    search: Search,
-    layers: &mut Vec<ResponseLayer>,
-    out: &mut Vec<Detection>,
-) {
-    for octave in 0..octaves {
-        if !detect_octave(integral, octave, search, layers, out) {
-            break;
-        }
-    }
-}
-
 /// Detects the maxima of octave `octave` in `integral` (the image as smoothed for that
 /// octave) and appends them to `out`; `layers` is scratch space reused across octaves
 /// (and calls). Returns `false` when the octave's filters do not fit in the image (nor
@@ -210,6 +193,18 @@ mod tests {
     use crate::features::GrayView;
     use crate::surf::test_images::gaussian_blob;
 
+    /// The scale-space maxima of `det(H_approx)` above the threshold over all octaves of
+    /// one integral image (no per-octave smoothing).
+    fn detect(integral: &IntegralImage, octaves: usize, search: Search) -> Vec<Detection> {
+        let (mut layers, mut out) = (Vec::new(), Vec::new());
+        for octave in 0..octaves {
+            if !detect_octave(integral, octave, search, &mut layers, &mut out) {
+                break;
+            }
+        }
+        out
+    }
+
     #[test]
     fn filter_sizes_follow_the_paper() {
         let sizes = |o| (0..4).map(|i| filter_size(o, i)).collect::<Vec<_>>();
@@ -283,10 +278,9 @@ mod tests {
         };
         let c = (n / 2) as f32;
         let near = |d: &Detection| (d.x - c).abs() < 1.0 && (d.y - c).abs() < 1.0;
-        let mut found = Vec::new();
-        detect(&ii, 2, search(false), &mut Vec::new(), &mut found);
+        let found = detect(&ii, 2, search(false));
         assert!(!found.iter().any(near), "{found:?}");
-        detect(&ii, 2, search(true), &mut Vec::new(), &mut found);
+        let found = detect(&ii, 2, search(true));
         let hit = found.iter().find(|d| near(d));
         assert!(
             hit.is_some_and(|d| d.scale == 1.2 && d.laplacian_positive),
@@ -304,14 +298,13 @@ mod tests {
                 height: n,
                 data: &img,
             });
-            let mut found = Vec::new();
             let search = Search {
                 intervals: 2,
                 initial_step: 1,
                 threshold: 1e-4,
                 finest_layer: false,
             };
-            detect(&ii, 4, search, &mut Vec::new(), &mut found);
+            let found = detect(&ii, 4, search);
             let best = found
                 .iter()
                 .max_by(|a, b| a.response.total_cmp(&b.response))

@@ -25,6 +25,8 @@ pub const TEMPLATE_RADIUS: usize = 4;
 const SIDE: usize = 2 * TEMPLATE_RADIUS + 3;
 /// Side of the aligned patch.
 const N: usize = 2 * TEMPLATE_RADIUS + 1;
+/// [`TEMPLATE_RADIUS`], pixels.
+const R: f32 = TEMPLATE_RADIUS as f32;
 
 /// When an alignment ([`PatchTemplate::align`], [`PatchTemplate::align_affine`]) stops,
 /// and what it accepts.
@@ -67,9 +69,8 @@ impl PatchTemplate {
     /// of its structure tensor below one grey level squared per pixel).
     #[must_use]
     pub fn sample(image: GrayView<'_>, at: (f32, f32)) -> Option<Self> {
-        let r = TEMPLATE_RADIUS as f32;
         let mut big = [0f32; SIDE * SIDE];
-        sample_patch(image, at.0 - r - 1.0, at.1 - r - 1.0, SIDE, &mut big)?;
+        sample_patch(image, at.0 - R - 1.0, at.1 - R - 1.0, SIDE, &mut big)?;
         let mut t = Self {
             values: [0.0; N * N],
             gx: [0.0; N * N],
@@ -136,13 +137,12 @@ impl PatchTemplate {
         start: (f32, f32),
         limits: AlignLimits,
     ) -> Option<(f32, f32)> {
-        let r = TEMPLATE_RADIUS as f32;
         let (hxx, hxy, hyy) = self.ptensor;
         let det = hxx * hyy - hxy * hxy;
         let mut patch = [0f32; N * N];
         let (mut px, mut py) = start;
         for _ in 0..limits.iterations {
-            sample_patch(image, px - r, py - r, N, &mut patch)?;
+            sample_patch(image, px - R, py - R, N, &mut patch)?;
             let (mut ex, mut ey) = (0f32, 0f32);
             for (((p, t), gx), gy) in patch.iter().zip(&self.values).zip(&self.pgx).zip(&self.pgy) {
                 let e = p - t;
@@ -160,7 +160,7 @@ impl PatchTemplate {
                 let Some(min_ncc) = limits.min_ncc else {
                     return Some((px, py));
                 };
-                sample_patch(image, px - r, py - r, N, &mut patch)?;
+                sample_patch(image, px - R, py - R, N, &mut patch)?;
                 return (ncc(&patch, &self.values) >= min_ncc).then_some((px, py));
             }
         }
@@ -180,8 +180,7 @@ impl PatchTemplate {
         start: (f32, f32),
         limits: AlignLimits,
     ) -> Option<(f32, f32)> {
-        let r = TEMPLATE_RADIUS as f32;
-        let coords = |k: usize| ((k % N) as f32 - r, (k / N) as f32 - r);
+        let coords = |k: usize| ((k % N) as f32 - R, (k / N) as f32 - R);
         // The steepest-descent images `∇T ∂W/∂p`, once per call.
         let mut sd = [SVector::<f32, 6>::zeros(); N * N];
         for (k, sd) in sd.iter_mut().enumerate() {
@@ -233,7 +232,7 @@ impl PatchTemplate {
                 .max(dp[1].abs())
                 .max(dp[2].abs())
                 .max(dp[3].abs());
-            if dp[4].hypot(dp[5]) < 0.01 && linear * r < 0.01 {
+            if dp[4].hypot(dp[5]) < 0.01 && linear * R < 0.01 {
                 let Some(min_ncc) = limits.min_ncc else {
                     return Some((px, py));
                 };
