@@ -31,6 +31,7 @@ use swarmpose_runs::plots::{PlotTrack, render_plots};
 use swarmpose_runs::synthetic::SyntheticSequence;
 use swarmpose_vision::image::GrayImage;
 
+use super::odometry_calibration::calibration_lines;
 use super::odometry_input::open_input;
 use super::odometry_mcap::McapOutput;
 use super::odometry_output::OutputDir;
@@ -719,46 +720,8 @@ fn finish(
             levels.unsigned_abs()
         ))?;
     }
-    if source == CorrectionModel::GIVEN {
-        out(&format!("disparity correction: {applied} (given)"))?;
-    } else {
-        let focal = if decision.model.has(CorrectionModel::FOCAL_LENGTH) {
-            format!("; focal length {:+.3} px", decision.focal_px)
-        } else {
-            String::new()
-        };
-        out(&format!(
-            "disparity correction: {}{focal} ({}; rows: yaw f*psi {:.3} px{}, roll f*theta {:.3} px, from {} \
-             row offsets; rigidity: {} pairs, held-out score {:.1}{})",
-            decision.correction,
-            decision.model,
-            decision.rows.rotation_px[0],
-            match (decision.rows.yaw, decision.rows.weight) {
-                (false, _) => " (not used)".to_owned(),
-                (true, w) if w < 1.0 => format!(" (used, applied {:.0} %)", 100.0 * w),
-                (true, _) => " (used)".to_owned(),
-            },
-            decision.rows.rotation_px[1],
-            decision.rows.measurements,
-            decision.pairs,
-            decision.rigidity_score,
-            if decision.rigidity_weight > 0.0 && decision.rigidity_weight < 1.0 {
-                format!(", applied {:.0} %", 100.0 * decision.rigidity_weight)
-            } else {
-                String::new()
-            }
-        ))?;
-        if decision.one_plane_pairs > 0 {
-            out(&format!(
-                "calibration {}: {} pair(s) saw one plane, where a disparity offset cannot be                  told from the scene's scale; they corrected nothing",
-                if decision.rigidity_unobservable() {
-                    "unobservable by rigidity"
-                } else {
-                    "partly unobservable"
-                },
-                decision.one_plane_pairs
-            ))?;
-        }
+    for line in calibration_lines(&decision, source == CorrectionModel::GIVEN) {
+        out(&line)?;
     }
     out(&format!(
         "time per frame: {total:.1} ms ({:.1} frames/s): load {:.1}, features {:.1}, stereo {:.1}, \
