@@ -126,11 +126,11 @@ pub struct OdometryArgs {
               OdometryConfig::default().window.marginalise.name()))]
     pub marginalise: Option<Marginalisation>,
 
-    /// Each feature track keeps the disparity correction of the frame where it began: a
-    /// change of the self-calibration enters through new tracks only and does not jump
-    /// the online pose, at a cost in drift (docs/self-calibration.md).
+    /// Each measurement of the sliding window keeps the disparity correction of the frame
+    /// where it was made: a change of the self-calibration enters through new measurements
+    /// only and does not jump the online pose, at a cost in drift (docs/self-calibration.md).
     #[arg(long)]
-    pub correction_per_track: bool,
+    pub correction_per_frame: bool,
 
     /// Fewest inliers for a motion to be accepted (at least 3).
     #[arg(long, value_name = "N", value_parser = min_inliers, allow_negative_numbers = true,
@@ -325,7 +325,7 @@ pub fn run_config(args: &OdometryArgs) -> Result<RunConfig, CliError> {
     set(&mut o.min_working_pixels, args.min_working_pixels);
     o.seed = args.seed.unwrap_or(o.seed);
     o.window.marginalise = args.marginalise.unwrap_or(o.window.marginalise);
-    o.window.correction_per_track |= args.correction_per_track;
+    o.window.correction_per_frame |= args.correction_per_frame;
     let input = &mut rc.input;
     input.frame_period_s = args.frame_period.unwrap_or(input.frame_period_s);
     input.stamp_tolerance_ms = args.stamp_tolerance.unwrap_or(input.stamp_tolerance_ms);

@@ -277,10 +277,10 @@ fn a_correction_chosen_by_a_hair_is_applied_by_a_fraction() {
 /// frames): the correction converges from nothing to about 1 px, changing on most frames.
 /// What is compared (`common::online_against_smoothed`): per frame, the online step length
 /// `|t_k − t_{k−1}|` (the poses as given out) over the smoothed trajectory's step between
-/// the same frames (each frame's last pose in the window), minus one. With each track
-/// keeping the correction of its first frame (`WindowConfig::correction_per_track`), no
-/// step differs by more than 1 %; by default the window re-solves its keyframes under
-/// every new correction and the online steps jump by more.
+/// the same frames (each frame's last pose in the window), minus one. With each measurement
+/// keeping the correction of its own frame (`WindowConfig::correction_per_frame`), no step
+/// differs by more than 1 %; by default the window re-solves its keyframes under every new
+/// correction and the online steps jump by more.
 #[test]
 fn a_converging_correction_moves_no_online_step_by_more_than_a_percent() {
     let seq = SyntheticSequence::default().with_right_camera_error(RightCameraError {
@@ -288,16 +288,16 @@ fn a_converging_correction_moves_no_online_step_by_more_than_a_percent() {
         ..RightCameraError::default()
     });
     let truth = seq.ground_truth().expect("known path");
-    let run_with = |correction_per_track: bool| {
+    let run_with = |correction_per_frame: bool| {
         let mut config = OdometryConfig::default();
-        config.window.correction_per_track = correction_per_track;
+        config.window.correction_per_frame = correction_per_frame;
         let run = crate::common::run_sequence(&seq, config);
         let applied: Vec<f64> = run.results.iter().map(|r| r.correction.offset_px).collect();
         let rows = crate::common::online_against_smoothed(&run);
         let worst = rows.iter().fold(0.0, |w: f64, x| w.max(x.2.abs()));
         let e = crate::common::evaluate_poses(run.poses(), truth);
         eprintln!(
-            "correction_per_track {correction_per_track}: offsets applied {applied:.3?}; \
+            "correction_per_frame {correction_per_frame}: offsets applied {applied:.3?}; \
              worst online / smoothed step {:.3} % over {} frames; drift {:.3} %",
             100.0 * worst,
             rows.len(),
