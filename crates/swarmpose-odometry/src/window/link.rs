@@ -103,9 +103,9 @@ impl Window {
 
     /// A new track begun by the link `l`: its measurement in the reference frame (the
     /// window's newest; with a `correcting` model, corrected by its correction, the one in
-    /// use when the pair was measured) and, with images, the reference's patch as its template, the
-    /// pair's measurement then being its first in the current frame (the detected keypoint
-    /// otherwise).
+    /// use when the pair was measured) and, with images, the reference's patch as its
+    /// template, the pair's measurement then being its first in the current frame (the
+    /// detected keypoint otherwise).
     fn begin_track(
         &mut self,
         correcting: Option<&StereoModel>,
