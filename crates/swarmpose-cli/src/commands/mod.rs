@@ -7,6 +7,7 @@ pub mod correspondences;
 pub mod demo;
 pub mod evaluate;
 pub mod odometry;
+pub mod odometry_calibration;
 pub mod odometry_input;
 pub mod odometry_ins;
 pub mod odometry_mcap;

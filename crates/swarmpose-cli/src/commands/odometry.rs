@@ -31,6 +31,7 @@ use swarmpose_runs::plots::{PlotTrack, render_plots};
 use swarmpose_runs::synthetic::SyntheticSequence;
 use swarmpose_vision::image::GrayImage;
 
+use super::odometry_calibration::calibration_lines;
 use super::odometry_input::open_input;
 use super::odometry_mcap::McapOutput;
 use super::odometry_output::OutputDir;
@@ -125,11 +126,11 @@ pub struct OdometryArgs {
               OdometryConfig::default().window.marginalise.name()))]
     pub marginalise: Option<Marginalisation>,
 
-    /// Each feature track keeps the disparity correction of the frame where it began: a
-    /// change of the self-calibration enters through new tracks only and does not jump
-    /// the online pose, at a cost in drift (docs/self-calibration.md).
+    /// Each measurement of the sliding window keeps the disparity correction of the frame
+    /// where it was made: a change of the self-calibration enters through new measurements
+    /// only and does not jump the online pose, at a cost in drift (docs/self-calibration.md).
     #[arg(long)]
-    pub correction_per_track: bool,
+    pub correction_per_frame: bool,
 
     /// Fewest inliers for a motion to be accepted (at least 3).
     #[arg(long, value_name = "N", value_parser = min_inliers, allow_negative_numbers = true,
@@ -324,7 +325,7 @@ pub fn run_config(args: &OdometryArgs) -> Result<RunConfig, CliError> {
     set(&mut o.min_working_pixels, args.min_working_pixels);
     o.seed = args.seed.unwrap_or(o.seed);
     o.window.marginalise = args.marginalise.unwrap_or(o.window.marginalise);
-    o.window.correction_per_track |= args.correction_per_track;
+    o.window.correction_per_frame |= args.correction_per_frame;
     let input = &mut rc.input;
     input.frame_period_s = args.frame_period.unwrap_or(input.frame_period_s);
     input.stamp_tolerance_ms = args.stamp_tolerance.unwrap_or(input.stamp_tolerance_ms);
@@ -719,46 +720,8 @@ fn finish(
             levels.unsigned_abs()
         ))?;
     }
-    if source == CorrectionModel::GIVEN {
-        out(&format!("disparity correction: {applied} (given)"))?;
-    } else {
-        let focal = if decision.model.has(CorrectionModel::FOCAL_LENGTH) {
-            format!("; focal length {:+.3} px", decision.focal_px)
-        } else {
-            String::new()
-        };
-        out(&format!(
-            "disparity correction: {}{focal} ({}; rows: yaw f*psi {:.3} px{}, roll f*theta {:.3} px, from {} \
-             row offsets; rigidity: {} pairs, held-out score {:.1}{})",
-            decision.correction,
-            decision.model,
-            decision.rows.rotation_px[0],
-            match (decision.rows.yaw, decision.rows.weight) {
-                (false, _) => " (not used)".to_owned(),
-                (true, w) if w < 1.0 => format!(" (used, applied {:.0} %)", 100.0 * w),
-                (true, _) => " (used)".to_owned(),
-            },
-            decision.rows.rotation_px[1],
-            decision.rows.measurements,
-            decision.pairs,
-            decision.rigidity_score,
-            if decision.rigidity_weight > 0.0 && decision.rigidity_weight < 1.0 {
-                format!(", applied {:.0} %", 100.0 * decision.rigidity_weight)
-            } else {
-                String::new()
-            }
-        ))?;
-        if decision.one_plane_pairs > 0 {
-            out(&format!(
-                "calibration {}: {} pair(s) saw one plane, where a disparity offset cannot be                  told from the scene's scale; they corrected nothing",
-                if decision.rigidity_unobservable() {
-                    "unobservable by rigidity"
-                } else {
-                    "partly unobservable"
-                },
-                decision.one_plane_pairs
-            ))?;
-        }
+    for line in calibration_lines(&decision, source == CorrectionModel::GIVEN) {
+        out(&line)?;
     }
     out(&format!(
         "time per frame: {total:.1} ms ({:.1} frames/s): load {:.1}, features {:.1}, stereo {:.1}, \

@@ -28,9 +28,9 @@ fn at(z: &StereoObservation) -> (f32, f32) {
 impl Window {
     /// The track of each link's current feature and its measurement in the current
     /// frame, into `observations` (one per track); with a `correcting` model, its
-    /// disparity corrected by the track's correction (a track that begins here takes the
-    /// model's; [`super::calibration`]). The current frame's track of each feature becomes
-    /// the newest, and the tracks that did not go on lose their templates and corrections.
+    /// disparity corrected by the model's correction, the one in use for this frame
+    /// ([`super::calibration`]). The current frame's track of each feature becomes the
+    /// newest, and the tracks that did not go on lose their templates.
     pub(super) fn link_tracks(
         &mut self,
         correcting: Option<&StereoModel>,
@@ -56,10 +56,7 @@ impl Window {
             if used.insert(track) {
                 tracks.insert(l.current_feature, track);
                 let z = match correcting {
-                    Some(m) => {
-                        let c = *self.corrections.entry(track).or_insert(m.correction);
-                        corrected(m, &c, &z)
-                    }
+                    Some(m) => corrected(m, &m.correction, &z),
                     None => z,
                 };
                 observations.push((track, z));
@@ -69,7 +66,6 @@ impl Window {
         self.next_tracks = std::mem::replace(&mut self.newest_tracks, tracks);
         // `used` holds the tracks of the newest frame: the live ones.
         self.templates.retain(|t, _| used.contains(t));
-        self.corrections.retain(|t, _| used.contains(t));
         self.used = used;
     }
 
@@ -106,10 +102,10 @@ impl Window {
     }
 
     /// A new track begun by the link `l`: its measurement in the reference frame (the
-    /// window's newest; with a `correcting` model, corrected by its correction, which
-    /// becomes the track's) and, with images, the reference's patch as its template, the
-    /// pair's measurement then being its first in the current frame (the detected keypoint
-    /// otherwise).
+    /// window's newest; with a `correcting` model, corrected by its correction, the one in
+    /// use when the pair was measured) and, with images, the reference's patch as its
+    /// template, the pair's measurement then being its first in the current frame (the
+    /// detected keypoint otherwise).
     fn begin_track(
         &mut self,
         correcting: Option<&StereoModel>,
@@ -118,10 +114,7 @@ impl Window {
     ) -> (u32, StereoObservation) {
         let t = self.new_track();
         let z = match correcting {
-            Some(m) => {
-                self.corrections.insert(t, m.correction);
-                corrected(m, &m.correction, &l.reference)
-            }
+            Some(m) => corrected(m, &m.correction, &l.reference),
             None => l.reference,
         };
         if let Some(r) = self.frames.back_mut() {

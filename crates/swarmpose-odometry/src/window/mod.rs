@@ -53,7 +53,6 @@ use std::collections::{HashMap, HashSet, VecDeque};
 use nalgebra::{Isometry3, Matrix6, UnitQuaternion};
 
 use swarmpose_vision::features::GrayView;
-use swarmpose_vision::frontend::DisparityCorrection;
 use swarmpose_vision::temporal::template::PatchTemplate;
 
 use crate::refine::evidence::MatrixK;
@@ -84,15 +83,15 @@ pub struct WindowConfig {
     /// What happens to the oldest keyframe's information when it leaves the window
     /// (default [`Marginalisation::Off`]: discarded; docs/window.md has the measurements).
     pub marginalise: Marginalisation,
-    /// Each track keeps the disparity correction of the frame where it began, and a new
-    /// correction enters the window through new tracks only (module `window::calibration`;
-    /// issue 30),
-    /// so that a change of the self-calibration does not rescale the window's keyframes
-    /// and jump the online pose (default false: the window solves every measurement under
-    /// the newest correction). It is not the default: the online steps follow the
-    /// smoothed ones within 0.5 % instead of 1.35 % on kitti_vo_seq2, but the drift and
-    /// Karlsruhe's ATE grow (docs/self-calibration.md has every sequence).
-    pub correction_per_track: bool,
+    /// Each measurement keeps the disparity correction in use for the frame where it was
+    /// made, and a new correction enters the window through new measurements only (module
+    /// `window::calibration`; issue 30), so that a change of the self-calibration does not
+    /// rescale the window's keyframes and jump the online pose (default false: the window
+    /// solves every measurement under the newest correction). It is not the default: at the
+    /// frames where the correction's model changes, the online steps follow the smoothed
+    /// ones within 0.6 % instead of 1.35 % (kitti_vo_seq2) and 6.0 % (Karlsruhe), but the
+    /// drift and Karlsruhe's ATE grow (docs/self-calibration.md has every sequence).
+    pub correction_per_frame: bool,
 }
 
 impl Default for WindowConfig {
@@ -102,7 +101,7 @@ impl Default for WindowConfig {
             max_iterations: 1,
             huber_k: 2.5,
             marginalise: Marginalisation::Off,
-            correction_per_track: false,
+            correction_per_frame: false,
         }
     }
 }
@@ -193,9 +192,6 @@ pub struct Window {
     newest_tracks: HashMap<usize, u32>,
     /// The patch of each live track in the frame where it began (with images).
     templates: HashMap<u32, PatchTemplate>,
-    /// The disparity correction of each live track: the one applied when it began. Its
-    /// measurements are kept with their disparities corrected by it ([`calibration`]).
-    corrections: HashMap<u32, DisparityCorrection>,
     next_track: u32,
     /// The prior left by the keyframes marginalised so far ([`WindowConfig::marginalise`]).
     prior: Option<prior::Prior>,
@@ -232,7 +228,6 @@ impl Window {
         }
         self.newest_tracks.clear();
         self.templates.clear();
-        self.corrections.clear();
         self.prior = None;
     }
 
@@ -298,7 +293,6 @@ impl Window {
                 * (size_of::<usize>() + size_of::<u32>())
             + self.used.capacity() * size_of::<u32>()
             + self.templates.capacity() * (size_of::<u32>() + size_of::<PatchTemplate>())
-            + self.corrections.capacity() * (size_of::<u32>() + size_of::<DisparityCorrection>())
             + self.prior.as_ref().map_or(0, prior::Prior::heap_bytes)
             + self.workspace.heap_bytes()
             + self.rule.heap_bytes()
@@ -315,8 +309,8 @@ impl Window {
     /// `pose` (the camera in the world, from the pair alone); refines the window with
     /// `model` (whose calibration terms have the covariance `calibration_covariance`,
     /// pixels², for the covariance of the result; with
-    /// [`WindowConfig::correction_per_track`] its disparity correction is taken by the
-    /// tracks that begin in this frame only, [`calibration`]) and returns the current frame's refined pose, what was done and the
+    /// [`WindowConfig::correction_per_frame`] its disparity correction is taken by this
+    /// frame's measurements only, [`calibration`]) and returns the current frame's refined pose, what was done and the
     /// window's measurement of the frame, or `None` when the window is too short to add
     /// anything to the pair (or the refinement failed; the pair's pose stands then).
     ///
@@ -353,9 +347,9 @@ impl Window {
             .map_or(*pose, |r| r.pose_cw.inverse() * motion);
         let mut observations = self.spare.pop().unwrap_or_default();
         observations.reserve(links.len());
-        let model = &if self.config.correction_per_track {
+        let model = &if self.config.correction_per_frame {
             self.link_tracks(Some(model), links, images, &mut observations);
-            // The measurements are corrected, each by its track's correction: the window
+            // The measurements are corrected, each by its frame's correction: the window
             // solves with none of its own ([`calibration`]).
             calibration::solver_model(model)
         } else {

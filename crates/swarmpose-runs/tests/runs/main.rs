@@ -13,6 +13,7 @@ mod kitti;
 mod kitti_pairs;
 mod kitti_variants;
 mod moving_object;
+mod online_steps;
 mod rectification;
 mod rgbd;
 mod streaming;
