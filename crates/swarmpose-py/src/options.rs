@@ -98,6 +98,9 @@ odometry_config! {
         marginalise: Option<String> = None => "what happens to the window's oldest keyframe \
             when it leaves: ``\"off\"`` (``None``), ``\"finished\"`` or ``\"all\"`` (see \
             docs/window.md)",
+        correction_per_frame: Option<bool> = None => "each window measurement keeps the \
+            disparity correction of the frame where it was made, so that a calibration change \
+            moves no online step (costs drift; docs/self-calibration.md; ``None``: ``False``)",
         max_working_pixels: Option<usize> = None => "stereo images are halved while they have \
             more pixels than this (``None``: 1 500 000; at least 10 000; see \
             ``Odometry.working_camera``)",
@@ -184,6 +187,9 @@ impl OdometryConfig {
         c.split_check = self.split_check.unwrap_or(c.split_check);
         c.seed = self.seed.map_or(c.seed, |s| s.0);
         c.window.keyframes = self.window.unwrap_or(c.window.keyframes);
+        c.window.correction_per_frame = self
+            .correction_per_frame
+            .unwrap_or(c.window.correction_per_frame);
         if let Some(mode) = &self.marginalise {
             let mode: Marginalisation = mode
                 .parse()

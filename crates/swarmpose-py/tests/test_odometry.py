@@ -276,6 +276,23 @@ def test_marginalise_matches_the_cli(kitti_seq2, swarmpose_bin, tmp_path):
         swarmpose.Odometry(**KITTI_CAMERA, marginalise="sometimes")
 
 
+def test_correction_per_frame_matches_the_cli(kitti_seq2, swarmpose_bin, tmp_path):
+    """``correction_per_frame=True`` is the command line's ``--correction-per-frame``
+    (issue 30): the same trajectory, another one than the default's."""
+    out = tmp_path / "cli"
+    subprocess.run([str(swarmpose_bin), "odometry", str(kitti_seq2), "--out", str(out),
+                    "--quiet", "--correction-per-frame"], check=True, capture_output=True)
+    cli = read_kitti(out / "trajectory.kitti.txt")
+    config = swarmpose.OdometryConfig(correction_per_frame=True)
+    assert config.correction_per_frame is True
+    run = swarmpose.odometry(kitti_seq2, config=config)
+    assert np.max(np.abs(run.poses - cli)) < 1e-12
+    subprocess.run([str(swarmpose_bin), "odometry", str(kitti_seq2), "--out", str(tmp_path / "d"),
+                    "--quiet"], check=True, capture_output=True)
+    default = read_kitti(tmp_path / "d" / "trajectory.kitti.txt")
+    assert np.max(np.abs(run.poses - default)) > 1e-6
+
+
 def test_fixed_correction_with_a_linear_term_matches_the_cli(kitti_seq2, swarmpose_bin, tmp_path):
     """``disparity_correction=(offset, quadratic, linear)`` is the command line's
     ``--disparity-offset --disparity-quadratic --disparity-linear``: the same trajectory,

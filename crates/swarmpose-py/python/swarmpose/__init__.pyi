@@ -175,6 +175,7 @@ class OdometryConfig:
         seed: Optional[int] = None,
         window: Optional[int] = None,
         marginalise: Optional[str] = None,
+        correction_per_frame: Optional[bool] = None,
         max_working_pixels: Optional[int] = None,
         min_working_pixels: Optional[int] = None,
         split_check: Optional[bool] = None,
@@ -203,6 +204,8 @@ class OdometryConfig:
     @property
     def marginalise(self) -> Optional[str]: ...
     @property
+    def correction_per_frame(self) -> Optional[bool]: ...
+    @property
     def max_working_pixels(self) -> Optional[int]: ...
     @property
     def min_working_pixels(self) -> Optional[int]: ...
@@ -226,6 +229,7 @@ _OdometryOptions = TypedDict(
         "seed": Optional[int],
         "window": Optional[int],
         "marginalise": Optional[str],
+        "correction_per_frame": Optional[bool],
         "max_working_pixels": Optional[int],
         "min_working_pixels": Optional[int],
         "split_check": Optional[bool],
