@@ -12,7 +12,7 @@
 //! | `Odometry`, `Odometry.track` | [`swarmpose_odometry::Odometry`], [`swarmpose_odometry::Odometry::track`] |
 //! | `Odometry.rgbd`, `Odometry.track_rgbd` | [`swarmpose_odometry::Odometry::track_rgbd`] |
 //! | `odometry` | [`swarmpose_runs::batch::run_sequence`], [`swarmpose_runs::batch::run_rgbd_sequence`] |
-//! | `Sequence` | [`swarmpose_cli::commands::odometry_input::open_input`] (the command line's front door) |
+//! | `Sequence` | [`swarmpose_cli::commands::odometry::input::open_input`] (the command line's front door) |
 //! | `evaluate` | [`swarmpose_eval::evaluate`] |
 //! | `batch.run`, `batch.merge` | [`swarmpose_cli::batch`] |
 //!

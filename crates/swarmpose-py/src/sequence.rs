@@ -1,6 +1,6 @@
 //! `swarmpose.Sequence`: a recorded sequence (KITTI, Karlsruhe, EuRoC, a TUM RGB-D folder,
 //! or a ROS 2 bag, stereo or RGB-D) read by the workspace's loaders, frame by frame as
-//! numpy images. It is opened by [`swarmpose_cli::commands::odometry_input::open_input`],
+//! numpy images. It is opened by [`swarmpose_cli::commands::odometry::input::open_input`],
 //! the front door of `swarmpose odometry`: the same inputs, the same errors.
 
 use std::ops::ControlFlow;
@@ -59,7 +59,7 @@ impl Sequence {
         let mut opts = StereoOptions::with_tolerance_ms(bag.left, bag.right, bag.stamp_tolerance)
             .map_err(|e| PyValueError::new_err(format!("stamp_tolerance: {e}")))?;
         opts.depth = bag.depth;
-        let opened = swarmpose_cli::commands::odometry_input::open_input(path, &opts)
+        let opened = swarmpose_cli::commands::odometry::input::open_input(path, &opts)
             .map_err(|e| run_error_then(&e, ""))?;
         Ok(Self {
             inner: opened.input,

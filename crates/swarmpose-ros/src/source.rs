@@ -1,5 +1,5 @@
 //! One front door for every input but a TUM RGB-D folder (whose reader is
-//! swarmpose-runs', put before this door by the command line's `odometry_input`, which
+//! swarmpose-runs', put before this door by the command line's `odometry::input`, which
 //! Python uses too): a ROS 2 bag (an `.mcap` or `.db3` file, or a folder with
 //! `metadata.yaml`; stereo or RGB-D) or a stereo dataset folder
 //! ([`swarmpose_datasets::open`]).

@@ -4,7 +4,7 @@
 
 use swarmpose_odometry::FrameResult;
 
-use super::odometry_output::{OutputDir, StreamFile};
+use super::output::{OutputDir, StreamFile};
 use crate::error::CliError;
 
 /// The header of `split_check.csv`.

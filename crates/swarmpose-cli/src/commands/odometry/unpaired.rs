@@ -9,7 +9,7 @@ use std::collections::VecDeque;
 use swarmpose_ros::stereo::pairing::UnpairedImage;
 use swarmpose_runs::output::FRAMES_HEADER;
 
-use super::odometry_output::StreamFile;
+use super::output::StreamFile;
 use crate::error::CliError;
 
 /// Most unpaired images named in the summary line (all are in `frames.csv`).

@@ -13,7 +13,7 @@ use swarmpose_ros::result::{OdometryMessages, status};
 use swarmpose_ros::write::{FrameMessages, OdometryMcap};
 use swarmpose_vision::image::GrayImage;
 
-use super::odometry_output::OutputDir;
+use super::output::OutputDir;
 use crate::error::CliError;
 
 /// The file's name in the output folder.
