@@ -1,7 +1,8 @@
 //! KITTI stereo frames written into ROS 2 bags by the independent `rosbags` writer (MCAP
 //! plain, MCAP with zstd chunks, SQLite; Image mono8, rgb8 and CompressedImage PNG) read
 //! back as the folder reads them: the same calibration to the bit, the same pixels. A bag
-//! cut in the middle (a recorder killed) gives every whole frame before the cut.
+//! cut in the middle (a recorder killed; plain, zstd or LZ4 chunks) gives every whole frame
+//! before the cut.
 
 mod common;
 
@@ -135,7 +136,9 @@ fn a_cut_mcap_gives_every_whole_frame_before_the_cut() {
     let Some((py, seq, dir, frames)) = prepare("kitti_cut") else {
         return;
     };
-    for storage in ["mcap", "mcap-zstd"] {
+    // Plain, zstd and LZ4 chunks: a cut inside a compressed chunk gives the messages its
+    // decompressed prefix holds whole.
+    for storage in ["mcap", "mcap-zstd", "mcap-lz4"] {
         let out = make(&py, &frames, &dir.join(storage), storage, &[]);
         let whole = std::fs::read(file_in(&out, "mcap")).expect("read");
         let full = Bag::open(&file_in(&out, "mcap")).expect("open");
