@@ -55,6 +55,13 @@ impl ChunkRecords {
     }
 }
 
+/// Where a chunk's records are: a range of the chunk record's body as read from the file
+/// (an uncompressed chunk), or a buffer of their own (decompressed).
+enum RecordsAt {
+    Body(std::ops::Range<usize>),
+    Own(Vec<u8>),
+}
+
 /// What indexing needs besides the sink: the channel map of the file.
 struct Walk<'a> {
     path: &'a Path,
@@ -398,16 +405,17 @@ impl McapFile {
         let bad = |e: String| container(&self.path, format!("chunk at byte {offset}: {e}"));
         let parts = chunk_parts(&body).ok_or_else(|| bad("too short".to_owned()))?;
         let start = parts.data_start;
-        let records = match decompress(&parts).map_err(bad)? {
-            Cow::Borrowed(b) => Err(start..start + b.len()),
-            Cow::Owned(v) => Ok(v),
+        // Where the records are, decided before `body` (which `parts` borrows) moves.
+        let place = match decompress(&parts).map_err(bad)? {
+            Cow::Borrowed(b) => RecordsAt::Body(start..start + b.len()),
+            Cow::Owned(v) => RecordsAt::Own(v),
         };
-        let records = Arc::new(match records {
-            Ok(buf) => ChunkRecords {
+        let records = Arc::new(match place {
+            RecordsAt::Own(buf) => ChunkRecords {
                 range: 0..buf.len(),
                 buf,
             },
-            Err(range) => ChunkRecords { buf: body, range },
+            RecordsAt::Body(range) => ChunkRecords { buf: body, range },
         });
         self.keep(offset, Arc::clone(&records))?;
         Ok(records)
