@@ -49,7 +49,7 @@ def stamped_run(clone, data, log):
                             text=True, check=True).stdout.strip()
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.monotonic()
-    with open(log, "w", encoding="utf-8") as out:
+    with open(log, "w", encoding="utf-8", buffering=1) as out:  # line by line: a killed run keeps its log
         load = " ".join(f"{x:.2f}" for x in os.getloadavg())
         out.write(f"0.0\tstart {commit} load {load}\n")
         proc = subprocess.Popen([".ci/run"], cwd=clone, env=env, stdout=subprocess.PIPE,
