@@ -247,10 +247,17 @@ def test_two_registrations_run_at_once():
     """Holding the GIL, the two estimations could only run one after the other, so
     the wall time would exceed the sum of their times. Released, they overlap: on two
     free cores each takes its own time; sharing one core, each takes longer, and the
-    sum grows past the wall time either way."""
+    sum grows past the wall time either way. Best of 5: a scheduler may still run one
+    thread to the end before the other starts (seen once in CI: wall 0.154 s against
+    0.078 + 0.081 s), but with the GIL held every try runs them in turn."""
     src, dst, _ = big_scene()
-    elapsed, wall = run_two_at_once(src, dst)
-    assert wall < 0.9 * sum(elapsed), (wall, elapsed)
+    tries = []
+    for _ in range(5):
+        elapsed, wall = run_two_at_once(src, dst)
+        tries.append((wall, elapsed))
+        if wall < 0.9 * sum(elapsed):
+            return
+    raise AssertionError(f"every try ran the two calls in turn (wall, [elapsed]): {tries}")
 
 
 def busy_cores_at_normal_priority(seconds=1.0):
