@@ -41,6 +41,10 @@ READ_MORE_TARGET = 0.05
 # The runs on bags (benches/bags.rs, run/* and open/*): bench name, row label.
 BAG_RUNS = (("bag_mcap", "MCAP, chunks uncompressed"), ("bag_mcap_zstd", "MCAP, zstd chunks"),
             ("bag_db3", "SQLite `.db3`"))
+# The zstd bag read with no decompressed chunk kept but the last: a bag much longer than
+# the chunk cache (swarmpose_ros::bag::DEFAULT_CHUNK_CACHE_BYTES).
+LONG_RUN = ("bag_mcap_zstd_uncached", "MCAP, zstd chunks, a bag longer than the chunk cache")
+CACHE_MIB = 64
 WRITE_TARGET_MS = 1.0
 
 
@@ -153,6 +157,10 @@ def main():
         more = run / folder - 1.0
         rows.append(f"| {label} | {run:.2f} | {opened:.2f} | {100 * more:+.1f} % |")
         verdicts.append(more <= READ_MORE_TARGET)
+    name, label = LONG_RUN
+    long_run, long_open = m("run", name) / FRAMES, m("open", name) / FRAMES
+    long_more = long_run / folder - 1.0
+    rows.append(f"| {label} | {long_run:.2f} | {long_open:.2f} | {100 * long_more:+.1f} % |")
     write = m("write", "odometry_mcap_frame")
     added = added_by_ros()
     total = cli_crate_count()
@@ -172,7 +180,10 @@ def main():
         *rows,
         "",
         f"Target: at most {100 * READ_MORE_TARGET:.0f} % more than the folder: "
-        + ("met" if all(verdicts) else "NOT met") + ".",
+        + ("met" if all(verdicts) else "NOT met") + " for the clip; for a zstd bag longer than "
+        f"the chunk cache (its last row: {CACHE_MIB} MiB of decompressed chunks kept, some 70 of these "
+        "frames; beyond them a chunk is decompressed at opening only up to its last header): "
+        + ("met" if long_more <= READ_MORE_TARGET else "NOT met") + ".",
         "",
         f"Writing one frame of `odometry.mcap` without images: {write:.3f} ms "
         f"(target at most {WRITE_TARGET_MS:.0f} ms: {'met' if write <= WRITE_TARGET_MS else 'NOT met'}).",

@@ -4,8 +4,11 @@
 //!   open the input, then read every frame once, in order; from the folder (two PNGs
 //!   decoded a frame) and from bags of the same frames (`sensor_msgs/Image` mono8 with
 //!   `camera_info`, as `ros2 bag record` writes them: MCAP with chunks uncompressed and
-//!   with zstd, and SQLite `.db3`). `open/*`: the opening alone (the index, every image's
-//!   header stamp, every `camera_info`, the first frame for the image size).
+//!   with zstd, and SQLite `.db3`). The zstd bag is also read with no decompressed chunk
+//!   kept between opening and reading but the last (`bag_mcap_zstd_uncached`): what a
+//!   frame of a bag much longer than the chunk cache costs. `open/*`: the opening alone
+//!   (the index, every image's header stamp, every `camera_info`, the first frame for the
+//!   image size).
 //! - `write/odometry_mcap_frame`: one frame of `odometry.mcap` without images (Odometry,
 //!   PoseWithCovarianceStamped, /tf, DiagnosticArray, ground-truth pose; one zstd chunk
 //!   flushed to the file).
@@ -29,7 +32,7 @@ use swarmpose_ros::msg::{
     CameraInfo, DiagnosticArray, DiagnosticStatus, Header, Image, Pose, RosMessage, Time, encode,
 };
 use swarmpose_ros::write::{FrameMessages, OdometryMcap};
-use swarmpose_ros::{BagSequence, StereoOptions};
+use swarmpose_ros::{Bag, BagSequence, StereoOptions};
 use swarmpose_testdata::bags::write_mcap_messages;
 
 /// Frames of the clip.
@@ -151,11 +154,14 @@ fn write_db3(messages: &Messages, path: &Path) {
     tx.commit().expect("commit");
 }
 
-/// The runs on bags: bench name, bag.
-const RUNS: [(&str, &str); 3] = [
-    ("bag_mcap", "mcap"),
-    ("bag_mcap_zstd", "mcap_zstd"),
-    ("bag_db3", "db3"),
+/// The runs on bags: bench name, bag, chunk cache budget (`None`: the default). The zstd
+/// bag is also read with no chunk kept but the last (`Some(0)`): what a frame of a bag
+/// much longer than the cache costs.
+const RUNS: [(&str, &str, Option<usize>); 4] = [
+    ("bag_mcap", "mcap", None),
+    ("bag_mcap_zstd", "mcap_zstd", None),
+    ("bag_mcap_zstd_uncached", "mcap_zstd", Some(0)),
+    ("bag_db3", "db3", None),
 ];
 
 fn bag_path(dir: &Path, name: &str) -> PathBuf {
@@ -165,9 +171,14 @@ fn bag_path(dir: &Path, name: &str) -> PathBuf {
     })
 }
 
-/// Opens the bag `name` of `dir` as a run does.
-fn open_bag(dir: &Path, name: &str) -> BagSequence {
-    BagSequence::open(&bag_path(dir, name), &StereoOptions::default()).expect("bag")
+/// Opens the bag `name` of `dir` as a run does (`cache_bytes`: the bag's budget of kept
+/// decompressed chunks, `None` for the default).
+fn open_bag(dir: &Path, name: &str, cache_bytes: Option<usize>) -> BagSequence {
+    let mut bag = Bag::open(&bag_path(dir, name)).expect("bag");
+    if let Some(bytes) = cache_bytes {
+        bag.set_chunk_cache_bytes(bytes);
+    }
+    BagSequence::from_bag(bag, &StereoOptions::default()).expect("stereo bag")
 }
 
 /// Every frame of `seq`, in order, as a run reads them.
@@ -193,16 +204,16 @@ fn bench_read(c: &mut Criterion, kitti: &Path, seq: &dyn StereoSequence, dir: &P
             }
         });
     });
-    for (label, name) in RUNS {
-        assert_eq!(open_bag(dir, name).len(), FRAMES);
-        g.bench_function(label, |b| b.iter(|| read_all(&open_bag(dir, name))));
+    for (label, name, cache) in RUNS {
+        assert_eq!(open_bag(dir, name, cache).len(), FRAMES);
+        g.bench_function(label, |b| b.iter(|| read_all(&open_bag(dir, name, cache))));
     }
     g.finish();
     // Of which opening (index, header stamps, camera_info, the first frame for its size).
     let mut g = c.benchmark_group("open");
     g.sample_size(10);
-    for (label, name) in RUNS {
-        g.bench_function(label, |b| b.iter(|| black_box(open_bag(dir, name))));
+    for (label, name, cache) in RUNS {
+        g.bench_function(label, |b| b.iter(|| black_box(open_bag(dir, name, cache))));
     }
     g.finish();
 }
