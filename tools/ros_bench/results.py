@@ -45,6 +45,8 @@ BAG_RUNS = (("bag_mcap", "MCAP, chunks uncompressed"), ("bag_mcap_zstd", "MCAP, 
 # the chunk cache (swarmpose_ros::bag::DEFAULT_CHUNK_CACHE_BYTES).
 LONG_RUN = ("bag_mcap_zstd_uncached", "MCAP, zstd chunks, a bag longer than the chunk cache")
 CACHE_MIB = 64
+# Stereo frames of the clip (two 1241 x 376 mono8 images) in the chunk cache.
+CACHE_FRAMES = CACHE_MIB * 2**20 // (2 * 1241 * 376)
 WRITE_TARGET_MS = 1.0
 
 
@@ -181,9 +183,11 @@ def main():
         "",
         f"Target: at most {100 * READ_MORE_TARGET:.0f} % more than the folder: "
         + ("met" if all(verdicts) else "NOT met") + " for the clip; for a zstd bag longer than "
-        f"the chunk cache (its last row: {CACHE_MIB} MiB of decompressed chunks kept, some 70 of these "
-        "frames; beyond them a chunk is decompressed at opening only up to its last header): "
-        + ("met" if long_more <= READ_MORE_TARGET else "NOT met") + ".",
+        f"the chunk cache (its last row: {CACHE_MIB} MiB of decompressed chunks kept, {CACHE_FRAMES} of "
+        "these frames; beyond them a chunk is decompressed at opening only up to its last header): "
+        + ("met" if long_more <= READ_MORE_TARGET else "NOT met") + ". The opening and the whole run "
+        "are separate medians: a bag whose chunks are all kept when it is opened reads its frames "
+        "at next to no cost after, so the two are within the noise of each other.",
         "",
         f"Writing one frame of `odometry.mcap` without images: {write:.3f} ms "
         f"(target at most {WRITE_TARGET_MS:.0f} ms: {'met' if write <= WRITE_TARGET_MS else 'NOT met'}).",
