@@ -38,6 +38,15 @@ COMMAND = "python3 tools/ros_bench/results.py --update crates/swarmpose-ros/RESU
 # The bench's frames per clip (benches/bags.rs, FRAMES).
 FRAMES = 10
 READ_MORE_TARGET = 0.05
+# The runs on bags (benches/bags.rs, run/* and open/*): bench name, row label.
+BAG_RUNS = (("bag_mcap", "MCAP, chunks uncompressed"), ("bag_mcap_zstd", "MCAP, zstd chunks"),
+            ("bag_db3", "SQLite `.db3`"))
+# The zstd bag read with no decompressed chunk kept but the last: a bag much longer than
+# the chunk cache (swarmpose_ros::bag::DEFAULT_CHUNK_CACHE_BYTES).
+LONG_RUN = ("bag_mcap_zstd_uncached", "MCAP, zstd chunks, a bag longer than the chunk cache")
+CACHE_MIB = 64
+# Stereo frames of the clip (two 1241 x 376 mono8 images) in the chunk cache.
+CACHE_FRAMES = CACHE_MIB * 2**20 // (2 * 1241 * 376)
 WRITE_TARGET_MS = 1.0
 
 
@@ -141,15 +150,19 @@ def main():
         with open(cost_file, encoding="utf-8") as f:
             cost = json.load(f)
     m = lambda g, n: median_ms(a.target, g, n)  # noqa: E731
-    folder = m("read", "folder")
+    # A run: open the input and read every frame once, in order (benches/bags.rs, run/*).
+    folder = m("run", "folder") / FRAMES
     rows = [f"| folder (two PNGs) | {folder:.2f} | | |"]
     verdicts = []
-    for name, label in (("bag_mcap", "MCAP, chunks uncompressed"), ("bag_mcap_zstd", "MCAP, zstd chunks"),
-                        ("bag_db3", "SQLite `.db3`")):
-        read, opened = m("read", name), m("open", name) / FRAMES
-        more = (read + opened) / folder - 1.0
-        rows.append(f"| {label} | {read:.2f} | {opened:.2f} | {100 * more:+.1f} % |")
+    for name, label in BAG_RUNS:
+        run, opened = m("run", name) / FRAMES, m("open", name) / FRAMES
+        more = run / folder - 1.0
+        rows.append(f"| {label} | {run:.2f} | {opened:.2f} | {100 * more:+.1f} % |")
         verdicts.append(more <= READ_MORE_TARGET)
+    name, label = LONG_RUN
+    long_run, long_open = m("run", name) / FRAMES, m("open", name) / FRAMES
+    long_more = long_run / folder - 1.0
+    rows.append(f"| {label} | {long_run:.2f} | {long_open:.2f} | {100 * long_more:+.1f} % |")
     write = m("write", "odometry_mcap_frame")
     added = added_by_ros()
     total = cli_crate_count()
@@ -160,15 +173,21 @@ def main():
            if a.no_run else f"medians, one thread; generated {provenance()}; ")
         + "the machine was shared with other builds while it ran, so the times are not quiet).",
         "",
-        f"Reading one stereo frame of the first {FRAMES} KITTI frames (1241 x 376, "
-        "`sensor_msgs/Image` mono8 with `camera_info`):",
+        f"Reading the first {FRAMES} KITTI frames (1241 x 376, `sensor_msgs/Image` mono8 with "
+        "`camera_info`) as a run does: open the input, then read every stereo frame once, in "
+        "order; the time divided by the frames:",
         "",
-        "| from | read, ms a frame | opening the bag, ms a frame | more than the folder |",
+        "| from | open and read, ms a frame | of which opening | more than the folder |",
         "|---|---:|---:|---:|",
         *rows,
         "",
         f"Target: at most {100 * READ_MORE_TARGET:.0f} % more than the folder: "
-        + ("met" if all(verdicts) else "NOT met") + " (opening included).",
+        + ("met" if all(verdicts) else "NOT met") + " for the clip; for a zstd bag longer than "
+        f"the chunk cache (its last row: {CACHE_MIB} MiB of decompressed chunks kept, {CACHE_FRAMES} of "
+        "these frames; beyond them a chunk is decompressed at opening only up to its last header): "
+        + ("met" if long_more <= READ_MORE_TARGET else "NOT met") + ". The opening and the whole run "
+        "are separate medians: a bag whose chunks are all kept when it is opened reads its frames "
+        "at next to no cost after, so the two are within the noise of each other.",
         "",
         f"Writing one frame of `odometry.mcap` without images: {write:.3f} ms "
         f"(target at most {WRITE_TARGET_MS:.0f} ms: {'met' if write <= WRITE_TARGET_MS else 'NOT met'}).",

@@ -1,11 +1,14 @@
 //! Speed of the ROS 2 input and output, one thread:
 //!
-//! - `read/*`: one stereo frame of the first KITTI frames (`kitti_vo_seq2`, 1241 x 376)
-//!   read from its folder (two PNGs decoded) and from an MCAP bag of the same frames
-//!   (`sensor_msgs/Image` mono8 with `camera_info`, as `ros2 bag record` writes them:
-//!   MCAP with chunks uncompressed and with zstd, and SQLite `.db3`), frame after frame
-//!   in a loop; `open/*`: opening the bag (its index, then every image's header read
-//!   once for its stamp), to be shared among the bag's frames.
+//! - `run/*`: what a run does with the first KITTI frames (`kitti_vo_seq2`, 1241 x 376):
+//!   open the input, then read every frame once, in order; from the folder (two PNGs
+//!   decoded a frame) and from bags of the same frames (`sensor_msgs/Image` mono8 with
+//!   `camera_info`, as `ros2 bag record` writes them: MCAP with chunks uncompressed and
+//!   with zstd, and SQLite `.db3`). The zstd bag is also read with no decompressed chunk
+//!   kept between opening and reading but the last (`bag_mcap_zstd_uncached`): what a
+//!   frame of a bag much longer than the chunk cache costs. `open/*`: the opening alone
+//!   (the index, every image's header stamp, every `camera_info`, the first frame for the
+//!   image size).
 //! - `write/odometry_mcap_frame`: one frame of `odometry.mcap` without images (Odometry,
 //!   PoseWithCovarianceStamped, /tf, DiagnosticArray, ground-truth pose; one zstd chunk
 //!   flushed to the file).
@@ -29,7 +32,7 @@ use swarmpose_ros::msg::{
     CameraInfo, DiagnosticArray, DiagnosticStatus, Header, Image, Pose, RosMessage, Time, encode,
 };
 use swarmpose_ros::write::{FrameMessages, OdometryMcap};
-use swarmpose_ros::{BagSequence, StereoOptions};
+use swarmpose_ros::{Bag, BagSequence, StereoOptions};
 use swarmpose_testdata::bags::write_mcap_messages;
 
 /// Frames of the clip.
@@ -151,8 +154,15 @@ fn write_db3(messages: &Messages, path: &Path) {
     tx.commit().expect("commit");
 }
 
-/// The bags of the clip: MCAP with chunks uncompressed, with zstd chunks, SQLite.
-const BAGS: [&str; 3] = ["mcap", "mcap_zstd", "db3"];
+/// The runs on bags: bench name, bag, chunk cache budget (`None`: the default). The zstd
+/// bag is also read with no chunk kept but the last (`Some(0)`): what a frame of a bag
+/// much longer than the cache costs.
+const RUNS: [(&str, &str, Option<usize>); 4] = [
+    ("bag_mcap", "mcap", None),
+    ("bag_mcap_zstd", "mcap_zstd", None),
+    ("bag_mcap_zstd_uncached", "mcap_zstd", Some(0)),
+    ("bag_db3", "db3", None),
+];
 
 fn bag_path(dir: &Path, name: &str) -> PathBuf {
     dir.join(match name {
@@ -161,38 +171,49 @@ fn bag_path(dir: &Path, name: &str) -> PathBuf {
     })
 }
 
-fn bench_read(c: &mut Criterion, seq: &dyn StereoSequence, dir: &Path) {
-    let mut g = c.benchmark_group("read");
-    g.sample_size(20);
-    let mut k = 0;
-    g.bench_function("folder", |b| {
-        b.iter(|| {
-            k = (k + 1) % FRAMES;
-            black_box(seq.frame(k).expect("frame"))
-        });
-    });
+/// Opens the bag `name` of `dir` as a run does (`cache_bytes`: the bag's budget of kept
+/// decompressed chunks, `None` for the default).
+fn open_bag(dir: &Path, name: &str, cache_bytes: Option<usize>) -> BagSequence {
+    let mut bag = Bag::open(&bag_path(dir, name)).expect("bag");
+    if let Some(bytes) = cache_bytes {
+        bag.set_chunk_cache_bytes(bytes);
+    }
+    BagSequence::from_bag(bag, &StereoOptions::default()).expect("stereo bag")
+}
+
+/// Every frame of `seq`, in order, as a run reads them.
+fn read_all(seq: &dyn StereoSequence) {
+    for k in 0..seq.len() {
+        black_box(seq.frame(k).expect("frame"));
+    }
+}
+
+fn bench_read(c: &mut Criterion, kitti: &Path, seq: &dyn StereoSequence, dir: &Path) {
     let msgs = messages(seq);
     write_mcap(&msgs, &dir.join("mcap.mcap"), None);
     write_mcap(&msgs, &dir.join("mcap_zstd.mcap"), Some(Compression::Zstd));
     write_db3(&msgs, &dir.join("db3.db3"));
-    for name in BAGS {
-        let bag = BagSequence::open(&bag_path(dir, name), &StereoOptions::default()).expect("bag");
-        assert_eq!(bag.len(), FRAMES);
-        g.bench_function(format!("bag_{name}"), |b| {
-            b.iter(|| {
-                k = (k + 1) % FRAMES;
-                black_box(bag.frame(k).expect("bag frame"))
-            });
+    // A run: open the input, then read every frame once, in order.
+    let mut g = c.benchmark_group("run");
+    g.sample_size(10);
+    g.bench_function("folder", |b| {
+        b.iter(|| {
+            let seq = open(kitti).expect("folder");
+            for k in 0..FRAMES {
+                black_box(seq.frame(k).expect("frame"));
+            }
         });
+    });
+    for (label, name, cache) in RUNS {
+        assert_eq!(open_bag(dir, name, cache).len(), FRAMES);
+        g.bench_function(label, |b| b.iter(|| read_all(&open_bag(dir, name, cache))));
     }
     g.finish();
+    // Of which opening (index, header stamps, camera_info, the first frame for its size).
     let mut g = c.benchmark_group("open");
     g.sample_size(10);
-    for name in BAGS {
-        let path = bag_path(dir, name);
-        g.bench_function(format!("bag_{name}"), |b| {
-            b.iter(|| black_box(BagSequence::open(&path, &StereoOptions::default()).expect("bag")));
-        });
+    for (label, name, cache) in RUNS {
+        g.bench_function(label, |b| b.iter(|| black_box(open_bag(dir, name, cache))));
     }
     g.finish();
 }
@@ -253,7 +274,7 @@ fn bench_bags(c: &mut Criterion) {
         return;
     };
     let dir = scratch();
-    bench_read(c, seq.as_ref(), &dir);
+    bench_read(c, &kitti, seq.as_ref(), &dir);
     bench_write(c, &dir);
     let _ = std::fs::remove_dir_all(&dir);
 }

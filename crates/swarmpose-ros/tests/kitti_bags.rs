@@ -10,7 +10,8 @@ use std::path::{Path, PathBuf};
 
 use swarmpose_datasets::StereoSequence;
 use swarmpose_datasets::kitti::KittiSequence;
-use swarmpose_ros::{Bag, BagSequence, StereoOptions};
+use swarmpose_ros::msg::decode_header;
+use swarmpose_ros::{Bag, BagSequence, StereoOptions, Topic};
 
 /// Frames put in each bag.
 const FRAMES: usize = 6;
@@ -127,6 +128,16 @@ fn kitti_bags_read_as_the_folder() {
         // The file alone reads as the folder.
         let file = BagSequence::open(&file_in(&out, ext), &opts).unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(file.len(), FRAMES);
+        if ext == "mcap" {
+            // A short bag: its chunks, decompressed when opening, kept for the reads.
+            assert!(file.frames().bag().chunk_cache_bytes() > 0);
+            // No chunk kept but the last one (a bag longer than the cache): the same frames.
+            let mut uncached = Bag::open(&file_in(&out, ext)).expect("bag");
+            uncached.set_chunk_cache_bytes(0);
+            let uncached = BagSequence::from_bag(uncached, &opts).unwrap_or_else(|e| panic!("{e}"));
+            assert_eq!(uncached.frames().bag().chunk_cache_bytes(), 0);
+            same_frames(&uncached, &seq, FRAMES);
+        }
         eprintln!("{storage} {extra:?}: {FRAMES} frames equal to the folder's");
     }
 }
@@ -160,10 +171,58 @@ fn a_cut_mcap_gives_every_whole_frame_before_the_cut() {
                 bag.len()
             );
             same_frames(&bag, &seq, bag.len());
+            // No chunk kept but the last: the whole chunks before the cut are read at
+            // opening only up to their last header, then whole.
+            let mut uncached = Bag::open(&cut).expect("open");
+            uncached.set_chunk_cache_bytes(0);
+            let uncached = BagSequence::from_bag(uncached, &StereoOptions::default())
+                .unwrap_or_else(|e| panic!("{e}"));
+            assert_eq!(uncached.len(), bag.len());
+            assert_eq!(uncached.notes(), bag.notes());
+            same_frames(&uncached, &seq, bag.len());
             eprintln!(
                 "{storage} cut at {share}: {} whole frames; {stopped}",
                 bag.len()
             );
         }
+    }
+}
+
+/// A compressed bag longer than the chunk cache: reading the images' headers decompresses
+/// each chunk only up to the last header it holds, and gives the headers that reading the
+/// whole messages gives.
+#[test]
+fn a_header_scan_decompresses_chunks_only_as_far_as_it_reads() {
+    let Some((py, _seq, dir, frames)) = prepare("kitti_heads") else {
+        return;
+    };
+    for storage in ["mcap-zstd", "mcap-lz4"] {
+        let out = make(&py, &frames, &dir.join(storage), storage, &[]);
+        let mut bag = Bag::open(&file_in(&out, "mcap")).expect("open");
+        bag.set_chunk_cache_bytes(0);
+        let images: Vec<&Topic> = bag
+            .topics()
+            .iter()
+            .filter(|t| t.msg_type == "sensor_msgs/msg/Image")
+            .collect();
+        assert_eq!(images.len(), 2);
+        let headers = |heads: &[Option<usize>]| {
+            let mut out = Vec::new();
+            let skipped = bag
+                .visit_heads(&images, heads, |k, i, bytes| {
+                    out.push((k, i, decode_header(bytes).expect("header")));
+                    Ok(())
+                })
+                .expect("visit");
+            (out, skipped)
+        };
+        let (whole, none_skipped) = headers(&[]);
+        let (heads, skipped) = headers(&[Some(64), Some(64)]);
+        assert_eq!(whole.len(), 2 * FRAMES);
+        assert_eq!(heads, whole, "{storage}");
+        assert_eq!(none_skipped, 0);
+        // The data of at least one image at the end of a chunk was not decompressed.
+        assert!(skipped > 1241 * 376, "{storage}: {skipped} bytes skipped");
+        eprintln!("{storage}: {skipped} bytes of records not decompressed");
     }
 }

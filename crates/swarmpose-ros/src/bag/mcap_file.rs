@@ -8,7 +8,7 @@ use std::borrow::Cow;
 use std::fs::File;
 use std::io::{Read, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
-use std::sync::{Arc, Mutex};
+use std::sync::Mutex;
 
 use byteorder::{ByteOrder, LittleEndian};
 use mcap::records::Record;
@@ -21,37 +21,48 @@ const MAGIC: &[u8; 8] = b"\x89MCAP0\r\n";
 /// Opcodes of the records read here.
 const OP_SCHEMA: u8 = 0x03;
 const OP_CHANNEL: u8 = 0x04;
-const OP_MESSAGE: u8 = 0x05;
+pub(crate) const OP_MESSAGE: u8 = 0x05;
 const OP_CHUNK: u8 = 0x06;
 const OP_FOOTER: u8 = 0x02;
 const OP_DATA_END: u8 = 0x0F;
 /// Opcode and length before each record's body.
-const RECORD_HEAD: u64 = 9;
+pub(crate) const RECORD_HEAD: u64 = 9;
 /// Channel, sequence, log time and publish time before a message's data.
-const MESSAGE_HEAD: usize = 22;
+pub(crate) const MESSAGE_HEAD: usize = 22;
 /// Largest decompressed chunk accepted, bytes (a corrupt size must not reserve gigabytes).
-const MAX_CHUNK: u64 = 1 << 28;
+pub(crate) const MAX_CHUNK: u64 = 1 << 28;
 
 /// An indexed MCAP file.
 #[derive(Debug)]
 pub(crate) struct McapFile {
-    path: PathBuf,
+    pub(crate) path: PathBuf,
     file: Mutex<File>,
-    /// The last chunk decompressed: its offset and records.
-    cache: Mutex<Option<(u64, Arc<ChunkRecords>)>>,
 }
 
 /// The records of a chunk: `buf[range]` (an uncompressed chunk keeps the record's body as
 /// read from the file, not copied).
 #[derive(Debug)]
-struct ChunkRecords {
+pub(crate) struct ChunkRecords {
     buf: Vec<u8>,
     range: std::ops::Range<usize>,
 }
 
 impl ChunkRecords {
+    /// Records held in a buffer of their own.
+    pub(crate) fn owned(buf: Vec<u8>) -> Self {
+        Self {
+            range: 0..buf.len(),
+            buf,
+        }
+    }
+
     fn bytes(&self) -> &[u8] {
         self.buf.get(self.range.clone()).unwrap_or_default()
+    }
+
+    /// The bytes it holds in memory.
+    pub(crate) fn size_bytes(&self) -> usize {
+        self.buf.len()
     }
 }
 
@@ -74,7 +85,7 @@ struct Walk<'a> {
     messages: usize,
 }
 
-fn container(path: &Path, message: impl Into<String>) -> RosError {
+pub(crate) fn container(path: &Path, message: impl Into<String>) -> RosError {
     RosError::Container {
         path: path.to_owned(),
         message: message.into(),
@@ -90,19 +101,19 @@ fn io(path: &Path, source: std::io::Error) -> RosError {
 }
 
 /// A chunk record's header and its compressed bytes (possibly cut short).
-struct ChunkParts<'a> {
-    uncompressed_size: u64,
+pub(crate) struct ChunkParts<'a> {
+    pub(crate) uncompressed_size: u64,
     uncompressed_crc: u32,
-    compression: String,
-    data: &'a [u8],
+    pub(crate) compression: String,
+    pub(crate) data: &'a [u8],
     /// Where `data` starts in the record's body.
     data_start: usize,
     /// True when the compressed bytes are all there.
-    whole: bool,
+    pub(crate) whole: bool,
 }
 
 /// Parses a chunk record's body (of which `body` may be only the first part).
-fn chunk_parts(body: &[u8]) -> Option<ChunkParts<'_>> {
+pub(crate) fn chunk_parts(body: &[u8]) -> Option<ChunkParts<'_>> {
     let uncompressed_size = LittleEndian::read_u64(body.get(16..24)?);
     let uncompressed_crc = LittleEndian::read_u32(body.get(24..28)?);
     let clen = LittleEndian::read_u32(body.get(28..32)?) as usize;
@@ -328,7 +339,6 @@ impl McapFile {
                 Self {
                     path: path.to_owned(),
                     file: Mutex::new(file),
-                    cache: Mutex::new(None),
                 },
                 None,
             ));
@@ -353,55 +363,80 @@ impl McapFile {
             Self {
                 path: path.to_owned(),
                 file: Mutex::new(file),
-                cache: Mutex::new(None),
             },
             stopped,
         ))
     }
 
-    /// `f` of the bytes of the message at `location` (CDR with its header), borrowed from
-    /// the cached chunk when it is in one.
+    /// `f` of the bytes of the message record at byte `offset` of the file (CDR with its
+    /// header; a message outside chunks).
     ///
     /// # Errors
     /// [`RosError::Io`], or [`RosError::Container`] when the record is no longer there.
-    pub(crate) fn with_message<R>(
+    pub(crate) fn with_plain_message<R>(
         &self,
-        location: Location,
+        offset: u64,
         f: impl FnOnce(&[u8]) -> R,
     ) -> Result<R, RosError> {
-        let missing = |what: String| container(&self.path, format!("no message at {what}"));
-        match location {
-            Location::McapPlain { offset, .. } => {
-                let (op, body) = self.record_at(offset, false)?;
-                (op == OP_MESSAGE)
-                    .then(|| message_data(&body).map(f))
-                    .flatten()
-                    .ok_or_else(|| missing(format!("byte {offset}")))
-            }
-            Location::McapChunk { chunk, inner, .. } => {
-                let records = self.chunk_records(chunk)?;
-                usize::try_from(inner)
-                    .ok()
-                    .and_then(|i| first_record(records.bytes().get(i..)?))
-                    .filter(|r| r.0 == OP_MESSAGE)
-                    .and_then(|r| message_data(r.1))
-                    .map(f)
-                    .ok_or_else(|| missing(format!("byte {inner} of the chunk at byte {chunk}")))
-            }
-            Location::Sqlite { .. } => Err(missing("an SQLite row".to_owned())),
-        }
+        let (op, body) = self.record_at(offset, false)?;
+        (op == OP_MESSAGE)
+            .then(|| message_data(&body).map(f))
+            .flatten()
+            .ok_or_else(|| container(&self.path, format!("no message at byte {offset}")))
     }
 
-    /// The decompressed records of the chunk at `offset` (cached: frames of one chunk
-    /// are read one after the other).
-    fn chunk_records(&self, offset: u64) -> Result<Arc<ChunkRecords>, RosError> {
-        if let Some(records) = self.cached(offset)? {
-            return Ok(records);
-        }
+    /// `f` of the bytes of the message record at byte `inner` of `records`, the records of
+    /// the chunk at byte `chunk`.
+    ///
+    /// # Errors
+    /// [`RosError::Container`] when the record is not there.
+    pub(crate) fn with_chunk_message<R>(
+        &self,
+        records: &ChunkRecords,
+        (chunk, inner): (u64, u64),
+        f: impl FnOnce(&[u8]) -> R,
+    ) -> Result<R, RosError> {
+        usize::try_from(inner)
+            .ok()
+            .and_then(|i| first_record(records.bytes().get(i..)?))
+            .filter(|r| r.0 == OP_MESSAGE)
+            .and_then(|r| message_data(r.1))
+            .map(f)
+            .ok_or_else(|| {
+                container(
+                    &self.path,
+                    format!("no message at byte {inner} of the chunk at byte {chunk}"),
+                )
+            })
+    }
+
+    /// The decompressed records of the chunk at `offset` (checked against its size and
+    /// CRC when it is whole).
+    ///
+    /// # Errors
+    /// [`RosError::Io`]; [`RosError::Container`] when there is no chunk there or it does
+    /// not decompress.
+    pub(crate) fn chunk_records(&self, offset: u64) -> Result<ChunkRecords, RosError> {
+        self.records_of(offset, self.raw_chunk(offset)?)
+    }
+
+    /// The body of the chunk record at `offset`, as in the file (cut short at its end).
+    ///
+    /// # Errors
+    /// [`RosError::Io`]; [`RosError::Container`] when there is no chunk there.
+    pub(crate) fn raw_chunk(&self, offset: u64) -> Result<Vec<u8>, RosError> {
         let (op, body) = self.record_at(offset, true)?;
         if op != OP_CHUNK {
             return Err(container(&self.path, format!("no chunk at byte {offset}")));
         }
+        Ok(body)
+    }
+
+    /// The records of `body`, the chunk record at `offset`, decompressed whole.
+    ///
+    /// # Errors
+    /// [`RosError::Container`] when it does not decompress or its size or CRC is wrong.
+    pub(crate) fn records_of(&self, offset: u64, body: Vec<u8>) -> Result<ChunkRecords, RosError> {
         let bad = |e: String| container(&self.path, format!("chunk at byte {offset}: {e}"));
         let parts = chunk_parts(&body).ok_or_else(|| bad("too short".to_owned()))?;
         let start = parts.data_start;
@@ -410,36 +445,10 @@ impl McapFile {
             Cow::Borrowed(b) => RecordsAt::Body(start..start + b.len()),
             Cow::Owned(v) => RecordsAt::Own(v),
         };
-        let records = Arc::new(match place {
-            RecordsAt::Own(buf) => ChunkRecords {
-                range: 0..buf.len(),
-                buf,
-            },
+        Ok(match place {
+            RecordsAt::Own(buf) => ChunkRecords::owned(buf),
             RecordsAt::Body(range) => ChunkRecords { buf: body, range },
-        });
-        self.keep(offset, Arc::clone(&records))?;
-        Ok(records)
-    }
-
-    /// The records of the chunk at `offset` when it is the cached one.
-    fn cached(&self, offset: u64) -> Result<Option<Arc<ChunkRecords>>, RosError> {
-        let cache = self
-            .cache
-            .lock()
-            .map_err(|_| container(&self.path, "chunk cache poisoned"))?;
-        Ok(cache
-            .as_ref()
-            .filter(|(o, _)| *o == offset)
-            .map(|(_, records)| Arc::clone(records)))
-    }
-
-    /// Keeps `records`, of the chunk at `offset`, as the cached chunk.
-    fn keep(&self, offset: u64, records: Arc<ChunkRecords>) -> Result<(), RosError> {
-        *self
-            .cache
-            .lock()
-            .map_err(|_| container(&self.path, "chunk cache poisoned"))? = Some((offset, records));
-        Ok(())
+        })
     }
 
     /// The opcode and body of the record at `offset` (cut short at the end of the file

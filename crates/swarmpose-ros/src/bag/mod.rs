@@ -5,22 +5,32 @@
 //! from a `.db3` file's `messages` table), and [`Bag::read`] fetches one message's bytes
 //! afterwards, so that a stereo sequence has random access to its frames;
 //! [`Bag::visit`] reads many messages in file order, each chunk decompressed once.
+//! Decompressed chunks are kept within a budget of bytes ([`chunk_cache`]), so that a
+//! short bag whose headers were read at opening is not decompressed again frame by frame.
 //!
 //! An MCAP file whose recorder died has no summary and may end in the middle of a record
 //! (even of a compressed chunk): it is read up to its last whole message and
 //! [`Bag::stopped`] says where it stopped.
 
+pub mod chunk_cache;
+mod chunk_prefix;
 mod mcap_file;
 mod mcap_summary;
 mod metadata;
 mod sqlite;
+mod visit;
 
 use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex, PoisonError};
 
 use crate::error::RosError;
 use crate::msg::{RosMessage, decode};
 
+pub use chunk_cache::DEFAULT_CHUNK_CACHE_BYTES;
 pub use metadata::{Metadata, parse_metadata};
+
+use chunk_cache::{ChunkCache, ChunkKey};
+use mcap_file::{ChunkRecords, McapFile};
 
 /// Where a message's bytes are.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -91,7 +101,7 @@ pub struct Topic {
 /// The storage of one file of a bag.
 #[derive(Debug)]
 enum Storage {
-    Mcap(mcap_file::McapFile),
+    Mcap(McapFile),
     Sqlite(sqlite::SqliteFile),
 }
 
@@ -102,6 +112,8 @@ pub struct Bag {
     files: Vec<Storage>,
     topics: Vec<Topic>,
     stopped: Option<String>,
+    /// Decompressed MCAP chunks kept between reads.
+    chunks: Mutex<ChunkCache>,
 }
 
 /// Collects topics and their messages while the files are indexed.
@@ -190,7 +202,7 @@ impl Bag {
             }
             match f.extension().and_then(|e| e.to_str()) {
                 Some("mcap") => {
-                    let (file, stop) = mcap_file::McapFile::index(f, k, &mut sink)?;
+                    let (file, stop) = McapFile::index(f, k, &mut sink)?;
                     storages.push(Storage::Mcap(file));
                     if stopped.is_none() {
                         stopped = stop;
@@ -213,7 +225,26 @@ impl Bag {
             files: storages,
             topics,
             stopped,
+            chunks: Mutex::new(ChunkCache::new(DEFAULT_CHUNK_CACHE_BYTES)),
         })
+    }
+
+    /// Sets the budget of decompressed MCAP chunks kept between reads, bytes
+    /// ([`DEFAULT_CHUNK_CACHE_BYTES`] when opened; 0 keeps only the last chunk read).
+    pub fn set_chunk_cache_bytes(&mut self, bytes: usize) {
+        self.chunks
+            .get_mut()
+            .unwrap_or_else(PoisonError::into_inner)
+            .set_budget(bytes);
+    }
+
+    /// The bytes of decompressed MCAP chunks kept within the budget.
+    #[must_use]
+    pub fn chunk_cache_bytes(&self) -> usize {
+        self.chunks
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .kept_bytes()
     }
 
     /// The bag's path as given.
@@ -291,42 +322,35 @@ impl Bag {
 
     /// `f` of the bytes at `location`.
     fn with_bytes<R>(&self, location: Location, f: impl FnOnce(&[u8]) -> R) -> Result<R, RosError> {
-        match self.files.get(location.file()) {
-            Some(Storage::Mcap(m)) => m.with_message(location, f),
-            Some(Storage::Sqlite(s)) => s.read(location).map(|b| f(&b)),
-            None => Err(RosError::Container {
+        match (self.files.get(location.file()), location) {
+            (Some(Storage::Mcap(m)), Location::McapChunk { file, chunk, inner }) => {
+                let records = self.chunk(m, (file, chunk))?;
+                m.with_chunk_message(&records, (chunk, inner), f)
+            }
+            (Some(Storage::Mcap(m)), Location::McapPlain { offset, .. }) => {
+                m.with_plain_message(offset, f)
+            }
+            (Some(Storage::Sqlite(s)), _) => s.read(location).map(|b| f(&b)),
+            (Some(Storage::Mcap(_)), Location::Sqlite { .. }) => Err(RosError::Container {
+                path: self.path.clone(),
+                message: "no message at an SQLite row".to_owned(),
+            }),
+            (None, _) => Err(RosError::Container {
                 path: self.path.clone(),
                 message: format!("a message in file {}, not in the bag", location.file()),
             }),
         }
     }
 
-    /// Calls `f(k, i, bytes)` for every message `i` of each topic `topics[k]`, in the
-    /// order of the files (each chunk read and decompressed once, whatever the topics'
-    /// order): the way to read every message of a few topics.
-    ///
-    /// # Errors
-    /// As [`Bag::read`], and the first error of `f` (which stops the visit).
-    pub fn visit(
-        &self,
-        topics: &[&Topic],
-        mut f: impl FnMut(usize, usize, &[u8]) -> Result<(), RosError>,
-    ) -> Result<(), RosError> {
-        let mut all: Vec<(Location, usize, usize)> = topics
-            .iter()
-            .enumerate()
-            .flat_map(|(k, t)| {
-                t.entries
-                    .iter()
-                    .enumerate()
-                    .map(move |(i, e)| (e.location, k, i))
-            })
-            .collect();
-        all.sort_by_key(|m| m.0.file_order());
-        for (location, k, i) in all {
-            self.with_bytes(location, |b| f(k, i, b))??;
+    /// The records of chunk `key` of MCAP file `m`: kept ones, or decompressed (and kept).
+    fn chunk(&self, m: &McapFile, key: ChunkKey) -> Result<Arc<ChunkRecords>, RosError> {
+        let cache = || self.chunks.lock().unwrap_or_else(PoisonError::into_inner);
+        if let Some(records) = cache().get(key) {
+            return Ok(records);
         }
-        Ok(())
+        let records = Arc::new(m.chunk_records(key.1)?);
+        cache().put(key, Arc::clone(&records));
+        Ok(records)
     }
 
     /// The bytes of message `index` of `topic` (as [`Bag::read`] or [`Bag::visit`] gave

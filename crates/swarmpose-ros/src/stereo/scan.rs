@@ -1,12 +1,17 @@
 //! What opening a camera input reads of every message of its topics, in one pass over the
-//! bag ([`Bag::visit`]: each chunk read and decompressed once): the header stamp of every
-//! image and every `camera_info` (checked to give one calibration).
+//! bag ([`Bag::visit_heads`]: each chunk read and decompressed once, and a chunk that is
+//! not kept for the reads only as far as needed): the header stamp of every image and
+//! every `camera_info` (checked to give one calibration).
 
 use crate::bag::{Bag, Topic};
 use crate::error::RosError;
 use crate::msg::{CameraInfo, decode_header};
 
 use super::calib_error;
+
+/// Bytes of an image message read for its header (the 4-byte CDR header, the stamp and
+/// the `frame_id`); a longer header is read whole.
+const IMAGE_HEAD_BYTES: usize = 1024;
 
 /// The images of one topic: their header stamps and the first one's `frame_id`.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
@@ -47,9 +52,20 @@ pub(crate) fn scan(
         infos.iter().map(|t| vec![None; t.entries.len()]).collect();
     let topics: Vec<&Topic> = images.iter().chain(infos).copied().collect();
     let n = images.len();
-    bag.visit(&topics, |k, i, bytes| {
+    // Of an image, its header only; of a camera_info, all of it.
+    let heads: Vec<Option<usize>> = (0..topics.len())
+        .map(|k| (k < n).then_some(IMAGE_HEAD_BYTES))
+        .collect();
+    bag.visit_heads(&topics, &heads, |k, i, bytes| {
         if k < n {
-            let h = decode_header(bytes).map_err(|e| RosError::Decode {
+            let decoded = match decode_header(bytes) {
+                // A header longer than the bytes read: read the whole message.
+                Err(_) if bytes.len() >= IMAGE_HEAD_BYTES => {
+                    decode_header(&bag.read(topics[k], i)?)
+                }
+                other => other,
+            };
+            let h = decoded.map_err(|e| RosError::Decode {
                 path: bag.path().to_owned(),
                 topic: topics[k].name.clone(),
                 index: i,
