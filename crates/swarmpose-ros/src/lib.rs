@@ -3,7 +3,7 @@
 //! ROS 2 without a ROS install: the message types swarmpose reads and writes ([`msg`],
 //! CDR through `cdr-encoding`), ROS 2 bags ([`bag`]: MCAP through the `mcap` crate,
 //! SQLite `.db3` through `rusqlite`, rosbag2 folders with split files), stereo frames
-//! from a bag ([`stereo`]), RGB-D frames from a bag ([`rgbd`]), the `odometry.mcap` writer ([`write`]), and an engine's
+//! from a bag ([`stereo`]), RGB-D frames from a bag ([`rgbd`]), the `odometry.mcap` writer ([`mod@write`]), and an engine's
 //! results as messages ([`result`], and its inliers: [`inliers`]).
 #![deny(missing_docs)]
 #![forbid(unsafe_code)]

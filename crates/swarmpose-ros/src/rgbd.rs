@@ -65,7 +65,8 @@ fn names(cams: &[CameraTopics]) -> String {
 ///
 /// # Errors
 /// [`RosError::Topics`] (listing the topics) when the choice is ambiguous or the
-/// options do not fit; as [`named_camera`] for a named topic.
+/// options do not fit or a named image topic does not exist; [`RosError::Calibration`]
+/// when a named topic has no `camera_info` beside it.
 pub fn rgbd_cameras(
     bag: &Bag,
     opts: &StereoOptions,

@@ -152,7 +152,7 @@ fn clean(dir: &Path) -> Result<Vec<String>, RunError> {
 impl OutputDir {
     /// Creates `path` (and its parents) if needed, locks it for this run, checks that
     /// files can be written in it, and removes what an earlier run left there (see
-    /// [`clean`]).
+    /// `clean` in this file).
     ///
     /// # Errors
     /// An error naming the folder, when it cannot be created or written, or when

@@ -5,8 +5,8 @@
 //! repository), and the project's rule for a test whose data set is absent: skipped with
 //! a printed reason, except under `CI=true`, where it fails; and the tests' temporary
 //! folders ([`TempDir`]). With the feature `ros`, the ROS 2 bags the tests write: MCAP
-//! files ([`bags`]) and RGB-D input, a bag and the TUM folder of the same frames
-//! ([`rgbd`]). A dev-dependency only: no library of the workspace depends on it.
+//! files (module `bags`) and RGB-D input, a bag and the TUM folder of the same frames
+//! (module `rgbd`). A dev-dependency only: no library of the workspace depends on it.
 #![deny(missing_docs)]
 #![forbid(unsafe_code)]
 

@@ -83,7 +83,7 @@ pub struct Summary {
     pub metrics: Option<Metrics>,
     /// Wall time of the run, seconds.
     pub time_s: f64,
-    /// [`input_hash`].
+    /// [`input_hash`](super::hashes::input_hash).
     pub input_hash: String,
     /// [`config_hash`].
     pub config_hash: String,

@@ -310,7 +310,7 @@ impl Window {
     /// `model` (whose calibration terms have the covariance `calibration_covariance`,
     /// pixels², for the covariance of the result; with
     /// [`WindowConfig::correction_per_frame`] its disparity correction is taken by this
-    /// frame's measurements only, [`calibration`]) and returns the current frame's refined pose, what was done and the
+    /// frame's measurements only, as `calibration.rs` says) and returns the current frame's refined pose, what was done and the
     /// window's measurement of the frame, or `None` when the window is too short to add
     /// anything to the pair (or the refinement failed; the pair's pose stands then).
     ///

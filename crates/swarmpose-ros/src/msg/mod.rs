@@ -3,8 +3,8 @@
 //! and a live node. Bytes are CDR (little- or big-endian, with the 4-byte encapsulation
 //! header of ROS 2 messages) through the `cdr-encoding` crate ([`decode`], [`encode`]).
 //!
-//! Each type also carries its `.msg` definition ([`RosMessage::OWN_DEFINITION`]);
-//! [`schema_text`] joins it with those of the types it uses, in the `ros2msg` schema
+//! Each type names itself ([`RosMessage::TYPE`]); its `.msg` definition is in one table
+//! (`definitions.rs`), and [`schema_text`] joins it with those of the types it uses, in the `ros2msg` schema
 //! encoding that MCAP readers (Foxglove, the Rerun viewer, `ros2 bag`) expect.
 
 mod definitions;

@@ -2,7 +2,7 @@
 //! camera topics found or named ([`topics`]), left and right paired by header stamp
 //! ([`pairing`]), the rig from `camera_info` ([`calib`]), images to gray
 //! ([`crate::image`]). Opening reads every image once for its header stamp and every
-//! `camera_info`, in one pass ([`scan`]); a frame is then read, converted and (raw
+//! `camera_info`, in one pass (`scan.rs`); a frame is then read, converted and (raw
 //! streams) rectified when asked for.
 
 pub mod calib;
