@@ -171,10 +171,14 @@ fn fast9_in(
         // Without a branch on the full test (it is unpredictable): every pixel that
         // passed is scored, a score of 0 written for one that is no corner (as the
         // cleared buffer holds), and kept by advancing the count of `found`.
-        for (base, flags) in (0..n).step_by(8).zip(pass.chunks(8)) {
-            let mut bytes = [0u8; 8];
-            bytes[..flags.len()].copy_from_slice(flags);
-            let mut word = u64::from_le_bytes(bytes);
+        let chunks = pass.chunks_exact(8);
+        let last = (n - chunks.remainder().len(), chunks.remainder());
+        for (base, flags) in (0..n).step_by(8).zip(chunks).chain(std::iter::once(last)) {
+            // Little-endian: flag j in byte j (no call to copy a slice of unknown length).
+            let mut word = flags
+                .iter()
+                .rev()
+                .fold(0u64, |w, &f| (w << 8) | u64::from(f));
             let mut found = [Corner { x: 0, y, score: 0 }; 8];
             let mut kept = 0;
             while word != 0 {
