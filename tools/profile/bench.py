@@ -48,12 +48,14 @@ def run_bench(data, log):
     env = dict(os.environ, SWARMPOSE_DATA=data)
     subprocess.run(["cargo", "bench", "-p", "swarmpose-runs", "--bench", "pipeline", "--no-run"],
                    cwd=ROOT, env=env, check=True)
+    start = "LOAD-AT-START " + " / ".join(f"{v:.1f}" for v in os.getloadavg())
     p = subprocess.run(["/usr/bin/time", "-f", "CPU %U %S %e", "cargo", "bench", "-p",
                         "swarmpose-runs", "--bench", "pipeline", "--", "odometry/"],
                        cwd=ROOT, env=env, capture_output=True, text=True, check=True)
+    text = start + "\n" + p.stdout + p.stderr
     with open(log, "w", encoding="utf-8") as f:
-        f.write(p.stdout + p.stderr)
-    return p.stdout + p.stderr
+        f.write(text)
+    return text
 
 
 def estimates(target):
@@ -79,12 +81,16 @@ def section(log, found):
            "`cargo bench -p swarmpose-runs --bench pipeline -- odometry/`, release build, 10 samples "
            f"of the whole {FRAMES}-frame kitti_vo_seq2 each (frames/s = {FRAMES} / median). The "
            "machine's load is the line above: with a load above 1 another process shared the "
-           "two cores, and the figures are lower than a quiet machine's.", "",
+           "two cores, and the figures are lower than a quiet machine's (the two-thread modes "
+           "most).", "",
            "| mode | time for 51 frames (criterion median, interval) | frames/s |", "|---|---|---|"]
     for fid, label in MODES:
         if fid in found:
             med, lo, hi = found[fid]
             out.append(f"| {label} | {med:.3f} s ({lo:.3f}-{hi:.3f}) | {FRAMES / med:.1f} |")
+    start = re.findall(r"^LOAD-AT-START (.*)$", log, re.M)
+    if start:
+        out[0] = out[0].rstrip(".") + f" (at the start of the bench: {start[0]})."
     cpu = re.findall(r"^CPU ([\d.]+) ([\d.]+) ([\d.]+)$", log, re.M)
     lines = [l.strip() for l in log.splitlines() if "kitti_vo_seq2, orb + pso" in l]
     if lines:
