@@ -7,7 +7,7 @@ of the engine and the top functions by self time, with the commit, the machine a
 load (see tools/profile/README.md).
 
     python3 tools/profile/flame.py [--seconds 20] [--frequency 499] [--out DIR]
-                                   [--data DIR] [--update FILE]
+                                   [--data DIR] [--reuse] [--update FILE]
 
 Writes into DIR (default: the system's temporary folder, `swarmpose-flame`): perf.data,
 stacks.folded (one line per distinct stack, `frame;frame;... count`, the input of any
@@ -356,6 +356,11 @@ def main():
         with open(os.path.join(args.out, "stacks.folded"), "rb") as src, \
                 open(os.path.join(args.out, "flame.svg"), "wb") as dst:
             run(["inferno-flamegraph"], stdin=src, stdout=dst)
+    other = sum(c for st, c in stacks.items() if stage_of(st) == STAGE_ORDER[-1])
+    if other > 0.1 * sum(stacks.values()):
+        # A stage function renamed or moved: STAGES no longer names it.
+        print(f"warning: {100 * other / sum(stacks.values()):.0f} % of the samples in no stage; "
+              "check STAGES against the engine's code", file=sys.stderr)
     text = section(stacks, total, bench_lines, args.seconds, args.frequency)
     with open(os.path.join(args.out, "profile.md"), "w", encoding="utf-8") as f:
         f.write(text)
