@@ -233,7 +233,7 @@ fn fast9_in(
 /// a 7x7 window at `(x, y)`, with central-difference gradients (intensity units / 255).
 /// The caller keeps the window and its gradients inside the image (4 pixels).
 #[must_use]
-#[inline]
+#[inline(always)]
 pub fn harris(img: GrayView<'_>, x: usize, y: usize) -> f32 {
     let w = img.width;
     let d = img.data;
@@ -271,7 +271,7 @@ pub fn disc_half_widths(r: usize) -> Vec<usize> {
 /// `(x, y)`: `atan2(m01, m10)` radians, image axes (x right, y down). The caller keeps
 /// the disc inside the image.
 #[must_use]
-#[inline]
+#[inline(always)]
 pub fn centroid_angle(img: GrayView<'_>, x: usize, y: usize, u_max: &[usize]) -> f32 {
     let w = img.width as isize;
     let d = img.data;

@@ -157,7 +157,10 @@ impl OrbExtractor {
         let mut kps: Vec<Keypoint> = match &self.config.bucketing {
             Some(b) => {
                 s.keypoints.clear();
-                s.keypoints.extend(s.corners.iter().map(keypoint));
+                // A loop, not an iterator's fold: compiled inside this dispatched kernel.
+                for c in &s.corners {
+                    s.keypoints.push(keypoint(c));
+                }
                 let size = (image.width, image.height);
                 bucket_indices_into(&s.keypoints, size, b, &mut s.bucket, &mut s.kept);
                 s.kept.iter().map(|&i| s.keypoints[i]).collect()
