@@ -109,7 +109,7 @@ impl RotatedPattern {
     /// caller keeps `(x, y)` at least `PATTERN_RADIUS + 1` pixels from every edge (a
     /// point nearer the top or bottom gets an all-zero descriptor).
     #[must_use]
-    #[inline]
+    #[inline(always)]
     pub fn describe(
         &self,
         smooth: GrayView<'_>,
