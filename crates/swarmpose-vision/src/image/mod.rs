@@ -197,6 +197,7 @@ pub fn sample_bilinear(img: GrayView<'_>, x: f32, y: f32) -> Option<f32> {
 }
 
 #[must_use]
+#[inline(always)]
 /// Samples the `n × n` patch whose top-left sample is at `(x0, y0)` (pixels, sub-pixel)
 /// into `out` (row-major): every sample shares the same fractional offset, so the
 /// bilinear weights are computed once. `out` holds at least `n²` values. `None` when the

@@ -4,7 +4,9 @@
 use crate::features::GrayView;
 use crate::simd;
 
-/// The 16 pixels of the Bresenham circle of radius 3, clockwise from the top.
+/// The 16 pixels of the Bresenham circle of radius 3, clockwise from the top (`fast9`
+/// reads them as the row slices `p0` to `p15`; the tests, from here).
+#[cfg(test)]
 const CIRCLE: [(isize, isize); 16] = [
     (0, -3),
     (1, -3),
@@ -35,15 +37,15 @@ pub struct Corner {
     pub score: u16,
 }
 
-/// True when `mask` (16 bits, circular) has a run of at least 9 set bits.
+/// True when `mask` (16 bits, circular) has a run of at least 9 set bits: runs of 2, 4
+/// and 8 by doubling, then the ninth bit (four shifts instead of eight).
 #[inline(always)]
 fn has_run9(mask: u32) -> bool {
     let m = mask | (mask << 16);
-    let mut r = m;
-    for k in 1..9 {
-        r &= m >> k;
-    }
-    r != 0
+    let r2 = m & (m >> 1);
+    let r4 = r2 & (r2 >> 2);
+    let r8 = r4 & (r4 >> 4);
+    r8 & (m >> 8) != 0
 }
 
 /// True when `side` holds for 4 circularly consecutive points of 8.
@@ -134,7 +136,6 @@ fn fast9_in(
     } = scratch;
     scores.clear();
     scores.resize(w * h, 0);
-    let offs: [isize; 16] = CIRCLE.map(|(dx, dy)| dy * w as isize + dx);
     let d = img.data;
     candidates.clear();
     let (x0, n) = (border, w - 2 * border);
@@ -165,37 +166,54 @@ fn fast9_in(
             let dark = run4(even, |p| p < lo8) & run4(odd, |p| p < lo8);
             pass[k] = u8::from(bright | dark);
         }
-        for (k, _) in pass.iter().enumerate().filter(|(_, p)| **p != 0) {
-            let x = x0 + k;
-            let c = mid[k];
-            let hi8 = c.saturating_add(threshold);
-            let lo8 = c.saturating_sub(threshold);
-            let i = y * w + x;
-            let mut ring = [0u8; 16];
-            let (mut bright, mut dark) = (0u32, 0u32);
-            for (k, (&o, r)) in offs.iter().zip(ring.iter_mut()).enumerate() {
-                let p = d[(i as isize + o) as usize];
-                *r = p;
-                bright |= u32::from(p > hi8) << k;
-                dark |= u32::from(p < lo8) << k;
+        // The pixels that passed, eight flags at a time (most of a row fails): each flag
+        // is 0 or 1, one bit of its byte, cleared in turn lowest first (raster order).
+        // Without a branch on the full test (it is unpredictable): every pixel that
+        // passed is scored, a score of 0 written for one that is no corner (as the
+        // cleared buffer holds), and kept by advancing the count of `found`.
+        let chunks = pass.chunks_exact(8);
+        let last = (n - chunks.remainder().len(), chunks.remainder());
+        for (base, flags) in (0..n).step_by(8).zip(chunks).chain(std::iter::once(last)) {
+            // Little-endian: flag j in byte j (no call to copy a slice of unknown length).
+            let mut word = flags
+                .iter()
+                .rev()
+                .fold(0u64, |w, &f| (w << 8) | u64::from(f));
+            let mut found = [Corner { x: 0, y, score: 0 }; 8];
+            let mut kept = 0;
+            while word != 0 {
+                let k = base + (word.trailing_zeros() / 8) as usize;
+                word &= word - 1;
+                let x = x0 + k;
+                let c = mid[k];
+                let hi8 = c.saturating_add(threshold);
+                let lo8 = c.saturating_sub(threshold);
+                // The circle, clockwise from the top, from the row slices above.
+                let ring = [
+                    p0[k], p1[k], p2[k], p3[k], p4[k], p5[k], p6[k], p7[k], p8[k], p9[k], p10[k],
+                    p11[k], p12[k], p13[k], p14[k], p15[k],
+                ];
+                let (mut bright, mut dark) = (0u32, 0u32);
+                let (mut sb, mut sd) = (0u32, 0u32);
+                for (j, &p) in ring.iter().enumerate() {
+                    bright |= u32::from(p > hi8) << j;
+                    dark |= u32::from(p < lo8) << j;
+                    sb += u32::from(p.saturating_sub(hi8));
+                    sd += u32::from(lo8.saturating_sub(p));
+                }
+                let (is_bright, is_dark) = (has_run9(bright), has_run9(dark));
+                let score = match (is_bright, is_dark) {
+                    (true, true) => sb.max(sd),
+                    (true, false) => sb,
+                    _ => sd,
+                };
+                let corner = is_bright | is_dark;
+                let s = u16::from(corner) * score.clamp(1, u32::from(u16::MAX)) as u16;
+                scores[y * w + x] = s;
+                found[kept & 7] = Corner { x, y, score: s };
+                kept += usize::from(corner);
             }
-            let (is_bright, is_dark) = (has_run9(bright), has_run9(dark));
-            if !is_bright && !is_dark {
-                continue;
-            }
-            let (mut sb, mut sd) = (0u32, 0u32);
-            for &p in &ring {
-                sb += u32::from(p.saturating_sub(hi8));
-                sd += u32::from(lo8.saturating_sub(p));
-            }
-            let score = match (is_bright, is_dark) {
-                (true, true) => sb.max(sd),
-                (true, false) => sb,
-                _ => sd,
-            };
-            let s = score.clamp(1, u32::from(u16::MAX)) as u16;
-            scores[i] = s;
-            candidates.push(Corner { x, y, score: s });
+            candidates.extend_from_slice(&found[..kept]);
         }
     }
     for &c in candidates.iter() {
@@ -215,7 +233,7 @@ fn fast9_in(
 /// a 7x7 window at `(x, y)`, with central-difference gradients (intensity units / 255).
 /// The caller keeps the window and its gradients inside the image (4 pixels).
 #[must_use]
-#[inline]
+#[inline(always)]
 pub fn harris(img: GrayView<'_>, x: usize, y: usize) -> f32 {
     let w = img.width;
     let d = img.data;
@@ -253,7 +271,7 @@ pub fn disc_half_widths(r: usize) -> Vec<usize> {
 /// `(x, y)`: `atan2(m01, m10)` radians, image axes (x right, y down). The caller keeps
 /// the disc inside the image.
 #[must_use]
-#[inline]
+#[inline(always)]
 pub fn centroid_angle(img: GrayView<'_>, x: usize, y: usize, u_max: &[usize]) -> f32 {
     let w = img.width as isize;
     let d = img.data;
@@ -280,6 +298,20 @@ pub fn centroid_angle(img: GrayView<'_>, x: usize, y: usize, u_max: &[usize]) ->
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// [`has_run9`] against its definition (9 shifted copies), on every 16-bit mask.
+    #[test]
+    fn run9_on_every_mask() {
+        let by_definition = |mask: u32| {
+            let m = mask | (mask << 16);
+            (0..9).fold(m, |r, k| r & (m >> k)) != 0
+        };
+        let runs = (0..1u32 << 16).filter(|&m| has_run9(m)).count();
+        assert!(runs > 1000, "{runs}");
+        for mask in 0..1u32 << 16 {
+            assert_eq!(has_run9(mask), by_definition(mask), "{mask:016b}");
+        }
+    }
 
     #[test]
     fn run9() {

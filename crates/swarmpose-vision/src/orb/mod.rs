@@ -157,7 +157,10 @@ impl OrbExtractor {
         let mut kps: Vec<Keypoint> = match &self.config.bucketing {
             Some(b) => {
                 s.keypoints.clear();
-                s.keypoints.extend(s.corners.iter().map(keypoint));
+                // A loop, not an iterator's fold: compiled inside this dispatched kernel.
+                for c in &s.corners {
+                    s.keypoints.push(keypoint(c));
+                }
                 let size = (image.width, image.height);
                 bucket_indices_into(&s.keypoints, size, b, &mut s.bucket, &mut s.kept);
                 s.kept.iter().map(|&i| s.keypoints[i]).collect()
@@ -246,19 +249,19 @@ fn describe_in(
             && x + (BORDER as f32) < image.width as f32
             && y + (BORDER as f32) < image.height as f32
     };
-    keypoints
-        .iter()
-        .map(|k| {
-            if inside(k) {
-                let (x, y) = (k.x.round() as usize, k.y.round() as usize);
-                pattern.describe(view, x, y, k.angle)
-            } else {
-                // Too close to the border for the pattern: an all-zero descriptor
-                // (rarely the nearest neighbour of anything real).
-                BinaryDescriptor([0; 32])
-            }
-        })
-        .collect()
+    // A loop, not an iterator's fold: compiled inside this dispatched kernel.
+    let mut out = Vec::with_capacity(keypoints.len());
+    for k in keypoints {
+        out.push(if inside(k) {
+            let (x, y) = (k.x.round() as usize, k.y.round() as usize);
+            pattern.describe(view, x, y, k.angle)
+        } else {
+            // Too close to the border for the pattern: an all-zero descriptor (rarely
+            // the nearest neighbour of anything real).
+            BinaryDescriptor([0; 32])
+        });
+    }
+    out
 }
 
 impl FeatureExtractor for OrbExtractor {

@@ -34,7 +34,7 @@ impl PairWindow<'_> {
 
 /// Sum of squared differences between the window and the one at right `(xr, y)`. The
 /// caller keeps both windows inside.
-#[inline]
+#[inline(always)]
 fn ssd(window: PairWindow<'_>, xr: usize) -> u32 {
     let (left, right, xl, y, r) = (window.left, window.right, window.xl, window.y, window.r);
     let mut s = 0u32;
@@ -54,6 +54,7 @@ fn ssd(window: PairWindow<'_>, xr: usize) -> u32 {
 /// search`, and a parabola through the minimum and its neighbours gives the sub-pixel
 /// offset. `None` when a window leaves an image or the minimum is at the search edge.
 #[must_use]
+#[inline(always)]
 pub fn refine_disparity(window: PairWindow<'_>, d0: i64, search: i64) -> Option<f32> {
     if !window.rows_inside() {
         return None;
@@ -107,6 +108,7 @@ pub fn refine_disparity(window: PairWindow<'_>, d0: i64, search: i64) -> Option<
 /// `None` when a window leaves the image, the texture has no horizontal gradient, or
 /// the estimate moves more than one pixel from `d0`.
 #[must_use]
+#[inline(always)]
 pub fn refine_disparity_lk(window: PairWindow<'_>, d0: f32, iterations: usize) -> Option<f32> {
     if !window.rows_inside() {
         return None;
@@ -168,6 +170,7 @@ pub fn refine_disparity_lk(window: PairWindow<'_>, d0: f32, iterations: usize) -
 /// `(Σ e g, Σ g²)` over the window at disparity `d` (residual `e`, gradient `g` of the
 /// right image). `None` when the right window leaves the image (`right_width` pixels),
 /// `Σ g²` is too small, or `d` moves more than one pixel from `d0`.
+#[inline(always)]
 fn gauss_newton_disparity(
     right_width: usize,
     xl: usize,
@@ -205,6 +208,7 @@ fn gauss_newton_disparity(
 /// `None` near the borders, on texture that does not fix both, when `d` moves more
 /// than one pixel from `d0` or `dy` more than two.
 #[must_use]
+#[inline(always)]
 pub fn refine_disparity_lk_2d(
     window: PairWindow<'_>,
     d0: f32,
@@ -219,6 +223,7 @@ pub fn refine_disparity_lk_2d(
 /// rectified pair; used to check rectification. `None` near the borders, on texture
 /// without vertical gradient, or beyond 2 pixels.
 #[must_use]
+#[inline(always)]
 pub fn row_offset(window: PairWindow<'_>, d: f32) -> Option<f32> {
     align_window(window, d, 10, false).map(|(_, dy)| dy)
 }
@@ -227,6 +232,7 @@ pub fn row_offset(window: PairWindow<'_>, d: f32) -> Option<f32> {
 /// `(xl, y)`, from `(d0, 0)`: `dy` alone, or `d` too when `disparity_free`. Returns
 /// `(d, dy)`; `None` near the borders, on texture that does not fix the unknowns, when
 /// `d` moves more than one pixel or `dy` more than two.
+#[inline(always)]
 fn align_window(
     window: PairWindow<'_>,
     d0: f32,
