@@ -34,3 +34,5 @@ pub mod simd;
 pub mod stereo;
 pub mod surf;
 pub mod temporal;
+#[cfg(test)]
+mod test_noise;

@@ -484,13 +484,7 @@ mod tests {
     #[test]
     fn blur_matches_the_clamped_definition() {
         for (w, h) in [(1, 1), (3, 2), (4, 7), (5, 5), (13, 9)] {
-            let mut s = 7u32;
-            let data: Vec<u8> = (0..w * h)
-                .map(|_| {
-                    s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-                    (s >> 24) as u8
-                })
-                .collect();
+            let data = crate::test_noise::noise_bytes(w * h, 7);
             let at = |x: isize, y: isize| {
                 let (x, y) = (x.clamp(0, w as isize - 1), y.clamp(0, h as isize - 1));
                 u32::from(data[y as usize * w + x as usize])

@@ -151,13 +151,7 @@ mod tests {
     #[test]
     fn describe_is_its_definition() {
         let (w, h) = (97usize, 73usize);
-        let mut s = 7u32;
-        let img: Vec<u8> = (0..w * h)
-            .map(|_| {
-                s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-                (s >> 24) as u8
-            })
-            .collect();
+        let img = crate::test_noise::noise_bytes(w * h, 7);
         let view = GrayView {
             width: w,
             height: h,

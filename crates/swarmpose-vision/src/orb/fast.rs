@@ -369,13 +369,7 @@ mod tests {
     #[test]
     fn quick_rejection_drops_no_corner() {
         let (w, h) = (97, 61);
-        let mut st = 11u32;
-        let mut data: Vec<u8> = (0..w * h)
-            .map(|_| {
-                st = st.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-                (st >> 24) as u8
-            })
-            .collect();
+        let mut data = crate::test_noise::noise_bytes(w * h, 11);
         // Smooth half of it, so that there are both noise and blobs.
         for i in (w..w * h / 2).rev() {
             data[i] = (u16::from(data[i]) + u16::from(data[i - w])).div_ceil(2) as u8;

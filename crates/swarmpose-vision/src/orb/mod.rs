@@ -288,13 +288,7 @@ mod tests {
 
     /// A deterministic blocky texture.
     fn texture(w: usize, h: usize, seed: u32) -> Vec<u8> {
-        let mut s = seed;
-        let cells: Vec<u8> = (0..(w / 4 + 1) * (h / 4 + 1))
-            .map(|_| {
-                s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-                (s >> 24) as u8
-            })
-            .collect();
+        let cells = crate::test_noise::noise_bytes((w / 4 + 1) * (h / 4 + 1), seed);
         (0..w * h)
             .map(|i| cells[(i / w / 4) * (w / 4 + 1) + (i % w) / 4])
             .collect()

@@ -407,11 +407,8 @@ mod tests {
     #[test]
     fn gauss_newton_disparity_is_the_definition() {
         let (w, h) = (1100usize, 9usize);
-        let mut s = 3u32;
-        let mut noise = || {
-            s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-            (s >> 28) as f32
-        };
+        let mut g = crate::test_noise::Lcg(3);
+        let mut noise = || (g.next_u32() >> 28) as f32;
         let f = |x: f32| 128.0 + 60.0 * (x * 0.45).sin() + 30.0 * (x * 0.17 + 1.0).cos();
         let left: Vec<u8> = (0..w * h)
             .map(|i| (f((i % w) as f32) + noise()).round() as u8)

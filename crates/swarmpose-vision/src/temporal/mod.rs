@@ -247,11 +247,8 @@ mod tests {
 
     #[test]
     fn both_directions_at_once_match_one_at_a_time() {
-        let mut s = 5u32;
-        let mut next = || {
-            s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-            s >> 8
-        };
+        let mut g = crate::test_noise::Lcg(5);
+        let mut next = || g.next_u32() >> 8;
         let mut set = |n: usize| -> (Vec<Keypoint>, Vec<BinaryDescriptor>) {
             (0..n)
                 .map(|_| {
