@@ -339,11 +339,18 @@ mod tests {
             return;
         };
         let start = std::time::Instant::now();
+        // Both ways of writing wait at once (each up to FIFO_READER_WAIT): the test takes
+        // one wait, not two.
+        let stream = {
+            let fifo = fifo.clone();
+            std::thread::spawn(move || create_stream(&fifo).map(drop))
+        };
         let e = write_file(&fifo, b"nobody\n").unwrap_err();
         assert_eq!(e.kind(), ErrorKind::TimedOut, "{e}");
         assert!(e.to_string().starts_with("a FIFO that nobody reads"), "{e}");
-        let e = create_stream(&fifo).unwrap_err();
+        let e = stream.join().unwrap().unwrap_err();
         assert_eq!(e.kind(), ErrorKind::TimedOut, "{e}");
+        assert!(start.elapsed() >= FIFO_READER_WAIT);
         assert!(start.elapsed() < 4 * FIFO_READER_WAIT);
         assert!(
             std::fs::symlink_metadata(&fifo)

@@ -11,7 +11,6 @@
 
 use swarmpose_core::{Estimator, PsoEstimator, PsoEstimatorConfig};
 use swarmpose_datasets::open;
-use swarmpose_odometry::OdometryConfig;
 use swarmpose_vision::frontend::{FrameMatches, Frontend};
 
 #[test]
@@ -42,7 +41,8 @@ fn kitti_pairs_recover_the_ground_truth_motion() {
     assert!(counts[0] >= 300, "fewest correspondences {}", counts[0]);
 
     // The engine's self-calibrated correction (image data only).
-    let correction = crate::common::run_sequence(seq.as_ref(), OdometryConfig::default())
+    let correction = crate::common::default_run("kitti_vo_seq2")
+        .expect("present")
         .calibration
         .correction;
     let baseline = seq.calibration().baseline_m;

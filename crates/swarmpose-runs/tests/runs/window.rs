@@ -2,7 +2,6 @@
 //! frame-to-frame engine on every shared real sequence, and the same trajectory with one
 //! and with two threads.
 
-use swarmpose_datasets::open;
 use swarmpose_odometry::{Odometry, OdometryConfig};
 use swarmpose_runs::batch::{camera_of, collect, run_sequence_two_threads};
 use swarmpose_runs::synthetic::SyntheticSequence;
@@ -20,12 +19,10 @@ fn with_window(keyframes: usize) -> OdometryConfig {
 #[test]
 fn window_beats_frame_to_frame_on_kitti() {
     let name = "kitti_vo_seq2";
-    let Some(dir) = crate::common::dataset(name) else {
+    let Some(f2f) = crate::common::shared_run(name, with_window(0)) else {
         return;
     };
-    let seq = open(&dir).expect("open");
-    let f2f = crate::common::run_sequence(seq.as_ref(), with_window(0));
-    let win = crate::common::run_sequence(seq.as_ref(), with_window(10));
+    let win = crate::common::shared_run(name, with_window(10)).expect("present");
     let (a, b) = (
         crate::common::evaluate_run(name, &f2f),
         crate::common::evaluate_run(name, &win),
@@ -63,9 +60,8 @@ fn window_beats_frame_to_frame_on_karlsruhe() {
     let Some(dir) = crate::common::dataset(name) else {
         return;
     };
-    let seq = open(&dir).expect("open");
-    let f2f = crate::common::run_sequence(seq.as_ref(), with_window(0));
-    let win = crate::common::run_sequence(seq.as_ref(), with_window(10));
+    let f2f = crate::common::shared_run(name, with_window(0)).expect("present");
+    let win = crate::common::shared_run(name, with_window(10)).expect("present");
     let a = crate::common::karlsruhe_ate_percent(&dir, &f2f);
     let b = crate::common::karlsruhe_ate_percent(&dir, &win);
     eprintln!("{name}: ATE frame to frame {a:.3} %, window of 10 {b:.3} % of the path");
@@ -93,12 +89,10 @@ fn window_beats_frame_to_frame_on_karlsruhe() {
 #[test]
 fn window_keeps_a_still_camera_still() {
     let name = "euroc_v1_01_easy_micro";
-    let Some(dir) = crate::common::dataset(name) else {
+    let Some(win) = crate::common::shared_run(name, with_window(10)) else {
         return;
     };
-    let seq = open(&dir).expect("open");
-    let win = crate::common::run_sequence(seq.as_ref(), with_window(10));
-    let f2f = crate::common::run_sequence(seq.as_ref(), with_window(0));
+    let f2f = crate::common::shared_run(name, with_window(0)).expect("present");
     let farthest = |r: &crate::common::Run| {
         r.poses()
             .iter()

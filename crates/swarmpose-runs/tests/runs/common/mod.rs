@@ -2,6 +2,7 @@
 #![allow(dead_code)]
 
 use std::path::PathBuf;
+use std::sync::{Arc, Mutex, OnceLock};
 
 use nalgebra::{Isometry3, Vector6};
 use swarmpose_datasets::open;
@@ -46,10 +47,36 @@ pub fn run_sequence(seq: &dyn swarmpose_datasets::StereoSequence, config: Odomet
 }
 
 /// The default run on a shared data set.
-pub fn default_run(name: &str) -> Option<Run> {
+pub fn default_run(name: &str) -> Option<Arc<Run>> {
+    shared_run(name, OdometryConfig::default())
+}
+
+/// The run of `config` on the shared data set `name`, computed once for all the tests of
+/// this binary that ask for it (the engine is deterministic: the same sequence and
+/// settings give the same results, `two_threads.rs`). A test asking while another
+/// computes it waits for that run.
+pub fn shared_run(name: &str, config: OdometryConfig) -> Option<Arc<Run>> {
+    type Cell = Arc<OnceLock<Arc<Run>>>;
+    static RUNS: OnceLock<Mutex<Vec<(String, OdometryConfig, Cell)>>> = OnceLock::new();
     let dir = dataset(name)?;
-    let seq = open(&dir).expect("open");
-    Some(run_sequence(seq.as_ref(), OdometryConfig::default()))
+    let cell = {
+        let mut runs = RUNS
+            .get_or_init(Mutex::default)
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        match runs.iter().find(|(n, c, _)| n == name && *c == config) {
+            Some((_, _, cell)) => Arc::clone(cell),
+            None => {
+                let cell = Cell::default();
+                runs.push((name.to_owned(), config.clone(), Arc::clone(&cell)));
+                cell
+            }
+        }
+    };
+    Some(Arc::clone(cell.get_or_init(|| {
+        let seq = open(&dir).expect("open");
+        Arc::new(run_sequence(seq.as_ref(), config))
+    })))
 }
 
 /// Evaluation of poses against ground truth of the same frames.
