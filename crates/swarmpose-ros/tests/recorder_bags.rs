@@ -201,6 +201,47 @@ fn compare(py: &str, bag_path: &Path, reader: &str, raw: bool, scratch: &Path) -
     (compared, decoded_n)
 }
 
+/// Compares one bag with each of its independent readers; returns the number of messages
+/// compared and decoded over the readers. One of the readers must agree on every message.
+fn check_bag(py: &str, bag: &Path, scratch: &Path) -> (usize, usize) {
+    let (mut total, mut decoded) = (0, 0);
+    let is_mcap = bag.extension().is_some_and(|e| e == "mcap")
+        || bag.join("metadata.yaml").is_file()
+            && std::fs::read_to_string(bag.join("metadata.yaml"))
+                .is_ok_and(|m| m.contains("storage_identifier: mcap"));
+    let readers: &[&str] = if is_mcap {
+        &["rosbags", "mcap"]
+    } else {
+        &["rosbags", "sqlite"]
+    };
+    let ours: usize = Bag::open(bag)
+        .expect("open")
+        .topics()
+        .iter()
+        .map(|t| t.entries.len())
+        .sum();
+    let mut best = 0;
+    for reader in readers {
+        // The second reader decodes only what the first did not (the time is in
+        // Python).
+        let (n, d) = compare(py, bag, reader, best == ours, scratch);
+        eprintln!(
+            "{}: {reader}: {n} messages equal, {d} decoded equal",
+            bag.display()
+        );
+        best = best.max(n);
+        total += n;
+        decoded += d;
+    }
+    assert_eq!(
+        best,
+        ours,
+        "{}: no reader agrees on all {ours} messages",
+        bag.display()
+    );
+    (total, decoded)
+}
+
 #[test]
 fn every_message_of_the_recorder_bags_matches_independent_readers() {
     let Some(root) = swarmpose_testdata::dataset_for_test("ros2_bags") else {
@@ -219,42 +260,32 @@ fn every_message_of_the_recorder_bags_matches_independent_readers() {
     }
     assert!(list.len() >= 10, "found only {list:?}");
     let scratch = common::scratch("recorder_bags");
-    let (mut total, mut decoded_total) = (0, 0);
-    for bag in &list {
-        let is_mcap = bag.extension().is_some_and(|e| e == "mcap")
-            || bag.join("metadata.yaml").is_file()
-                && std::fs::read_to_string(bag.join("metadata.yaml"))
-                    .is_ok_and(|m| m.contains("storage_identifier: mcap"));
-        let readers: &[&str] = if is_mcap {
-            &["rosbags", "mcap"]
-        } else {
-            &["rosbags", "sqlite"]
-        };
-        let ours: usize = Bag::open(bag)
-            .expect("open")
-            .topics()
-            .iter()
-            .map(|t| t.entries.len())
-            .sum();
-        let mut best = 0;
-        for reader in readers {
-            // The second reader decodes only what the first did not (the time is in Python).
-            let (n, d) = compare(&py, bag, reader, best == ours, &scratch);
-            eprintln!(
-                "{}: {reader}: {n} messages equal, {d} decoded equal",
-                bag.display()
-            );
-            best = best.max(n);
-            total += n;
-            decoded_total += d;
-        }
-        assert_eq!(
-            best,
-            ours,
-            "{}: no reader agrees on all {ours} messages",
-            bag.display()
-        );
-    }
+    // The readers' time is in their Python processes: the bags are compared by as many
+    // workers as there are cores, each with its own scratch folder.
+    let workers = std::thread::available_parallelism().map_or(1, usize::from);
+    let per_worker: Vec<(usize, usize)> = std::thread::scope(|s| {
+        let handles: Vec<_> = (0..workers)
+            .map(|w| {
+                let (list, py, scratch) = (&list, &py, scratch.join(format!("worker-{w}")));
+                s.spawn(move || {
+                    std::fs::create_dir_all(&scratch).expect("scratch");
+                    let (mut total, mut decoded_total) = (0, 0);
+                    for bag in list.iter().skip(w).step_by(workers) {
+                        let (n, d) = check_bag(py, bag, &scratch);
+                        total += n;
+                        decoded_total += d;
+                    }
+                    (total, decoded_total)
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| h.join().expect("a worker panicked"))
+            .collect()
+    });
+    let total: usize = per_worker.iter().map(|w| w.0).sum();
+    let decoded_total: usize = per_worker.iter().map(|w| w.1).sum();
     eprintln!(
         "{} bags: {total} messages equal, {decoded_total} decoded equal",
         list.len()
