@@ -88,8 +88,10 @@ fn correspondences_then_register_recover_kitti_motions() {
     assert!((0.0..8.0).contains(&quadratic), "quadratic {quadratic} px");
     assert!((-2.0..2.0).contains(&linear), "linear {linear} px");
 
-    let (mut good, mut fewest) = (0, usize::MAX);
-    for k in 0..seq.len() - 1 {
+    // One pair: its correspondences (pair 0's are written above), then registered;
+    // returns the number of correspondences, whether the motion is within the bounds, and
+    // the line to print.
+    let pair = |k: usize| -> (usize, bool, String) {
         let path = csv(k);
         if k > 0 {
             let (i, j) = (k.to_string(), (k + 1).to_string());
@@ -114,7 +116,6 @@ fn correspondences_then_register_recover_kitti_motions() {
         let report = json_of(&swarmpose(&["register", &path, "--seed", &seed], None));
         assert_eq!(report["noise_model"], "covariance");
         let n = report["n_correspondences"].as_u64().expect("count") as usize;
-        fewest = fewest.min(n);
         let truth = seq.relative_ground_truth(k, k + 1).expect("ground truth");
         let d = truth.inverse() * pose_of(&report);
         let (deg, cm) = (
@@ -122,12 +123,39 @@ fn correspondences_then_register_recover_kitti_motions() {
             d.translation.vector.norm() * 100.0,
         );
         let ok = deg < 0.2 && cm < 5.0;
-        good += usize::from(ok);
-        eprintln!(
+        let line = format!(
             "pair {k:2}-{:2}: {n:4} correspondences, error {deg:.3} deg {cm:5.2} cm{}",
             k + 1,
             if ok { "" } else { "  <-- off" }
         );
+        (n, ok, line)
+    };
+    // The pairs are independent processes: as many workers as cores run them.
+    let workers = std::thread::available_parallelism().map_or(1, usize::from);
+    let pairs = seq.len() - 1;
+    let mut results: Vec<(usize, (usize, bool, String))> = std::thread::scope(|s| {
+        let handles: Vec<_> = (0..workers)
+            .map(|w| {
+                let pair = &pair;
+                s.spawn(move || {
+                    (w..pairs)
+                        .step_by(workers)
+                        .map(|k| (k, pair(k)))
+                        .collect::<Vec<_>>()
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .flat_map(|h| h.join().expect("a worker panicked"))
+            .collect()
+    });
+    results.sort_by_key(|r| r.0);
+    let (mut good, mut fewest) = (0, usize::MAX);
+    for (_, (n, ok, line)) in &results {
+        eprintln!("{line}");
+        fewest = fewest.min(*n);
+        good += usize::from(*ok);
     }
     eprintln!(
         "disparity correction {offset:.3} px + {quadratic:.3} px x² + {linear:.3} px x; fewest correspondences \
