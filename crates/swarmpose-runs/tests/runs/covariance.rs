@@ -120,6 +120,7 @@ fn synthetic_split_feature_nees() {
 /// of 6.83: `tools/covariance/street.py`, RESULTS.md "Covariance: the rendered street"),
 /// so one street alone is not a test of the bar; five give 95 pairs (about 0.34).
 #[test]
+#[ignore = "slow: .ci/run runs it (cargo test --workspace --test runs -- --ignored)"]
 fn street_split_feature_nees() {
     use swarmpose_runs::synthetic::SyntheticSequence;
     let (mut nees, mut model) = (Vec::new(), Vec::new());

@@ -22,6 +22,7 @@ fn track(tracker: &mut Tracker<BinaryDescriptor>, seq: &FeatureSequence, k: usiz
 /// of its largest size over the first 500, frame to frame and with a window of 10
 /// keyframes.
 #[test]
+#[ignore = "slow: .ci/run runs it (cargo test --workspace --test runs -- --ignored)"]
 fn memory_does_not_grow_over_2000_frames() {
     let seq = FeatureSequence::new(FeatureSequenceConfig {
         seed: 5,
@@ -80,6 +81,7 @@ fn motion_covariance_is_honest() {
 /// motions by more than their statistical error (mean NEES 16.1 for 5 keyframes at
 /// 0.5 px).
 #[test]
+#[ignore = "slow: .ci/run runs it (cargo test --workspace --test runs -- --ignored)"]
 fn window_motion_covariance_is_honest() {
     for keyframes in [5, 10] {
         for (seed, sigma_px) in [(11u64, 0.5), (12, 1.0)] {
@@ -100,6 +102,7 @@ fn window_motion_covariance_is_honest() {
 /// honest: the prior carries its sensitivity to the calibration terms (without it, the
 /// mean NEES was 7.9 for K = 10 at 0.5 px).
 #[test]
+#[ignore = "slow: .ci/run runs it (cargo test --workspace --test runs -- --ignored)"]
 fn window_motion_covariance_is_honest_with_marginalisation() {
     use swarmpose_odometry::window::Marginalisation;
     for mode in [Marginalisation::Finished, Marginalisation::All] {
