@@ -218,6 +218,19 @@ impl OdometryConfig {
                 ),
             });
         }
+        for (name, t) in [("orb", &self.orb.temporal), ("surf", &self.surf.temporal)] {
+            let radius_ok = t.guided_radius_px.is_none_or(|r| r.is_finite() && r > 0.0);
+            let ratio_ok = t.guided_min_ratio.is_finite() && t.guided_min_ratio >= 0.0;
+            if !(radius_ok && ratio_ok) {
+                return Err(crate::OdometryError::Config {
+                    message: format!(
+                        "{name}.temporal: guided_radius_px {:?} (finite, above 0) and \
+                         guided_min_ratio {} (finite, at least 0)",
+                        t.guided_radius_px, t.guided_min_ratio
+                    ),
+                });
+            }
+        }
         Ok(())
     }
 }

@@ -89,6 +89,16 @@ fn bad_sequences_give_one_clear_line() {
             ],
         ));
     }
+    // The guided search's radius is a distance.
+    for r in ["0", "-3", "nan"] {
+        cases.push((
+            vec!["--guided-radius", r],
+            vec![
+                format!("'{r}' for '--guided-radius <PX>'"),
+                "a finite number of pixels above 0".into(),
+            ],
+        ));
+    }
     for (options, expected) in &cases {
         let mut args = vec!["odometry", s(&two), "--out", s(&out_dir)];
         args.extend(options);
@@ -459,9 +469,21 @@ fn a_run_s_configuration_reruns_it_byte_for_byte() {
         assert!(a == b, "{name} differs between the run and its rerun");
     }
     // An option beside the file replaces its setting.
-    let third = run("third", &["--config", s(&config), "--seed", "8"]);
+    let third = run(
+        "third",
+        &[
+            "--config",
+            s(&config),
+            "--seed",
+            "8",
+            "--guided-radius",
+            "20",
+        ],
+    );
     let text = std::fs::read_to_string(third.join("config.json")).expect("third");
     assert!(text.contains(r#""seed": 8"#) && text.contains(r#""swarm_size": 20"#));
+    assert!(text.contains(r#""guided_radius_px": 20.0"#), "{text}");
+    assert!(!text.contains(r#""guided_radius_px": null"#), "{text}");
 
     let bad = tmp.0.join("bad.json");
     std::fs::write(&bad, r#"{"odometry": {"window": {"keyframes": "ten"}}}"#).expect("bad");

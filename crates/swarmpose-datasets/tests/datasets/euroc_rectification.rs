@@ -23,7 +23,7 @@ fn row_differences(pair: &StereoPair) -> Vec<f32> {
         max_distance: 40.0,
         ratio: 0.8,
         max_displacement_px: Some(120.0),
-        circular_check: false,
+        ..TemporalConfig::default()
     };
     let m = mutual_matches(
         &l.keypoints,

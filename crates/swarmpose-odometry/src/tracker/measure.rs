@@ -8,7 +8,9 @@ use std::time::Instant;
 
 use nalgebra::{Isometry3, Matrix6, UnitQuaternion};
 use swarmpose_vision::features::{Descriptor, GrayView};
-use swarmpose_vision::frontend::{DisparityCorrection, FrameMatches, StereoFrame, match_frames};
+use swarmpose_vision::frontend::{
+    DisparityCorrection, FrameMatches, MotionGuide, StereoFrame, match_frames_guided, match_share,
+};
 use swarmpose_vision::image::GrayImage;
 use swarmpose_vision::temporal::subpixel::align_patch;
 
@@ -98,7 +100,7 @@ impl<D: Descriptor> Tracker<D> {
         times: &mut StageTimes,
         counts: &mut Counts,
     ) -> Result<Measured, Reason> {
-        let matches = self.match_step(reference, now.frame, times, counts)?;
+        let matches = self.match_step(reference, &now, times, counts)?;
         let (correction, model) = self.correction();
         let focal_px = self.focal_px();
         let seed = self.config.seed.wrapping_add(now.index as u64);
@@ -164,17 +166,35 @@ impl<D: Descriptor> Tracker<D> {
         self.config.min_inliers.max(crate::config::MIN_INLIERS)
     }
 
-    /// Match: the frame's features matched to the reference's.
+    /// Match: the frame's features matched to the reference's, near where the
+    /// constant-velocity prediction puts them when there is one and the configuration asks
+    /// for it ([`swarmpose_vision::temporal::TemporalConfig::guided_radius_px`]), held to
+    /// the share of the features the last pair matched.
     fn match_step(
-        &self,
+        &mut self,
         reference: &Reference<D>,
-        frame: &StereoFrame<D>,
+        now: &Current<'_, D>,
         times: &mut StageTimes,
         counts: &mut Counts,
     ) -> Result<FrameMatches, Reason> {
         let min = self.min_inliers();
         let t = Instant::now();
-        let m = match_frames(&reference.frame, frame, &self.temporal).map_err(Reason::Matching)?;
+        let prediction = self.prediction(reference.timestamp_s, now.timestamp_s);
+        let guide = prediction
+            .as_ref()
+            .zip(self.last_match_share)
+            .map(|(motion, last_share)| MotionGuide {
+                motion,
+                rig: &self.camera.rig,
+                last_share,
+            });
+        let (m, _) = match_frames_guided(&reference.frame, now.frame, &self.temporal, guide)
+            .map_err(Reason::Matching)?;
+        self.last_match_share = Some(match_share(
+            &reference.frame,
+            now.frame,
+            m.correspondences.len(),
+        ));
         times.match_ms = ms(t);
         counts.matches = m.correspondences.len();
         if counts.matches < min {

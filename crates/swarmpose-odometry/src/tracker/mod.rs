@@ -84,6 +84,9 @@ pub struct Tracker<D: Descriptor> {
     last_tracked_s: Option<f64>,
     /// The last frame's motion was ambiguous ([`FrameResult::ambiguous`]).
     last_ambiguous: bool,
+    /// The share of the features the last pair matched
+    /// ([`swarmpose_vision::frontend::match_share`]), which a guided search is held to.
+    last_match_share: Option<f32>,
     next_index: usize,
 }
 
@@ -116,6 +119,7 @@ impl<D: Descriptor> Tracker<D> {
             velocity: None,
             last_tracked_s: None,
             last_ambiguous: false,
+            last_match_share: None,
             next_index: 0,
         }
     }

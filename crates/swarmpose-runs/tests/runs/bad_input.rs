@@ -148,3 +148,29 @@ fn fewer_than_three_inliers_is_refused_not_raised() {
     };
     assert!(Odometry::new(camera, three).is_ok());
 }
+
+#[test]
+fn a_guided_search_radius_that_is_not_a_distance_is_refused() {
+    let camera = camera_of(&SyntheticSequence::new(2, 0.5, 0.0));
+    let with = |radius: Option<f32>, ratio: f32| {
+        let mut config = OdometryConfig::default();
+        config.orb.temporal.guided_radius_px = radius;
+        config.orb.temporal.guided_min_ratio = ratio;
+        Odometry::new(camera, config)
+    };
+    for (radius, ratio) in [
+        (Some(0.0), 0.75),
+        (Some(-5.0), 0.75),
+        (Some(f32::NAN), 0.75),
+        (Some(20.0), -0.1),
+        (Some(20.0), f32::INFINITY),
+    ] {
+        let e = with(radius, ratio).err().expect("refused");
+        assert!(
+            matches!(e, swarmpose_odometry::OdometryError::Config { .. }),
+            "{e}"
+        );
+    }
+    assert!(with(Some(20.0), 0.75).is_ok());
+    assert!(with(None, 0.75).is_ok());
+}

@@ -7,11 +7,13 @@
 
 mod correction;
 mod detector;
+mod guided;
 mod refine;
 mod settings;
 
 pub use correction::{CORRECTION_TERMS, DisparityCorrection};
 pub use detector::{Detector, UnknownDetector};
+pub use guided::{MotionGuide, Search, match_frames_guided, match_share};
 pub use refine::{CHI2_3_99, refine_stereo, refine_weighted};
 pub use settings::{OrbFrontendConfig, SurfFrontendConfig};
 
@@ -306,23 +308,51 @@ pub fn match_frames<D: Descriptor>(
     src: &StereoFrame<D>,
     config: &TemporalConfig,
 ) -> Result<FrameMatches, PoseError> {
-    let mut pairs = mutual_matches(
-        &dst.left_keypoints,
+    let pairs = frame_pairs(
+        (&dst.left_keypoints, &dst.right_keypoints),
+        dst,
+        src,
+        config,
+    );
+    frame_matches(dst, src, &pairs)
+}
+
+/// The pairs `(index in dst, index in src)` of the left descriptors' mutual nearest
+/// neighbours, with `dst`'s features at the keypoints `(dst_left, dst_right)` (their own,
+/// or where a prediction puts them in `src`'s images), confirmed by the right images when
+/// configured.
+fn frame_pairs<D: Descriptor>(
+    (dst_left, dst_right): (&[Keypoint], &[Keypoint]),
+    dst: &StereoFrame<D>,
+    src: &StereoFrame<D>,
+    config: &TemporalConfig,
+) -> Vec<(usize, usize)> {
+    let pairs = mutual_matches(
+        dst_left,
         &dst.left_descriptors,
         &src.left_keypoints,
         &src.left_descriptors,
         config,
     );
-    if config.circular_check {
-        let right = mutual_matches(
-            &dst.right_keypoints,
-            &dst.right_descriptors,
-            &src.right_keypoints,
-            &src.right_descriptors,
-            config,
-        );
-        pairs = circular_check(&pairs, &right);
+    if !config.circular_check {
+        return pairs;
     }
+    let right = mutual_matches(
+        dst_right,
+        &dst.right_descriptors,
+        &src.right_keypoints,
+        &src.right_descriptors,
+        config,
+    );
+    circular_check(&pairs, &right)
+}
+
+/// The matches of the `pairs` `(index in dst, index in src)`.
+fn frame_matches<D>(
+    dst: &StereoFrame<D>,
+    src: &StereoFrame<D>,
+    pairs: &[(usize, usize)],
+) -> Result<FrameMatches, PoseError> {
     let src_pts = pairs.iter().map(|&(_, j)| src.points[j]).collect();
     let dst_pts = pairs.iter().map(|&(i, _)| dst.points[i]).collect();
     let px = |k: &Keypoint| (k.x, k.y);

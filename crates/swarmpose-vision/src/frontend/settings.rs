@@ -14,7 +14,10 @@ use crate::temporal::TemporalConfig;
 /// upright BRIEF (a car-mounted camera does not roll, and steering the pattern costs
 /// distinctiveness), FAST threshold 12 with 20 features per 48-pixel cell on the left,
 /// every FAST-10 corner on the right (so every left feature can find its partner), and a
-/// frame-to-frame search within 150 pixels.
+/// frame-to-frame search within 150 pixels. The search near where the engine's prediction
+/// puts each feature ([`TemporalConfig::guided_radius_px`]) is not the default: at 15-40
+/// pixels it is a third as costly and lowers the aligned ATE of most variants of
+/// kitti_vo_seq2, but raises Karlsruhe's (docs/history.md, issue 34).
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(
     feature = "serde",

@@ -26,6 +26,20 @@ pub struct TemporalConfig {
     /// Also require the circular check (left t → right t → right t-1 → left t-1 → left
     /// t closes) (default false).
     pub circular_check: bool,
+    /// With a predicted motion between the frames, search each feature's partner only
+    /// within this many pixels (column and row) of where the prediction puts it, instead
+    /// of within [`TemporalConfig::max_displacement_px`] of where it was
+    /// ([`crate::frontend::match_frames_guided`]); `None` never uses a prediction
+    /// (default None).
+    pub guided_radius_px: Option<f32>,
+    /// The guided search is kept when its share of matches (over the fewer of the two
+    /// frames' triangulated features) is at least this times the share of the last pair
+    /// matched ([`crate::frontend::MotionGuide::last_share`]); below, the prediction is
+    /// taken as wrong and the pair searched again without it. A wrong prediction loses
+    /// the partners of the points it moves most, the near ones, and the share drops; from
+    /// one pair to the next it varies by 0.79-1.0 times on the shared sequences and
+    /// variants (docs/history.md, issue 34) (default 0.75).
+    pub guided_min_ratio: f32,
 }
 
 impl TemporalConfig {
@@ -35,6 +49,8 @@ impl TemporalConfig {
         ratio: 0.9,
         max_displacement_px: Some(250.0),
         circular_check: false,
+        guided_radius_px: None,
+        guided_min_ratio: 0.75,
     };
 }
 

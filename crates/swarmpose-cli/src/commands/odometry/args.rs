@@ -103,6 +103,14 @@ pub struct OdometryArgs {
     #[arg(long)]
     pub correction_per_frame: bool,
 
+    /// Search each feature's partner in the next frame within PX pixels of where the
+    /// constant-velocity prediction puts it, instead of within 150 px of where it was (the
+    /// pair is searched again without the prediction when the share of features matched
+    /// drops below 0.75 times the last pair's). A third of the matching time; not the
+    /// default, since it raises Karlsruhe's ATE (docs/history.md, issue 34).
+    #[arg(long, value_name = "PX", value_parser = positive_px, allow_negative_numbers = true)]
+    pub guided_radius: Option<f32>,
+
     /// Fewest inliers for a motion to be accepted (at least 3).
     #[arg(long, value_name = "N", value_parser = min_inliers, allow_negative_numbers = true,
           help = with_default("Fewest inliers for a motion to be accepted (at least 3)",
@@ -216,6 +224,14 @@ fn min_inliers(s: &str) -> Result<usize, String> {
     }
 }
 
+/// `--guided-radius`: a finite number of pixels above 0.
+fn positive_px(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err("a radius is a finite number of pixels above 0".into()),
+    }
+}
+
 /// `text` with its default value noted, as clap notes it.
 fn with_default(text: &str, default: impl std::fmt::Display) -> String {
     format!("{text} [default: {default}]")
@@ -248,6 +264,10 @@ pub fn run_config(args: &OdometryArgs) -> Result<RunConfig, CliError> {
     o.seed = args.seed.unwrap_or(o.seed);
     o.window.marginalise = args.marginalise.unwrap_or(o.window.marginalise);
     o.window.correction_per_frame |= args.correction_per_frame;
+    if let Some(r) = args.guided_radius {
+        o.orb.temporal.guided_radius_px = Some(r);
+        o.surf.temporal.guided_radius_px = Some(r);
+    }
     let input = &mut rc.input;
     input.frame_period_s = args.frame_period.unwrap_or(input.frame_period_s);
     input.stamp_tolerance_ms = args.stamp_tolerance.unwrap_or(input.stamp_tolerance_ms);
