@@ -101,6 +101,10 @@ odometry_config! {
         correction_per_frame: Option<bool> = None => "each window measurement keeps the \
             disparity correction of the frame where it was made, so that a calibration change \
             moves no online step (costs drift; docs/self-calibration.md; ``None``: ``False``)",
+        guided_radius_px: Option<f32> = None => "search each feature's partner in the next \
+            frame within this many pixels of where the engine's constant-velocity prediction \
+            puts it (opt-in; a third of the matching time, not the default: docs/history.md; \
+            ``None``: the whole search window)",
         max_working_pixels: Option<usize> = None => "stereo images are halved while they have \
             more pixels than this (``None``: 1 500 000; at least 10 000; see \
             ``Odometry.working_camera``)",
@@ -190,6 +194,10 @@ impl OdometryConfig {
         c.window.correction_per_frame = self
             .correction_per_frame
             .unwrap_or(c.window.correction_per_frame);
+        if let Some(r) = self.guided_radius_px {
+            c.orb.temporal.guided_radius_px = Some(r);
+            c.surf.temporal.guided_radius_px = Some(r);
+        }
         if let Some(mode) = &self.marginalise {
             let mode: Marginalisation = mode
                 .parse()

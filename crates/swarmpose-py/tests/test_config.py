@@ -132,7 +132,8 @@ def test_repr_and_equality():
     assert repr(config) == (
         "OdometryConfig(method='svd', threshold=None, detector=None, refine=None, "
         "calibrate=None, disparity_correction=(0.25, 0.0), min_inliers=None, seed=None, "
-        "window=5, marginalise='finished', correction_per_frame=None, max_working_pixels=None, "
+        "window=5, marginalise='finished', correction_per_frame=None, guided_radius_px=None, "
+        "max_working_pixels=None, "
         "min_working_pixels=None, "
         "split_check=None, config_file=None)")
     assert config == eval(repr(config), {"OdometryConfig": OdometryConfig})

@@ -293,6 +293,25 @@ def test_correction_per_frame_matches_the_cli(kitti_seq2, swarmpose_bin, tmp_pat
     assert np.max(np.abs(run.poses - default)) > 1e-6
 
 
+def test_guided_radius_matches_the_cli(kitti_seq2, swarmpose_bin, tmp_path):
+    """``guided_radius_px=20`` is the command line's ``--guided-radius 20`` (issue 34): the
+    same trajectory, another one than the default's; a radius that is not above 0 is refused
+    with the engine's message."""
+    out = tmp_path / "cli"
+    subprocess.run([str(swarmpose_bin), "odometry", str(kitti_seq2), "--out", str(out),
+                    "--quiet", "--guided-radius", "20"], check=True, capture_output=True)
+    cli = read_kitti(out / "trajectory.kitti.txt")
+    config = swarmpose.OdometryConfig(guided_radius_px=20.0)
+    assert config.guided_radius_px == 20.0
+    run = swarmpose.odometry(kitti_seq2, config=config)
+    assert np.max(np.abs(run.poses - cli)) < 1e-12
+    default = swarmpose.odometry(kitti_seq2)
+    assert np.max(np.abs(run.poses - default.poses)) > 1e-6
+    for bad in (0.0, -1.0, float("nan")):
+        with pytest.raises(ValueError, match="guided"):
+            swarmpose.OdometryConfig(guided_radius_px=bad)
+
+
 def test_fixed_correction_with_a_linear_term_matches_the_cli(kitti_seq2, swarmpose_bin, tmp_path):
     """``disparity_correction=(offset, quadratic, linear)`` is the command line's
     ``--disparity-offset --disparity-quadratic --disparity-linear``: the same trajectory,

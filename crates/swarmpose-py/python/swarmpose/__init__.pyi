@@ -176,6 +176,7 @@ class OdometryConfig:
         window: Optional[int] = None,
         marginalise: Optional[str] = None,
         correction_per_frame: Optional[bool] = None,
+        guided_radius_px: Optional[float] = None,
         max_working_pixels: Optional[int] = None,
         min_working_pixels: Optional[int] = None,
         split_check: Optional[bool] = None,
@@ -206,6 +207,8 @@ class OdometryConfig:
     @property
     def correction_per_frame(self) -> Optional[bool]: ...
     @property
+    def guided_radius_px(self) -> Optional[float]: ...
+    @property
     def max_working_pixels(self) -> Optional[int]: ...
     @property
     def min_working_pixels(self) -> Optional[int]: ...
@@ -230,6 +233,7 @@ _OdometryOptions = TypedDict(
         "window": Optional[int],
         "marginalise": Optional[str],
         "correction_per_frame": Optional[bool],
+        "guided_radius_px": Optional[float],
         "max_working_pixels": Optional[int],
         "min_working_pixels": Optional[int],
         "split_check": Optional[bool],
