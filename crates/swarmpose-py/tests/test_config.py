@@ -42,7 +42,7 @@ def test_the_keywords_are_declared_once():
     """Keyword-only, with the command line's defaults; a read-only property each; the
     stubs' constructor and ``**options`` type name the same keywords."""
     names = keywords()
-    assert names[:3] == ["method", "threshold", "detector"] and len(names) == 15
+    assert names[:3] == ["method", "threshold", "detector"] and len(names) == 16
     params = inspect.signature(OdometryConfig).parameters.values()
     assert all(p.kind is inspect.Parameter.KEYWORD_ONLY for p in params)
     default = OdometryConfig()

@@ -5,14 +5,15 @@
 //! from a `.db3` file's `messages` table), and [`Bag::read`] fetches one message's bytes
 //! afterwards, so that a stereo sequence has random access to its frames;
 //! [`Bag::visit`] reads many messages in file order, each chunk decompressed once.
-//! Decompressed chunks are kept within a budget of bytes ([`chunk_cache`]), so that a
-//! short bag whose headers were read at opening is not decompressed again frame by frame.
+//! Decompressed chunks are kept within a budget of bytes ([`DEFAULT_CHUNK_CACHE_BYTES`],
+//! [`Bag::set_chunk_cache_bytes`]), so that a short bag whose headers were read at opening
+//! is not decompressed again frame by frame.
 //!
 //! An MCAP file whose recorder died has no summary and may end in the middle of a record
 //! (even of a compressed chunk): it is read up to its last whole message and
 //! [`Bag::stopped`] says where it stopped.
 
-pub mod chunk_cache;
+mod chunk_cache;
 mod chunk_prefix;
 mod mcap_file;
 mod mcap_summary;
