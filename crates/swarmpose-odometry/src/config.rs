@@ -224,9 +224,11 @@ impl OdometryConfig {
             if !(radius_ok && ratio_ok) {
                 return Err(crate::OdometryError::Config {
                     message: format!(
-                        "{name}.temporal: guided_radius_px {:?} (finite, above 0) and \
+                        "{name}.temporal: guided_radius_px {} (finite, above 0) and \
                          guided_min_ratio {} (finite, at least 0)",
-                        t.guided_radius_px, t.guided_min_ratio
+                        t.guided_radius_px
+                            .map_or("none".to_owned(), |r| format!("{r} px")),
+                        t.guided_min_ratio
                     ),
                 });
             }

@@ -83,11 +83,10 @@ fn predicted<D>(
     {
         let q = guide.motion.inverse_transform_point(p);
         let ((ul, ur), v) = if q.z > 0.0 && q.z.is_finite() {
-            let u = rig.fx * q.x / q.z + rig.cx;
-            (
-                (u as f32, (u - rig.fx * rig.baseline_m / q.z) as f32),
-                (rig.fy * q.y / q.z + rig.cy) as f32,
-            )
+            // The left pixel, and the right one a disparity `fx b / z` to its left.
+            let (u, v) = rig.project_left(&q);
+            let disparity_px = rig.fx * rig.baseline_m / q.z;
+            ((u as f32, (u - disparity_px) as f32), v as f32)
         } else {
             ((NOWHERE_PX, NOWHERE_PX), NOWHERE_PX)
         };
