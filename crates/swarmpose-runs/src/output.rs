@@ -229,8 +229,9 @@ impl Summary {
 }
 
 /// The self-calibration's decision as JSON: the causes chosen, the correction's
-/// coefficients, and the evidence of the rows (rotation) and of rigidity (held-out
-/// scores, the margin the next term missed, counts).
+/// coefficients, and the evidence of the rows (their `x y` bend, which is a yaw only when
+/// taken as one; roll and pitch) and of rigidity (held-out scores, the margin the next
+/// term missed, counts).
 #[must_use]
 pub fn calibration_json(d: &Decision) -> serde_json::Value {
     let terms: serde_json::Map<String, serde_json::Value> =
@@ -246,10 +247,14 @@ pub fn calibration_json(d: &Decision) -> serde_json::Value {
         "focal_length_change_px": d.focal_px,
         "rows": {
             "measurements": r.measurements,
-            "yaw": r.yaw,
+            // The rows' x*y bend is what a yaw of the right camera shows, and what a
+            // rectification left with lens distortion shows too: it is named by its
+            // shape, and a yaw only when the decision took it as one (the summary line
+            // says the same).
+            "xy_bend_px": r.rotation_px[0],
+            "xy_bend_taken_as_yaw": r.yaw,
             "roll": r.roll,
             "pitch": r.pitch,
-            "f_yaw_px": r.rotation_px[0],
             "f_roll_px": r.rotation_px[1],
             "f_pitch_px": r.rotation_px[2],
             "vertical_scale_px": r.vertical_scale_px,
@@ -293,5 +298,32 @@ impl Smoothed {
     #[must_use]
     pub fn poses(&self) -> &[Isometry3<f64>] {
         &self.poses
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The rows' `x y` bend is reported by its shape; "yaw" appears only as whether the
+    /// decision took it as one (issue 30: a user reading "yaw" would re-calibrate a rig
+    /// that may be fine).
+    #[test]
+    fn calibration_json_names_the_rows_bend_by_its_shape() {
+        let mut d = Decision::default();
+        d.rows.rotation_px = [-6.76, 0.25, 0.0];
+        let json = calibration_json(&d);
+        let rows = &json["rows"];
+        assert_eq!(rows["xy_bend_px"], serde_json::json!(-6.76));
+        assert_eq!(rows["xy_bend_taken_as_yaw"], serde_json::json!(false));
+        assert_eq!(rows["f_roll_px"], serde_json::json!(0.25));
+        let keys: Vec<&String> = rows.as_object().expect("an object").keys().collect();
+        let yaw: Vec<&&String> = keys.iter().filter(|k| k.contains("yaw")).collect();
+        assert_eq!(yaw, [&"xy_bend_taken_as_yaw"], "{keys:?}");
+        d.rows.yaw = true;
+        assert_eq!(
+            calibration_json(&d)["rows"]["xy_bend_taken_as_yaw"],
+            serde_json::json!(true)
+        );
     }
 }
