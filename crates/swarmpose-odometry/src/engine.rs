@@ -21,11 +21,14 @@
 use std::ops::ControlFlow;
 
 use swarmpose_core::Estimator;
-use swarmpose_vision::features::{BinaryDescriptor, FeatureExtractor, FloatDescriptor64};
-use swarmpose_vision::frontend::{Detector, Frontend, StereoFrame};
+use swarmpose_vision::features::{
+    BinaryDescriptor, Descriptor, FeatureExtractor, FloatDescriptor64,
+};
+use swarmpose_vision::frontend::{Detector, Frontend, StereoFrame, match_frames};
 use swarmpose_vision::image::GrayImage;
 use swarmpose_vision::orb::OrbExtractor;
 use swarmpose_vision::surf::Surf;
+use swarmpose_vision::temporal::TemporalConfig;
 
 use crate::config::{Calibration, OdometryConfig};
 use crate::error::{OdometryError, RunFailure};
@@ -34,7 +37,7 @@ use crate::intake::{RgbdInput, StereoCamera, StereoInput, check_rgbd, check_ster
 use crate::record::{FrameResult, StageTimes};
 use crate::refine::model::PixelNoise;
 use crate::selfcal::Decision;
-use crate::tracker::Tracker;
+use crate::tracker::{Prematched, Tracker};
 use crate::working::{Resampler, WorkingScale};
 
 /// The front end and back end for one detector.
@@ -395,10 +398,12 @@ pub enum RunEnd {
 
 impl Odometry {
     /// Runs the stereo frames of `frames` through the engine on two threads: while the
-    /// back end (matching, estimate, refinement, self-calibration) works on frame `k`,
-    /// a second thread obtains frame `k + 1` (the iterator runs there) and runs its
-    /// front end (features, stereo matching). The results are those of [`Odometry::track`]
-    /// called frame by frame (the front end does not depend on the back end's state),
+    /// back end (estimate, refinement, self-calibration, window) works on frame `k`, a
+    /// second thread obtains frame `k + 1` (the iterator runs there), runs its front end
+    /// (features, stereo matching) and matches it to frame `k` (unless the matching is
+    /// guided by the back end's prediction; the back end matches again when its reference
+    /// is another frame). The results are those of [`Odometry::track`] called frame by
+    /// frame (the front end and an unguided matching do not depend on the back end's state),
     /// and reach `on_frame` in order, each as soon as it exists; `on_frame` may stop the
     /// run by returning [`ControlFlow::Break`]. Returns how the run ended.
     ///
@@ -427,15 +432,21 @@ impl Odometry {
         let levels = scale.levels;
         with_inner!(&mut self.inner, f, t => {
             let frontend = f.as_ref();
+            let prematching = t.prematching();
             std::thread::scope(|scope| {
                 // One frame in flight between the threads: memory stays bounded.
                 let (tx, rx) = std::sync::mpsc::sync_channel(1);
                 scope.spawn(move || {
                     let mut resamplers = [Resampler::default(), Resampler::default()];
+                    let mut ahead = MatchAhead::new(prematching);
                     for (index, item) in frames.enumerate() {
                         let front = item.and_then(|frame| {
                             owned_front_end(frontend, &camera, levels, &mut resamplers, frame)
                                 .map_err(E::from)
+                        });
+                        let front = front.map(|(features, frame, times)| {
+                            let prematched = ahead.next(&features, frame.timestamp_s);
+                            (features, frame, times, prematched)
                         });
                         let failed = front.is_err();
                         let message = front.map_err(|e| e.at_frame(index));
@@ -447,9 +458,10 @@ impl Odometry {
                 });
                 let mut taken = 0;
                 for message in rx {
-                    let (features, frame, times) = message?;
+                    let (features, frame, times, prematched) = message?;
+                    let left = Some(frame.left.view());
                     let r = t
-                        .track(features, Some(frame.left.view()), frame.timestamp_s, times)
+                        .track_prematched(features, left, frame.timestamp_s, times, prematched)
                         .map(|r| scale.result_in_camera_pixels(r))
                         .map_err(|e| E::from(e).at_frame(taken))?;
                     taken += 1;
@@ -460,6 +472,50 @@ impl Odometry {
                 Ok(RunEnd::Finished)
             })
         })
+    }
+}
+
+/// The temporal matching of [`Odometry::run_two_threads`], done ahead on the front end's
+/// thread: each frame is matched to the last one with enough stereo points to become the
+/// tracker's reference (the tracker's own rule), so that the back end finds its matches
+/// ready. The back end checks that they are with its reference and matches again
+/// otherwise ([`Prematched`]).
+struct MatchAhead<D> {
+    /// The matching's configuration and the fewest points of a reference; `None`: no
+    /// matching ahead (a guided search needs the back end's prediction).
+    prematching: Option<(TemporalConfig, usize)>,
+    /// The last frame that can be the reference, and its timestamp (seconds).
+    reference: Option<(StereoFrame<D>, f64)>,
+}
+
+impl<D: Descriptor> MatchAhead<D> {
+    fn new(prematching: Option<(TemporalConfig, usize)>) -> Self {
+        Self {
+            prematching,
+            reference: None,
+        }
+    }
+
+    /// The matches of `frame` (taken at `timestamp_s`) with the expected reference, if
+    /// any; `frame` becomes the next expected reference when it has enough points.
+    fn next(&mut self, frame: &StereoFrame<D>, timestamp_s: f64) -> Option<Prematched> {
+        let (temporal, min) = self.prematching?;
+        if frame.len() < min {
+            // Not tracked, and not the next reference.
+            return None;
+        }
+        let prematched = self.reference.as_ref().and_then(|(reference, at_s)| {
+            let t0 = std::time::Instant::now();
+            // An error is found again, and reported, by the back end.
+            let matches = match_frames(reference, frame, &temporal).ok()?;
+            Some(Prematched {
+                reference_timestamp_s: *at_s,
+                matches,
+                match_ms: crate::frontend::ms(t0),
+            })
+        });
+        self.reference = Some((frame.clone(), timestamp_s));
+        prematched
     }
 }
 

@@ -42,6 +42,8 @@ pub(super) struct Current<'a, D> {
     pub(super) index: usize,
     /// Its timestamp, seconds.
     pub(super) timestamp_s: f64,
+    /// Its matches found ahead of time, if any ([`super::Prematched`]).
+    pub(super) prematched: Option<super::Prematched>,
 }
 
 /// A frame's matches with the reference and their stereo measurements (patch-aligned
@@ -96,11 +98,12 @@ impl<D: Descriptor> Tracker<D> {
     fn measure_from(
         &mut self,
         reference: &Reference<D>,
-        now: Current<'_, D>,
+        mut now: Current<'_, D>,
         times: &mut StageTimes,
         counts: &mut Counts,
     ) -> Result<Measured, Reason> {
-        let matches = self.match_step(reference, &now, times, counts)?;
+        let prematched = now.prematched.take();
+        let matches = self.match_step(reference, &now, prematched, times, counts)?;
         let (correction, model) = self.correction();
         let focal_px = self.focal_px();
         let seed = self.config.seed.wrapping_add(now.index as u64);
@@ -169,33 +172,47 @@ impl<D: Descriptor> Tracker<D> {
     /// Match: the frame's features matched to the reference's, near where the
     /// constant-velocity prediction puts them when there is one and the configuration asks
     /// for it ([`swarmpose_vision::temporal::TemporalConfig::guided_radius_px`]), held to
-    /// the share of the features the last pair matched.
+    /// the share of the features the last pair matched. Matches found ahead of time
+    /// (`prematched`) are taken when they are with this reference and the search is not
+    /// guided: they are the same matches.
     fn match_step(
         &mut self,
         reference: &Reference<D>,
         now: &Current<'_, D>,
+        prematched: Option<super::Prematched>,
         times: &mut StageTimes,
         counts: &mut Counts,
     ) -> Result<FrameMatches, Reason> {
         let min = self.min_inliers();
-        let t = Instant::now();
-        let prediction = self.prediction(reference.timestamp_s, now.timestamp_s);
-        let guide = prediction
-            .as_ref()
-            .zip(self.last_match_share)
-            .map(|(motion, last_share)| MotionGuide {
-                motion,
-                rig: &self.camera.rig,
-                last_share,
-            });
-        let (m, _) = match_frames_guided(&reference.frame, now.frame, &self.temporal, guide)
-            .map_err(Reason::Matching)?;
+        let usable = prematched.filter(|p| {
+            self.temporal.guided_radius_px.is_none()
+                && p.reference_timestamp_s.to_bits() == reference.timestamp_s.to_bits()
+        });
+        let m = if let Some(p) = usable {
+            times.match_ms = p.match_ms;
+            p.matches
+        } else {
+            let t = Instant::now();
+            let prediction = self.prediction(reference.timestamp_s, now.timestamp_s);
+            let guide =
+                prediction
+                    .as_ref()
+                    .zip(self.last_match_share)
+                    .map(|(motion, last_share)| MotionGuide {
+                        motion,
+                        rig: &self.camera.rig,
+                        last_share,
+                    });
+            let (m, _) = match_frames_guided(&reference.frame, now.frame, &self.temporal, guide)
+                .map_err(Reason::Matching)?;
+            times.match_ms = ms(t);
+            m
+        };
         self.last_match_share = Some(match_share(
             &reference.frame,
             now.frame,
             m.correspondences.len(),
         ));
-        times.match_ms = ms(t);
         counts.matches = m.correspondences.len();
         if counts.matches < min {
             return Err(Reason::TooFewMatches {

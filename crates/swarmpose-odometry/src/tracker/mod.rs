@@ -18,7 +18,7 @@
 use nalgebra::{Isometry3, UnitQuaternion};
 use swarmpose_core::Estimator;
 use swarmpose_vision::features::{Descriptor, GrayView};
-use swarmpose_vision::frontend::{DisparityCorrection, StereoFrame};
+use swarmpose_vision::frontend::{DisparityCorrection, FrameMatches, StereoFrame};
 use swarmpose_vision::image::GrayImage;
 use swarmpose_vision::stereo::RectifiedStereo;
 use swarmpose_vision::temporal::TemporalConfig;
@@ -50,6 +50,24 @@ struct Reference<D> {
     pose: Isometry3<f64>,
     timestamp_s: f64,
     index: usize,
+}
+
+/// A frame's matches with the frame it is expected to be tracked from, found ahead of
+/// time (by the front-end thread of [`crate::Odometry::run_two_threads`], while the back
+/// end works on the frame before). [`Tracker::track_prematched`] uses them only when that
+/// frame is the reference and the matching is not guided by a prediction (which needs the
+/// back end's state): they are then what the back end would have found, computed by the
+/// same function on the same frames.
+#[derive(Debug, Clone)]
+pub(crate) struct Prematched {
+    /// The timestamp of the frame matched to, seconds: it names the frame, since the
+    /// timestamps increase strictly.
+    pub(crate) reference_timestamp_s: f64,
+    /// The matches, as [`swarmpose_vision::frontend::match_frames`] gives them with the
+    /// reference as `dst`.
+    pub(crate) matches: FrameMatches,
+    /// The time they took, milliseconds.
+    pub(crate) match_ms: f64,
 }
 
 /// The last pose given out.
@@ -213,7 +231,30 @@ impl<D: Descriptor> Tracker<D> {
         frame: StereoFrame<D>,
         left: Option<GrayView<'_>>,
         timestamp_s: f64,
+        times: StageTimes,
+    ) -> Result<FrameResult, OdometryError> {
+        self.track_prematched(frame, left, timestamp_s, times, None)
+    }
+
+    /// What is needed to match a frame ahead of time ([`Prematched`]): the temporal
+    /// matching's configuration and the fewest stereo points of a frame that becomes the
+    /// reference; `None` when the matching is guided by the back end's prediction.
+    pub(crate) fn prematching(&self) -> Option<(TemporalConfig, usize)> {
+        self.temporal
+            .guided_radius_px
+            .is_none()
+            .then_some((self.temporal, self.min_inliers()))
+    }
+
+    /// [`Tracker::track`] with the frame's matches found ahead of time, used when they
+    /// are with the reference ([`Prematched`]); the result is the same.
+    pub(crate) fn track_prematched(
+        &mut self,
+        frame: StereoFrame<D>,
+        left: Option<GrayView<'_>>,
+        timestamp_s: f64,
         mut times: StageTimes,
+        prematched: Option<Prematched>,
     ) -> Result<FrameResult, OdometryError> {
         check_timestamp(timestamp_s, self.last.map(|l| l.timestamp_s))?;
         let index = self.next_index;
@@ -243,6 +284,7 @@ impl<D: Descriptor> Tracker<D> {
                     left,
                     index,
                     timestamp_s,
+                    prematched,
                 };
                 self.measure(now, &mut times, &mut counts)
             }

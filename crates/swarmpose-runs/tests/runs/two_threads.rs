@@ -183,3 +183,93 @@ fn baseline_kernels_give_the_dispatched_trajectory() {
         );
     }
 }
+
+/// The front thread matches each frame to the last one with enough points ahead of the
+/// back end; the back end takes those matches only when they are with its reference and
+/// the search is unguided. Results equal one thread's when frames in between have no
+/// texture (the reference is then an earlier frame), when the engine tracked frames
+/// before the run (its reference is not the run's), and with the guided search.
+#[test]
+fn matching_ahead_gives_one_threads_matches() {
+    let seq = SyntheticSequence::new(10, 0.8, 0.0);
+    let (w, h) = seq.image_size();
+    let blank = |i: usize| (3..5).contains(&i);
+    let frame = |i: usize| -> Result<OwnedStereoFrame, RunError> {
+        let pair = seq.frame(i).map_err(RunError::from)?;
+        let (left, right) = if blank(i) {
+            let mut flat = GrayImage::new(w, h);
+            flat.data.fill(128);
+            (flat.clone(), flat)
+        } else {
+            (pair.left, pair.right)
+        };
+        Ok(OwnedStereoFrame {
+            left,
+            right,
+            timestamp_s: i as f64 * 0.1,
+            load_ms: 0.0,
+        })
+    };
+    let mut guided = OdometryConfig::default();
+    guided.orb.temporal.guided_radius_px = Some(20.0);
+    let configs = [
+        ("default", OdometryConfig::default()),
+        ("frame to frame", OdometryConfig::default().with_window(0)),
+        ("guided", guided),
+    ];
+    for (name, config) in configs {
+        for before in [0, 2] {
+            let mut one = Odometry::new(camera_of(&seq), config.clone()).expect("engine");
+            let mut two = Odometry::new(camera_of(&seq), config.clone()).expect("engine");
+            let mut expected = Vec::new();
+            for i in 0..seq.len() {
+                let f = frame(i).expect("frame");
+                let r = one
+                    .track(swarmpose_odometry::StereoInput {
+                        left: f.left.view(),
+                        right: f.right.view(),
+                        timestamp_s: f.timestamp_s,
+                    })
+                    .expect("track");
+                expected.push(r);
+            }
+            // The first `before` frames one at a time, the rest on two threads.
+            let mut got = Vec::new();
+            for i in 0..before {
+                let f = frame(i).expect("frame");
+                let r = two
+                    .track(swarmpose_odometry::StereoInput {
+                        left: f.left.view(),
+                        right: f.right.view(),
+                        timestamp_s: f.timestamp_s,
+                    })
+                    .expect("track");
+                got.push(r);
+            }
+            let end = two
+                .run_two_threads((before..seq.len()).map(frame), &mut |r| {
+                    got.push(r.clone());
+                    ControlFlow::Continue(())
+                })
+                .expect("run");
+            assert!(matches!(end, RunEnd::Finished), "{name}");
+            assert_same(&expected, &got);
+            assert!(
+                expected[3..5].iter().all(|r| !r.status.is_tracked()),
+                "{name}: the blank frames are not tracked"
+            );
+            assert!(
+                expected[5].status.is_tracked(),
+                "{name}: {:?}",
+                expected[5].status
+            );
+            if name == "frame to frame" {
+                assert_eq!(
+                    expected[5].reference,
+                    Some(2),
+                    "{name}: matched across the gap"
+                );
+            }
+        }
+    }
+}
