@@ -98,8 +98,7 @@ impl AffineSteps {
     /// `contrast`.
     fn of(gx: &[f32; N * N], gy: &[f32; N * N], contrast: &[f32; N * N]) -> Self {
         let mut sd = [SVector::<f32, 6>::zeros(); N * N];
-        for (k, sd) in sd.iter_mut().enumerate() {
-            let (x, y) = coords(k);
+        for (k, (sd, &(x, y))) in sd.iter_mut().zip(&COORDS).enumerate() {
             let (gx, gy) = (gx[k], gy[k]);
             *sd = SVector::<f32, 6>::from([gx * x, gx * y, gy * x, gy * y, gx, gy]);
         }
@@ -114,10 +113,18 @@ impl AffineSteps {
     }
 }
 
-/// The offset from the patch centre of the aligned patch's sample `k` (row-major), pixels.
-fn coords(k: usize) -> (f32, f32) {
-    ((k % N) as f32 - R, (k / N) as f32 - R)
-}
+/// The offset from the patch centre of the aligned patch's sample `k` (row-major), pixels:
+/// `(k % N − R, k / N − R)`, small integers (exact), tabulated once rather than divided
+/// and converted per sample.
+const COORDS: [(f32, f32); N * N] = {
+    let mut c = [(0f32, 0f32); N * N];
+    let mut k = 0;
+    while k < N * N {
+        c[k] = ((k % N) as f32 - R, (k / N) as f32 - R);
+        k += 1;
+    }
+    c
+};
 
 impl PatchTemplate {
     /// The patch of `image` centred at `at` (pixels, sub-pixel allowed). `None` when the
@@ -246,8 +253,7 @@ impl PatchTemplate {
         let mut m = Matrix3::<f32>::new(1.0, 0.0, start.0, 0.0, 1.0, start.1, 0.0, 0.0, 1.0);
         let mut patch = [0f32; N * N];
         for _ in 0..limits.iterations {
-            for (k, sample) in patch.iter_mut().enumerate() {
-                let (x, y) = coords(k);
+            for (sample, &(x, y)) in patch.iter_mut().zip(&COORDS) {
                 let u = m[(0, 0)] * x + m[(0, 1)] * y + m[(0, 2)];
                 let v = m[(1, 0)] * x + m[(1, 1)] * y + m[(1, 2)];
                 *sample = sample_bilinear(image, u, v)?;
@@ -469,7 +475,7 @@ mod tests {
     ) -> Option<(f32, f32)> {
         let mut sd = [SVector::<f32, 6>::zeros(); N * N];
         for (k, sd) in sd.iter_mut().enumerate() {
-            let (x, y) = coords(k);
+            let (x, y) = ((k % N) as f32 - R, (k / N) as f32 - R);
             let (gx, gy) = (t.gx[k], t.gy[k]);
             *sd = SVector::<f32, 6>::from([gx * x, gx * y, gy * x, gy * y, gx, gy]);
         }
@@ -482,7 +488,7 @@ mod tests {
         let mut patch = [0f32; N * N];
         for _ in 0..limits.iterations {
             for (k, sample) in patch.iter_mut().enumerate() {
-                let (x, y) = coords(k);
+                let (x, y) = ((k % N) as f32 - R, (k / N) as f32 - R);
                 let u = m[(0, 0)] * x + m[(0, 1)] * y + m[(0, 2)];
                 let v = m[(1, 0)] * x + m[(1, 1)] * y + m[(1, 2)];
                 *sample = sample_bilinear(image, u, v)?;
