@@ -193,12 +193,24 @@ pub fn sample_bilinear(img: GrayView<'_>, x: f32, y: f32) -> Option<f32> {
         }
         return None;
     }
+    Some(sample_bilinear_inside(img, x, y))
+}
+
+/// [`sample_bilinear`] at `(x, y)` pixels that the caller has checked inside, with the
+/// four neighbours: `0 ≤ x < width − 1` and `0 ≤ y < height − 1`, where
+/// [`sample_bilinear`] gives `Some` of this (outside, a wrong value or a panic).
+#[inline(always)]
+#[must_use]
+pub(crate) fn sample_bilinear_inside(img: GrayView<'_>, x: f32, y: f32) -> f32 {
+    // As in `sample_bilinear`: x, y ≥ 0, so the integers `x as usize` gives.
+    let (tx, ty) = (x as i64, y as i64);
+    let (x0, y0) = (tx as usize, ty as usize);
     let (fx, fy) = (x - tx as f32, y - ty as f32);
     let i = y0 * img.width + x0;
     let d = img.data;
     let top = f32::from(d[i]) * (1.0 - fx) + f32::from(d[i + 1]) * fx;
     let bot = f32::from(d[i + img.width]) * (1.0 - fx) + f32::from(d[i + img.width + 1]) * fx;
-    Some(top * (1.0 - fy) + bot * fy)
+    top * (1.0 - fy) + bot * fy
 }
 
 #[must_use]
