@@ -74,7 +74,7 @@ impl Window {
     /// when it is not found again the track ends, and the feature begins a new one at
     /// its detected keypoint.
     fn continue_track(&mut self, t: u32, l: &Link, im: Images<'_>) -> (u32, StereoObservation) {
-        let found = self.templates.get(&t).and_then(|tpl| {
+        let found = self.templates.get_mut(&t).and_then(|tpl| {
             let limits = AlignLimits {
                 iterations: ALIGN_ITERATIONS,
                 max_move_px: ALIGN_MAX_MOVE_PX,

@@ -180,20 +180,37 @@ pub fn sample_bilinear(img: GrayView<'_>, x: f32, y: f32) -> Option<f32> {
     if !(x >= 0.0 && y >= 0.0) {
         return None;
     }
-    let (x0, y0) = (x as usize, y as usize);
+    // Through i64, whose conversions to and from f32 are cheaper than usize's: x, y ≥ 0
+    // (a NaN is refused above), so below 2^63 these are the integers `x as usize` gives,
+    // and non-negative; beyond, the position is outside any image (where `x as usize`
+    // could overflow `x0 + 1`).
+    let (tx, ty) = (x as i64, y as i64);
+    let (x0, y0) = (tx as usize, ty as usize);
     if x0 + 1 >= img.width || y0 + 1 >= img.height {
         // Exactly on the last row/column is still inside.
-        if x0 < img.width && y0 < img.height && x == x0 as f32 && y == y0 as f32 {
+        if x0 < img.width && y0 < img.height && x == tx as f32 && y == ty as f32 {
             return Some(f32::from(img.data[y0 * img.width + x0]));
         }
         return None;
     }
-    let (fx, fy) = (x - x0 as f32, y - y0 as f32);
+    Some(sample_bilinear_inside(img, x, y))
+}
+
+/// [`sample_bilinear`] at `(x, y)` pixels that the caller has checked inside, with the
+/// four neighbours: `0 ≤ x < width − 1` and `0 ≤ y < height − 1`, where
+/// [`sample_bilinear`] gives `Some` of this (outside, a wrong value or a panic).
+#[inline(always)]
+#[must_use]
+pub(crate) fn sample_bilinear_inside(img: GrayView<'_>, x: f32, y: f32) -> f32 {
+    // As in `sample_bilinear`: x, y ≥ 0, so the integers `x as usize` gives.
+    let (tx, ty) = (x as i64, y as i64);
+    let (x0, y0) = (tx as usize, ty as usize);
+    let (fx, fy) = (x - tx as f32, y - ty as f32);
     let i = y0 * img.width + x0;
     let d = img.data;
     let top = f32::from(d[i]) * (1.0 - fx) + f32::from(d[i + 1]) * fx;
     let bot = f32::from(d[i + img.width]) * (1.0 - fx) + f32::from(d[i + img.width + 1]) * fx;
-    Some(top * (1.0 - fy) + bot * fy)
+    top * (1.0 - fy) + bot * fy
 }
 
 #[must_use]
@@ -209,11 +226,14 @@ pub fn sample_patch(img: GrayView<'_>, x0: f32, y0: f32, n: usize, out: &mut [f3
     if !(x0 >= 0.0 && y0 >= 0.0) {
         return None;
     }
-    let (xi, yi) = (x0.floor() as usize, y0.floor() as usize);
+    // For x0, y0 ≥ 0 the floor is the truncation, and i64's conversions are cheaper than
+    // usize's (as in `sample_bilinear`): the same integers below 2^63.
+    let (tx, ty) = (x0 as i64, y0 as i64);
+    let (xi, yi) = (tx as usize, ty as usize);
     if xi + n >= img.width || yi + n >= img.height {
         return None;
     }
-    let (fx, fy) = (x0 - xi as f32, y0 - yi as f32);
+    let (fx, fy) = (x0 - tx as f32, y0 - ty as f32);
     let (w00, w10, w01, w11) = (
         (1.0 - fx) * (1.0 - fy),
         fx * (1.0 - fy),
@@ -399,6 +419,9 @@ fn blur5_in(img: GrayView<'_>, tmp: &mut Vec<u16>, out: &mut Vec<u8>) {
         }
     }
 }
+
+#[cfg(test)]
+mod sampling_bits;
 
 #[cfg(test)]
 mod tests {

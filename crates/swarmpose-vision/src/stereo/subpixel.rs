@@ -260,9 +260,10 @@ fn align_window(
     // The left window, and the right one with a row and a column around it for the
     // gradients.
     let mut lw = [0f32; MAX_SIDE * MAX_SIDE];
-    for (j, yy) in (y - r..=y + r).enumerate() {
-        for (i, xx) in (xl - r..=xl + r).enumerate() {
-            lw[j * n + i] = f32::from(left.data[yy * left.width + xx]);
+    for (out, yy) in lw.chunks_exact_mut(n).zip(y - r..=y + r) {
+        let row = &left.data[yy * left.width + xl - r..][..n];
+        for (o, &v) in out.iter_mut().zip(row) {
+            *o = f32::from(v);
         }
     }
     let mut rw = [0f32; MAX_SIDE * MAX_SIDE];
@@ -276,16 +277,22 @@ fn align_window(
             &mut rw,
         )?;
         // The derivatives of e = L - R(x - d, y + dy): gx by d, gy by dy.
+        // Pixel by pixel in rows, as `rw[k]`, `rw[k ± 1]`, `rw[k ± m]` with `k = (j + 1) m
+        // + i + 1`: row `j` of the left window against the right one's rows `j`, `j + 1`
+        // and `j + 2` (above, at and below the samples), zipped slices rather than indices
+        // (no bounds check per pixel).
         let (mut a, mut b, mut c, mut ex, mut ey) = (0f32, 0f32, 0f32, 0f32, 0f32);
-        for j in 0..n {
-            for i in 0..n {
-                let k = (j + 1) * m + i + 1;
-                let e = lw[j * n + i] - rw[k];
-                let gy = -0.5 * (rw[k + m] - rw[k - m]);
+        for (j, l) in lw.chunks_exact(n).take(n).enumerate() {
+            let above = &rw[j * m + 1..][..n];
+            let at = &rw[(j + 1) * m..][..m];
+            let below = &rw[(j + 2) * m + 1..][..n];
+            for (((&l, w), &up), &down) in l.iter().zip(at.windows(3)).zip(above).zip(below) {
+                let e = l - w[1];
+                let gy = -0.5 * (down - up);
                 c += gy * gy;
                 ey += gy * e;
                 if disparity_free {
-                    let gx = 0.5 * (rw[k + 1] - rw[k - 1]);
+                    let gx = 0.5 * (w[2] - w[0]);
                     a += gx * gx;
                     b += gx * gy;
                     ex += gx * e;
@@ -317,6 +324,9 @@ fn align_window(
     }
     Some((d, dy))
 }
+
+#[cfg(test)]
+mod window_bits;
 
 #[cfg(test)]
 mod tests {

@@ -15,7 +15,7 @@
 //! the centre by it.
 
 use crate::features::GrayView;
-use crate::image::{sample_bilinear, sample_patch};
+use crate::image::{sample_bilinear, sample_bilinear_inside, sample_patch};
 use nalgebra::{Matrix3, SMatrix, SVector};
 
 /// Half the side of the aligned patch, pixels (a 9x9 patch, as the frame-to-frame
@@ -46,7 +46,7 @@ pub struct AlignLimits {
 /// gradients (inverse compositional Lucas-Kanade). The alignments are blind to a change
 /// of exposure between the frames (`I ≈ g T + b`): their steps see only the part of the
 /// error outside the span of the template and the constant patch (`project_out`).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone)]
 pub struct PatchTemplate {
     values: [f32; N * N],
     gx: [f32; N * N],
@@ -61,7 +61,70 @@ pub struct PatchTemplate {
     ptensor: (f32, f32, f32),
     /// The template less its mean, of unit norm ([`unit_contrast`]).
     contrast: [f32; N * N],
+    /// The affine alignment's steepest-descent images and inverse Hessian, which depend
+    /// on the template alone: computed on its first [`PatchTemplate::align_affine`] and
+    /// kept while the template lives (a track's), not recomputed on every call; `None`
+    /// before.
+    affine: Option<AffineSteps>,
 }
+
+/// Equal templates: the same patch, gradients and their projections (whether the affine
+/// alignment's steps, which follow from them, have been computed yet does not count).
+impl PartialEq for PatchTemplate {
+    fn eq(&self, other: &Self) -> bool {
+        self.values == other.values
+            && self.gx == other.gx
+            && self.gy == other.gy
+            && self.tensor == other.tensor
+            && self.pgx == other.pgx
+            && self.pgy == other.pgy
+            && self.ptensor == other.ptensor
+            && self.contrast == other.contrast
+    }
+}
+
+/// The steps of [`PatchTemplate::align_affine`] that follow from the template alone.
+#[derive(Debug, Clone, PartialEq)]
+struct AffineSteps {
+    /// The steepest-descent images `∇T ∂W/∂p` with the exposure changes projected out.
+    sd: [SVector<f32, 6>; N * N],
+    /// The inverse of their Hessian `Σ sd sdᵀ`; `None` when it is singular (no affine
+    /// alignment).
+    h_inv: Option<SMatrix<f32, 6, 6>>,
+}
+
+impl AffineSteps {
+    /// The steps of the template whose gradients are `(gx, gy)` and whose contrast is
+    /// `contrast`.
+    fn of(gx: &[f32; N * N], gy: &[f32; N * N], contrast: &[f32; N * N]) -> Self {
+        let mut sd = [SVector::<f32, 6>::zeros(); N * N];
+        for (k, (sd, &(x, y))) in sd.iter_mut().zip(&COORDS).enumerate() {
+            let (gx, gy) = (gx[k], gy[k]);
+            *sd = SVector::<f32, 6>::from([gx * x, gx * y, gy * x, gy * y, gx, gy]);
+        }
+        project_out(&mut sd, contrast);
+        let h = sd
+            .iter()
+            .fold(SMatrix::<f32, 6, 6>::zeros(), |h, v| h + *v * v.transpose());
+        Self {
+            sd,
+            h_inv: h.try_inverse(),
+        }
+    }
+}
+
+/// The offset from the patch centre of the aligned patch's sample `k` (row-major), pixels:
+/// `(k % N − R, k / N − R)`, small integers (exact), tabulated once rather than divided
+/// and converted per sample.
+const COORDS: [(f32, f32); N * N] = {
+    let mut c = [(0f32, 0f32); N * N];
+    let mut k = 0;
+    while k < N * N {
+        c[k] = ((k % N) as f32 - R, (k / N) as f32 - R);
+        k += 1;
+    }
+    c
+};
 
 impl PatchTemplate {
     /// The patch of `image` centred at `at` (pixels, sub-pixel allowed). `None` when the
@@ -80,6 +143,7 @@ impl PatchTemplate {
             pgy: [0.0; N * N],
             ptensor: (0.0, 0.0, 0.0),
             contrast: [0.0; N * N],
+            affine: None,
         };
         let (mut hxx, mut hxy, mut hyy) = (0f32, 0f32, 0f32);
         for j in 0..N {
@@ -173,34 +237,49 @@ impl PatchTemplate {
     /// Lucas-Kanade on the 6 parameters of `x ↦ A x + t` about the patch centre), starting
     /// at `start` with `A = I`: the position of the centre, or `None` as for
     /// [`PatchTemplate::align`], or when the warp's area changes by more than a factor of 2.
+    /// The first call computes the steps that depend on the template alone and keeps them
+    /// in the template (hence `&mut self`); later calls reuse them.
     #[must_use]
     pub fn align_affine(
-        &self,
+        &mut self,
         image: GrayView<'_>,
         start: (f32, f32),
         limits: AlignLimits,
     ) -> Option<(f32, f32)> {
-        let coords = |k: usize| ((k % N) as f32 - R, (k / N) as f32 - R);
-        // The steepest-descent images `∇T ∂W/∂p`, once per call.
-        let mut sd = [SVector::<f32, 6>::zeros(); N * N];
-        for (k, sd) in sd.iter_mut().enumerate() {
-            let (x, y) = coords(k);
-            let (gx, gy) = (self.gx[k], self.gy[k]);
-            *sd = SVector::<f32, 6>::from([gx * x, gx * y, gy * x, gy * y, gx, gy]);
-        }
-        project_out(&mut sd, &self.contrast);
-        let h = sd
-            .iter()
-            .fold(SMatrix::<f32, 6, 6>::zeros(), |h, v| h + *v * v.transpose());
-        let h_inv = h.try_inverse()?;
+        let AffineSteps { sd, h_inv } = self
+            .affine
+            .get_or_insert_with(|| AffineSteps::of(&self.gx, &self.gy, &self.contrast));
+        let h_inv = h_inv.as_ref()?;
+        // Below these a sample has its four neighbours ([`sample_bilinear`]'s check); exact
+        // in f32 up to 2^24 pixels (larger images take the checked path).
+        let limited = (2..=1 << 24).contains(&image.width) && (2..=1 << 24).contains(&image.height);
+        let (u_max, v_max) = (
+            image.width.saturating_sub(1) as f32,
+            image.height.saturating_sub(1) as f32,
+        );
         let mut m = Matrix3::<f32>::new(1.0, 0.0, start.0, 0.0, 1.0, start.1, 0.0, 0.0, 1.0);
         let mut patch = [0f32; N * N];
+        let mut at = [(0f32, 0f32); N * N];
         for _ in 0..limits.iterations {
-            for (k, sample) in patch.iter_mut().enumerate() {
-                let (x, y) = coords(k);
+            // The positions, and whether all are inside (`&`, not `&&`: a NaN fails too):
+            // then [`sample_bilinear`] would give `Some` of each, which the samples are
+            // without its checks; otherwise it is called, and the first position outside
+            // ends the alignment.
+            let mut inside = limited;
+            for (p, &(x, y)) in at.iter_mut().zip(&COORDS) {
                 let u = m[(0, 0)] * x + m[(0, 1)] * y + m[(0, 2)];
                 let v = m[(1, 0)] * x + m[(1, 1)] * y + m[(1, 2)];
-                *sample = sample_bilinear(image, u, v)?;
+                inside &= (u >= 0.0) & (v >= 0.0) & (u < u_max) & (v < v_max);
+                *p = (u, v);
+            }
+            if inside {
+                for (sample, &(u, v)) in patch.iter_mut().zip(&at) {
+                    *sample = sample_bilinear_inside(image, u, v);
+                }
+            } else {
+                for (sample, &(u, v)) in patch.iter_mut().zip(&at) {
+                    *sample = sample_bilinear(image, u, v)?;
+                }
             }
             let mut b = SVector::<f32, 6>::zeros();
             for (k, i) in patch.iter().enumerate() {
@@ -295,14 +374,17 @@ fn ncc(a: &[f32; N * N], b: &[f32; N * N]) -> f32 {
 }
 
 #[cfg(test)]
+mod affine_bits;
+
+#[cfg(test)]
 mod tests {
     use super::*;
 
     /// Width and height of the test images, pixels.
-    const W: usize = 80;
-    const H: usize = 60;
+    pub(super) const W: usize = 80;
+    pub(super) const H: usize = 60;
 
-    fn view(data: &[u8]) -> GrayView<'_> {
+    pub(super) fn view(data: &[u8]) -> GrayView<'_> {
         GrayView {
             width: W,
             height: H,
@@ -311,7 +393,7 @@ mod tests {
     }
 
     /// A textured image whose pixel `(x, y)` shows the pattern at `source(x, y)`.
-    fn warped(source: impl Fn(f32, f32) -> (f32, f32)) -> Vec<u8> {
+    pub(super) fn warped(source: impl Fn(f32, f32) -> (f32, f32)) -> Vec<u8> {
         let pattern = |(x, y): (f32, f32)| {
             128.0 + 60.0 * (0.31 * x).sin() * (0.23 * y).cos() + 30.0 * (0.17 * (x + y)).sin()
         };
@@ -322,12 +404,12 @@ mod tests {
     }
 
     /// The pattern shifted by `shift` pixels.
-    fn image(shift: (f32, f32)) -> Vec<u8> {
+    pub(super) fn image(shift: (f32, f32)) -> Vec<u8> {
         warped(|x, y| (x - shift.0, y - shift.1))
     }
 
     /// Alignment limits with the cross-correlation checked at 0.9.
-    fn limits(iterations: usize, max_move_px: f32) -> AlignLimits {
+    pub(super) fn limits(iterations: usize, max_move_px: f32) -> AlignLimits {
         AlignLimits {
             iterations,
             max_move_px,
@@ -362,7 +444,7 @@ mod tests {
     /// exposure out of their steps.
     #[test]
     fn an_exposure_change_does_not_move_the_patch() {
-        let t = centre_template();
+        let mut t = centre_template();
         let shift = (1.37f32, -0.62f32);
         for (gain, offset) in [(1.15f32, -20.0f32), (0.7, 15.0)] {
             let img: Vec<u8> = image(shift)

@@ -1,0 +1,137 @@
+//! [`super::align_window`] against its definition with indices (before its sums ran over
+//! zipped rows): bit for bit.
+
+use super::{PairWindow, align_window};
+use crate::features::GrayView;
+use crate::image::sample_patch;
+use crate::test_noise::Lcg;
+
+/// [`align_window`] with every sample found by its index.
+fn by_definition(
+    window: PairWindow<'_>,
+    d0: f32,
+    iterations: usize,
+    disparity_free: bool,
+) -> Option<(f32, f32)> {
+    let PairWindow {
+        left,
+        right,
+        xl,
+        y,
+        r,
+    } = window;
+    let (n, m) = (2 * r + 1, 2 * r + 3);
+    if m > 13
+        || y < r + 4
+        || y + r + 4 >= left.height.min(right.height)
+        || xl < r
+        || xl + r >= left.width
+    {
+        return None;
+    }
+    let mut lw = [0f32; 169];
+    for (j, yy) in (y - r..=y + r).enumerate() {
+        for (i, xx) in (xl - r..=xl + r).enumerate() {
+            lw[j * n + i] = f32::from(left.data[yy * left.width + xx]);
+        }
+    }
+    let mut rw = [0f32; 169];
+    let (mut d, mut dy) = (d0, 0f32);
+    for _ in 0..iterations {
+        let (x0, y0) = (
+            xl as f32 - d - r as f32 - 1.0,
+            y as f32 + dy - r as f32 - 1.0,
+        );
+        sample_patch(right, x0, y0, m, &mut rw)?;
+        let (mut a, mut b, mut c, mut ex, mut ey) = (0f32, 0f32, 0f32, 0f32, 0f32);
+        for j in 0..n {
+            for i in 0..n {
+                let k = (j + 1) * m + i + 1;
+                let e = lw[j * n + i] - rw[k];
+                let gy = -0.5 * (rw[k + m] - rw[k - m]);
+                c += gy * gy;
+                ey += gy * e;
+                if disparity_free {
+                    let gx = 0.5 * (rw[k + 1] - rw[k - 1]);
+                    a += gx * gx;
+                    b += gx * gy;
+                    ex += gx * e;
+                }
+            }
+        }
+        let (sd, sy) = if disparity_free {
+            let det = a * c - b * b;
+            if !(det > 1e-6 * (a * c).max(1e-3) && a >= 1e-3) {
+                return None;
+            }
+            (-(c * ex - b * ey) / det, -(a * ey - b * ex) / det)
+        } else {
+            if c < 1e-3 {
+                return None;
+            }
+            (0.0, -ey / c)
+        };
+        d += sd;
+        dy += sy;
+        if (d - d0).abs() > 1.0 || dy.abs() > 2.0 {
+            return None;
+        }
+        if sd.abs() < 1e-3 && sy.abs() < 1e-3 {
+            break;
+        }
+    }
+    Some((d, dy))
+}
+
+/// Textured pairs with noise, every window half side 1 to 6 (6 is refused), windows all
+/// over the image and at its borders, disparities near the truth and off it: the same
+/// `(d, dy)`, bit for bit, or the same refusal, for the disparity free and fixed.
+#[test]
+fn align_window_is_its_definition_bit_for_bit() {
+    let (w, h) = (96usize, 40usize);
+    let mut g = Lcg(34);
+    let f = |x: f32, y: f32| {
+        128.0 + 60.0 * ((x + y) * 0.5).sin() + 25.0 * (x * 0.31).cos() * (y * 0.23).sin()
+    };
+    let mut image = |dx: f32, dy: f32| -> Vec<u8> {
+        (0..w * h)
+            .map(|i| {
+                let noise = (g.next_u32() >> 29) as f32;
+                (f((i % w) as f32 + dx, (i / w) as f32 - dy) + noise).round() as u8
+            })
+            .collect()
+    };
+    let (left, right) = (image(0.0, 0.0), image(6.6, 0.4));
+    let view = |data| GrayView {
+        width: w,
+        height: h,
+        data,
+    };
+    let mut found = 0;
+    for r in 1..=6 {
+        for y in (0..h).step_by(3) {
+            for xl in (0..w).step_by(5) {
+                let window = PairWindow {
+                    left: view(&left),
+                    right: view(&right),
+                    xl,
+                    y,
+                    r,
+                };
+                for d0 in [6.6f32, 6.0, 7.3, 0.2, 30.0] {
+                    for free in [true, false] {
+                        let got = align_window(window, d0, 8, free);
+                        assert_eq!(
+                            got.map(|(d, dy)| (d.to_bits(), dy.to_bits())),
+                            by_definition(window, d0, 8, free)
+                                .map(|(d, dy)| (d.to_bits(), dy.to_bits())),
+                            "r {r}, ({xl}, {y}), d0 {d0}, free {free}"
+                        );
+                        found += usize::from(got.is_some());
+                    }
+                }
+            }
+        }
+    }
+    assert!(found > 2_000, "{found}");
+}
