@@ -114,17 +114,36 @@ pub(crate) fn tr_mul<const C1: usize, const C2: usize>(
     out
 }
 
+/// `acc += t b`, the same bits as `*acc += t * b`.
+// The index form: `iter_mut().enumerate()` compiled to a fifth more instructions in the
+// window's system (callgrind, issue 34).
+#[allow(clippy::needless_range_loop)]
+#[inline(always)]
+pub(crate) fn add_product<const R: usize, const C: usize>(
+    acc: &mut SMatrix<f64, R, C>,
+    t: &SMatrix<f64, R, 3>,
+    b: &SMatrix<f64, 3, C>,
+) {
+    let (t, b, acc) = (&t.data.0, &b.data.0, &mut acc.data.0);
+    for j in 0..C {
+        for i in 0..R {
+            acc[j][i] += dot(t, i, &b[j]);
+        }
+    }
+}
+
 /// `acc -= t b`, the same bits as `*acc -= t * b`.
+#[allow(clippy::needless_range_loop)] // the index form, as in `add_product`
 #[inline(always)]
 pub(crate) fn sub_product<const R: usize, const C: usize>(
     acc: &mut SMatrix<f64, R, C>,
     t: &SMatrix<f64, R, 3>,
     b: &SMatrix<f64, 3, C>,
 ) {
-    let t = &t.data.0;
-    for (acc_j, b_j) in acc.data.0.iter_mut().zip(&b.data.0) {
-        for (i, v) in acc_j.iter_mut().enumerate() {
-            *v -= dot(t, i, b_j);
+    let (t, b, acc) = (&t.data.0, &b.data.0, &mut acc.data.0);
+    for j in 0..C {
+        for i in 0..R {
+            acc[j][i] -= dot(t, i, &b[j]);
         }
     }
 }

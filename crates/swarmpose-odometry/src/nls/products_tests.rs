@@ -91,7 +91,11 @@ fn sub_product_is_nalgebra_bit_for_bit() {
         let mut want = acc;
         want -= t * b;
         sub_product(&mut acc, &t, &b);
-        same_bits(&acc, &want)
+        let mut acc2: SMatrix<f64, 6, 6> = random(rng);
+        let mut want2 = acc2;
+        want2 += t * b;
+        add_product(&mut acc2, &t, &b);
+        same_bits(&acc, &want) && same_bits(&acc2, &want2)
     });
     assert_eq!(ok, 20_000);
 }
