@@ -8,7 +8,7 @@ use super::*;
 
 /// A random entry over many magnitudes, with exact zeros of both signs now and then
 /// (the sign of a zero sum is where a reordering would show).
-pub(crate) fn entry(rng: &mut ChaCha8Rng) -> f64 {
+fn entry(rng: &mut ChaCha8Rng) -> f64 {
     match rng.random_range(0..10) {
         0 => 0.0,
         1 => -0.0,

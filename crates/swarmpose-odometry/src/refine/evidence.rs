@@ -77,17 +77,57 @@ impl Reduced {
     /// The same bits as nalgebra's `pose.transpose() * pose * w` and the like, with the
     /// symmetric blocks computed on one triangle and mirrored ([`products`]).
     pub fn add_direct(&mut self, w: f64, pose: &Matrix3x6, corr: &Matrix3xK, e: &Vector3<f64>) {
-        products::add_gram(&mut self.pose_pose, pose, w);
-        products::add_cross(&mut self.pose_correction, pose, corr, w);
+        if !self.zero_pose_terms_change_nothing(w, pose, e, Some(corr)) {
+            products::add_gram(&mut self.pose_pose, pose, w);
+            products::add_cross(&mut self.pose_correction, pose, corr, w);
+            products::add_cross(&mut self.pose_gradient, pose, e, w);
+        }
         products::add_gram(&mut self.correction_correction, corr, w);
-        products::add_cross(&mut self.pose_gradient, pose, e, w);
         products::add_cross(&mut self.correction_gradient, corr, e, w);
     }
 
     /// [`Reduced::add_direct`] for the pose blocks only (the correction's unchanged).
     pub fn add_direct_pose(&mut self, w: f64, pose: &Matrix3x6, e: &Vector3<f64>) {
+        if self.zero_pose_terms_change_nothing(w, pose, e, None) {
+            return;
+        }
         products::add_gram(&mut self.pose_pose, pose, w);
         products::add_cross(&mut self.pose_gradient, pose, e, w);
+    }
+
+    /// Whether the pose terms of a measurement with a zero pose Jacobian (frame A's) may
+    /// be skipped without changing a bit: each of their entries is then a sum of
+    /// products with a zero factor, `±0` when the other factors (`w`, `e`, `corr`) are
+    /// finite, and adding `±0` changes no entry of the blocks but a `−0` (into `+0`).
+    fn zero_pose_terms_change_nothing(
+        &self,
+        w: f64,
+        pose: &Matrix3x6,
+        e: &Vector3<f64>,
+        corr: Option<&Matrix3xK>,
+    ) -> bool {
+        // Without early exits: these loops vectorise.
+        let all_zero = |m: &[f64]| m.iter().fold(0_u64, |a, v| a | (v.to_bits() << 1)) == 0;
+        let finite = |m: &[f64]| m.iter().fold(true, |a, v| a & v.is_finite());
+        let negative_zero = |m: &[f64]| {
+            let neg = (-0.0_f64).to_bits();
+            m.iter().fold(false, |a, v| a | (v.to_bits() == neg))
+        };
+        if !(all_zero(pose.as_slice()) && w.is_finite() && finite(e.as_slice())) {
+            return false;
+        }
+        match corr {
+            Some(c) => {
+                finite(c.as_slice())
+                    && !(negative_zero(self.pose_pose.as_slice())
+                        | negative_zero(self.pose_gradient.as_slice())
+                        | negative_zero(self.pose_correction.as_slice()))
+            }
+            None => {
+                !(negative_zero(self.pose_pose.as_slice())
+                    | negative_zero(self.pose_gradient.as_slice()))
+            }
+        }
     }
 
     /// [`Reduced::eliminate`] for the pose blocks only (the correction's unchanged).
@@ -170,3 +210,7 @@ impl QuadraticCost {
         }
     }
 }
+
+#[cfg(test)]
+#[path = "evidence_tests.rs"]
+mod tests;
