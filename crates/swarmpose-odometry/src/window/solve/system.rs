@@ -135,7 +135,7 @@ fn add_track(
         // nalgebra's products bit for bit, without temporaries ([`products`]).
         add_product(&mut point.hpp, &dpw, &j.d_point);
         add_product(&mut point.gp, &dpw, &j.residual);
-        point.hpc += dpw * j.d_correction;
+        add_product(&mut point.hpc, &dpw, &j.d_correction);
         let Some((dj, da)) = j.poses else {
             continue;
         };
@@ -147,7 +147,7 @@ fn add_track(
             let hpx = (&mut sc.hpx, &mut sc.hgx);
             add_hpx(hpx, point.start, v1, (&(dpw * b1), &score));
             sc.gradient[v1] += score;
-            sc.pose_calibration[v1] += b1w * j.d_correction;
+            add_product(&mut sc.pose_calibration[v1], &b1w, &j.d_correction);
             for (v2, b2) in &pair {
                 let Some(v2) = *v2 else { continue };
                 add_product(&mut sc.blocks[v1 * m + v2], &b1w, b2);
