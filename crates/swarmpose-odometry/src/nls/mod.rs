@@ -7,6 +7,7 @@
 //! | robust loss (Huber) | [`robust`] |
 //! | the Levenberg-Marquardt damping loop, driven by a small trait | [`lm`] |
 //! | points eliminated by their Schur complements, back-substitution | [`schur`] |
+//! | small products of the normal equations, nalgebra's arithmetic with fewer operations | [`products`] |
 //!
 //! Each solver keeps its own residuals, normal equations and stopping test (the
 //! refinement's reduced system is one 6x6 pose block per fold; the window's is dense over
@@ -23,5 +24,6 @@
 
 pub(crate) mod lm;
 pub(crate) mod pose;
+pub(crate) mod products;
 pub(crate) mod robust;
 pub(crate) mod schur;

@@ -19,7 +19,8 @@ pub(crate) fn through_point<const C: usize>(
     h_px: &SMatrix<f64, 3, C>,
     pp_inv: &Matrix3<f64>,
 ) -> SMatrix<f64, C, 3> {
-    h_px.transpose() * pp_inv
+    // The same bits as `h_px.transpose() * pp_inv`, without the transposed copy.
+    super::products::tr_mul(h_px, pp_inv)
 }
 
 /// The point `p` moved by its back-substituted step, `p − H_pp⁻¹ (g_p + H_px δx)`, with

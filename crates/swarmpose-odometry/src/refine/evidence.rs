@@ -7,6 +7,7 @@
 use nalgebra::{Matrix3, Matrix6, SMatrix, SVector, Vector3, Vector6};
 
 use super::model::{CALIBRATION_TERMS, Matrix3x6, Matrix3xK};
+use crate::nls::products;
 
 /// K, the number of calibration terms.
 const K: usize = CALIBRATION_TERMS;
@@ -72,36 +73,79 @@ pub struct PointBlocks {
 impl Reduced {
     /// Adds the direct (pose, correction) terms of one measurement, `J_xᵀ w J_y` and
     /// `J_xᵀ w e`.
+    ///
+    /// The same bits as nalgebra's `pose.transpose() * pose * w` and the like, with the
+    /// symmetric blocks computed on one triangle and mirrored ([`products`]).
     pub fn add_direct(&mut self, w: f64, pose: &Matrix3x6, corr: &Matrix3xK, e: &Vector3<f64>) {
-        self.pose_pose += pose.transpose() * pose * w;
-        self.pose_correction += pose.transpose() * corr * w;
-        self.correction_correction += corr.transpose() * corr * w;
-        self.pose_gradient += pose.transpose() * e * w;
-        self.correction_gradient += corr.transpose() * e * w;
+        if !self.zero_pose_terms_change_nothing(w, pose, e, Some(corr)) {
+            products::add_gram(&mut self.pose_pose, pose, w);
+            products::add_cross(&mut self.pose_correction, pose, corr, w);
+            products::add_cross(&mut self.pose_gradient, pose, e, w);
+        }
+        products::add_gram(&mut self.correction_correction, corr, w);
+        products::add_cross(&mut self.correction_gradient, corr, e, w);
     }
 
     /// [`Reduced::add_direct`] for the pose blocks only (the correction's unchanged).
     pub fn add_direct_pose(&mut self, w: f64, pose: &Matrix3x6, e: &Vector3<f64>) {
-        self.pose_pose += pose.transpose() * pose * w;
-        self.pose_gradient += pose.transpose() * e * w;
+        if self.zero_pose_terms_change_nothing(w, pose, e, None) {
+            return;
+        }
+        products::add_gram(&mut self.pose_pose, pose, w);
+        products::add_cross(&mut self.pose_gradient, pose, e, w);
+    }
+
+    /// Whether the pose terms of a measurement with a zero pose Jacobian (frame A's) may
+    /// be skipped without changing a bit: each of their entries is then a sum of
+    /// products with a zero factor, `±0` when the other factors (`w`, `e`, `corr`) are
+    /// finite, and adding `±0` changes no entry of the blocks but a `−0` (into `+0`).
+    fn zero_pose_terms_change_nothing(
+        &self,
+        w: f64,
+        pose: &Matrix3x6,
+        e: &Vector3<f64>,
+        corr: Option<&Matrix3xK>,
+    ) -> bool {
+        // Without early exits: these loops vectorise.
+        let all_zero = |m: &[f64]| m.iter().fold(0_u64, |a, v| a | (v.to_bits() << 1)) == 0;
+        let finite = |m: &[f64]| m.iter().fold(true, |a, v| a & v.is_finite());
+        let negative_zero = |m: &[f64]| {
+            let neg = (-0.0_f64).to_bits();
+            m.iter().fold(false, |a, v| a | (v.to_bits() == neg))
+        };
+        if !(all_zero(pose.as_slice()) && w.is_finite() && finite(e.as_slice())) {
+            return false;
+        }
+        match corr {
+            Some(c) => {
+                finite(c.as_slice())
+                    && !(negative_zero(self.pose_pose.as_slice())
+                        | negative_zero(self.pose_gradient.as_slice())
+                        | negative_zero(self.pose_correction.as_slice()))
+            }
+            None => {
+                !(negative_zero(self.pose_pose.as_slice())
+                    | negative_zero(self.pose_gradient.as_slice()))
+            }
+        }
     }
 
     /// [`Reduced::eliminate`] for the pose blocks only (the correction's unchanged).
     pub fn eliminate_pose(&mut self, b: &PointBlocks) {
-        let tp = b.pose.transpose() * b.pp_inv;
-        self.pose_pose -= tp * b.pose;
-        self.pose_gradient -= tp * b.gradient;
+        let tp = products::tr_mul(&b.pose, &b.pp_inv);
+        products::sub_product(&mut self.pose_pose, &tp, &b.pose);
+        products::sub_product(&mut self.pose_gradient, &tp, &b.gradient);
     }
 
     /// Eliminates one point: subtracts `H_xp H_pp⁻¹ H_py` and `H_xp H_pp⁻¹ g_p`.
     pub fn eliminate(&mut self, b: &PointBlocks) {
-        let tp = b.pose.transpose() * b.pp_inv;
-        let cp = b.correction.transpose() * b.pp_inv;
-        self.pose_pose -= tp * b.pose;
-        self.pose_correction -= tp * b.correction;
-        self.correction_correction -= cp * b.correction;
-        self.pose_gradient -= tp * b.gradient;
-        self.correction_gradient -= cp * b.gradient;
+        let tp = products::tr_mul(&b.pose, &b.pp_inv);
+        let cp = products::tr_mul(&b.correction, &b.pp_inv);
+        products::sub_product(&mut self.pose_pose, &tp, &b.pose);
+        products::sub_product(&mut self.pose_correction, &tp, &b.correction);
+        products::sub_product(&mut self.correction_correction, &cp, &b.correction);
+        products::sub_product(&mut self.pose_gradient, &tp, &b.gradient);
+        products::sub_product(&mut self.correction_gradient, &cp, &b.gradient);
     }
 
     /// Eliminates the pose too: the Hessian `I = H_cc − H_cT H_TT⁻¹ H_Tc` and gradient
@@ -166,3 +210,7 @@ impl QuadraticCost {
         }
     }
 }
+
+#[cfg(test)]
+#[path = "evidence_tests.rs"]
+mod tests;

@@ -32,6 +32,7 @@ use model::{Linearized, Matrix3xK, Parts, StereoModel, StereoObservation};
 
 use crate::nls::lm::{Damping, LeastSquares};
 use crate::nls::pose::Pose;
+use crate::nls::products;
 use crate::nls::robust::{huber_cost, huber_weight};
 use crate::nls::schur::{back_substitute, point_inverse};
 
@@ -251,19 +252,19 @@ impl Problem<'_> {
             )?;
             let wa = huber_weight(la.residual.norm_squared(), k);
             let wb = huber_weight(lb.residual.norm_squared(), k);
-            let hpp =
-                la.d_point.transpose() * la.d_point * wa + lb.d_point.transpose() * lb.d_point * wb;
+            // The nalgebra expressions `aᵀ b w + …`, bit for bit ([`products`]).
+            let hpp = products::gram(&la.d_point, wa) + products::gram(&lb.d_point, wb);
             let b = PointBlocks {
                 pp_inv: point_inverse(&hpp)?,
-                pose: lb.d_point.transpose() * lb.d_pose * wb,
+                pose: products::cross(&lb.d_point, &lb.d_pose, wb),
                 correction: if all {
-                    la.d_point.transpose() * la.d_correction * wa
-                        + lb.d_point.transpose() * lb.d_correction * wb
+                    products::cross(&la.d_point, &la.d_correction, wa)
+                        + products::cross(&lb.d_point, &lb.d_correction, wb)
                 } else {
                     Matrix3xK::zeros()
                 },
-                gradient: la.d_point.transpose() * la.residual * wa
-                    + lb.d_point.transpose() * lb.residual * wb,
+                gradient: products::cross(&la.d_point, &la.residual, wa)
+                    + products::cross(&lb.d_point, &lb.residual, wb),
             };
             let fold = folds.map_or(0, |f| usize::from(f[i] & 1));
             let r = &mut reduced[fold];

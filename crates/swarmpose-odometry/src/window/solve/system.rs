@@ -6,6 +6,7 @@ use nalgebra::{DMatrix, DVector, Matrix3, Matrix6, SMatrix, Vector3, Vector6};
 
 use super::{Eliminated, Scratch};
 use crate::nls::pose::Pose;
+use crate::nls::products::{add_product, sub_product};
 use crate::nls::robust::huber;
 use crate::nls::schur::{point_inverse, through_point};
 use crate::refine::evidence::Matrix6xK;
@@ -131,9 +132,10 @@ fn add_track(
         sc.chi2 += w * r2;
         sc.cost += rho;
         let dpw = j.d_point.transpose() * w;
-        point.hpp += dpw * j.d_point;
-        point.gp += dpw * j.residual;
-        point.hpc += dpw * j.d_correction;
+        // nalgebra's products bit for bit, without temporaries ([`products`]).
+        add_product(&mut point.hpp, &dpw, &j.d_point);
+        add_product(&mut point.gp, &dpw, &j.residual);
+        add_product(&mut point.hpc, &dpw, &j.d_correction);
         let Some((dj, da)) = j.poses else {
             continue;
         };
@@ -145,10 +147,10 @@ fn add_track(
             let hpx = (&mut sc.hpx, &mut sc.hgx);
             add_hpx(hpx, point.start, v1, (&(dpw * b1), &score));
             sc.gradient[v1] += score;
-            sc.pose_calibration[v1] += b1w * j.d_correction;
+            add_product(&mut sc.pose_calibration[v1], &b1w, &j.d_correction);
             for (v2, b2) in &pair {
                 let Some(v2) = *v2 else { continue };
-                sc.blocks[v1 * m + v2] += b1w * b2;
+                add_product(&mut sc.blocks[v1 * m + v2], &b1w, b2);
             }
         }
     }
@@ -170,11 +172,11 @@ fn eliminate_point(point: PointSums, m: usize, sc: &mut Scratch) -> Option<()> {
     for i1 in start..end {
         let (v1, b1) = sc.hpx[i1];
         let t1 = through_point(&b1, &hpp_inv);
-        sc.gradient[v1] -= t1 * gp;
-        sc.pose_calibration[v1] -= t1 * hpc;
+        sub_product(&mut sc.gradient[v1], &t1, &gp);
+        sub_product(&mut sc.pose_calibration[v1], &t1, &hpc);
         for i2 in start..end {
             let (v2, b2) = &sc.hpx[i2];
-            sc.blocks[v1 * m + v2] -= t1 * b2;
+            sub_product(&mut sc.blocks[v1 * m + v2], &t1, b2);
         }
     }
     sc.elim.push(Eliminated {

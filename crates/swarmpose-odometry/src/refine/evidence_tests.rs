@@ -1,0 +1,140 @@
+//! [`Reduced`]'s products against the nalgebra expressions they replace, bit for bit.
+
+use nalgebra::{SMatrix, Vector3};
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use super::*;
+use crate::nls::products::tests::{random, same_bits};
+
+/// The blocks as they were computed before issue 34 (nalgebra's expressions).
+fn add_direct_nalgebra(
+    r: &mut Reduced,
+    w: f64,
+    pose: &Matrix3x6,
+    corr: &Matrix3xK,
+    e: &Vector3<f64>,
+) {
+    r.pose_pose += pose.transpose() * pose * w;
+    r.pose_correction += pose.transpose() * corr * w;
+    r.correction_correction += corr.transpose() * corr * w;
+    r.pose_gradient += pose.transpose() * e * w;
+    r.correction_gradient += corr.transpose() * e * w;
+}
+
+fn eliminate_nalgebra(r: &mut Reduced, b: &PointBlocks) {
+    let tp = b.pose.transpose() * b.pp_inv;
+    let cp = b.correction.transpose() * b.pp_inv;
+    r.pose_pose -= tp * b.pose;
+    r.pose_correction -= tp * b.correction;
+    r.correction_correction -= cp * b.correction;
+    r.pose_gradient -= tp * b.gradient;
+    r.correction_gradient -= cp * b.gradient;
+}
+
+fn same(a: &Reduced, b: &Reduced) -> bool {
+    same_bits(&a.pose_pose, &b.pose_pose)
+        && same_bits(&a.pose_correction, &b.pose_correction)
+        && same_bits(&a.correction_correction, &b.correction_correction)
+        && same_bits(&a.pose_gradient, &b.pose_gradient)
+        && same_bits(&a.correction_gradient, &b.correction_gradient)
+}
+
+/// Zeros of either sign, or (now and then) random entries.
+fn zero_or_random<const R: usize, const C: usize>(rng: &mut ChaCha8Rng) -> SMatrix<f64, R, C> {
+    if rng.random_range(0..8) == 0 {
+        random(rng)
+    } else {
+        SMatrix::from_fn(|_, _| {
+            if rng.random_range(0..2) == 0 {
+                0.0
+            } else {
+                -0.0
+            }
+        })
+    }
+}
+
+fn random_reduced(rng: &mut ChaCha8Rng) -> Reduced {
+    Reduced {
+        pose_pose: random(rng),
+        pose_correction: random(rng),
+        correction_correction: random(rng),
+        pose_gradient: random(rng),
+        correction_gradient: random(rng),
+    }
+}
+
+#[test]
+fn add_direct_and_eliminate_are_nalgebras_bit_for_bit() {
+    let mut rng = ChaCha8Rng::seed_from_u64(34);
+    let mut skipped_zero_jacobians = 0;
+    for trial in 0..20_000 {
+        let mut got = random_reduced(&mut rng);
+        // A fresh system, as each pair's starts, now and then.
+        if trial % 5 == 0 {
+            got = Reduced::default();
+        }
+        let mut want = got;
+        // Mostly frame A's zero pose Jacobian, with now and then a factor not finite.
+        let pose: Matrix3x6 = zero_or_random(&mut rng);
+        let corr: Matrix3xK = random(&mut rng);
+        let mut e: Vector3<f64> = random(&mut rng);
+        let w = match rng.random_range(0..100) {
+            0 => f64::INFINITY,
+            1 => f64::NAN,
+            _ => rng.random_range(0.0..1.0),
+        };
+        if rng.random_range(0..100) == 0 {
+            e[1] = f64::NEG_INFINITY;
+        }
+        skipped_zero_jacobians +=
+            usize::from(got.zero_pose_terms_change_nothing(w, &pose, &e, None));
+        let mut got_pose = got;
+        let mut want_pose = want;
+        got.add_direct(w, &pose, &corr, &e);
+        add_direct_nalgebra(&mut want, w, &pose, &corr, &e);
+        got_pose.add_direct_pose(w, &pose, &e);
+        want_pose.pose_pose += pose.transpose() * pose * w;
+        want_pose.pose_gradient += pose.transpose() * e * w;
+        assert!(same(&got, &want), "add_direct, trial {trial}");
+        assert!(
+            same(&got_pose, &want_pose),
+            "add_direct_pose, trial {trial}"
+        );
+
+        let b = PointBlocks {
+            pp_inv: random::<3, 3>(&mut rng),
+            pose: random(&mut rng),
+            correction: random(&mut rng),
+            gradient: random(&mut rng),
+        };
+        got.eliminate(&b);
+        eliminate_nalgebra(&mut want, &b);
+        assert!(same(&got, &want), "eliminate, trial {trial}");
+        got_pose.eliminate_pose(&b);
+        want_pose.pose_pose -= b.pose.transpose() * b.pp_inv * b.pose;
+        want_pose.pose_gradient -= b.pose.transpose() * b.pp_inv * b.gradient;
+        assert!(same(&got_pose, &want_pose), "eliminate_pose, trial {trial}");
+    }
+    // Both ways were taken: skipped and summed.
+    assert!(
+        (1_000..19_000).contains(&skipped_zero_jacobians),
+        "{skipped_zero_jacobians}"
+    );
+}
+
+/// A negative zero in the blocks is where skipping zero terms would show: `−0 + +0` is
+/// `+0`. The check refuses to skip then.
+#[test]
+fn a_negative_zero_block_entry_is_not_skipped() {
+    let mut r = Reduced::default();
+    r.pose_pose[(2, 3)] = -0.0;
+    let (pose, e) = (Matrix3x6::zeros(), Vector3::new(1.0, -2.0, 3.0));
+    assert!(!r.zero_pose_terms_change_nothing(0.5, &pose, &e, None));
+    let mut want = r;
+    want.pose_pose += pose.transpose() * pose * 0.5;
+    r.add_direct_pose(0.5, &pose, &e);
+    assert_eq!(want.pose_pose[(2, 3)].to_bits(), 0.0_f64.to_bits());
+    assert!(same_bits(&r.pose_pose, &want.pose_pose));
+}
