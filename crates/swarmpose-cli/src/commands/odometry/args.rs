@@ -148,12 +148,14 @@ pub struct OdometryArgs {
     #[arg(long)]
     pub quiet: bool,
 
-    /// Threads: 1, or 2 to load and run the front end of the next frame while the back
-    /// end works on this one (the same trajectory; stereo sequences only).
+    /// Threads: 1, or 2 to load the next frame, run its front end and match it to this
+    /// one while the back end works on this one (the same trajectory; stereo sequences
+    /// only).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u8).range(1..=2),
           help = with_default(
-              "Threads: 1, or 2 to load and run the front end of the next frame while the \
-               back end works on this one (the same trajectory; stereo sequences only)",
+              "Threads: 1, or 2 to load the next frame, run its front end and match it to \
+               this one while the back end works on this one (the same trajectory; stereo \
+               sequences only)",
               RunConfig::default().threads))]
     pub threads: Option<u8>,
 
