@@ -163,7 +163,9 @@ fn moved(pose: &Pose, xi: &Vector6<f64>) -> Pose {
 }
 
 /// The two measurements of one point, linearised (the Jacobians of `parts`), or `None`
-/// if B cannot see it.
+/// if B cannot see it. Inlined into each caller, where `parts` is a constant: the
+/// Jacobians it leaves zero are then neither written nor copied (issue 34).
+#[inline(always)]
 fn linearize(
     model: &StereoModel,
     pose: &Pose,
@@ -228,7 +230,9 @@ impl Problem<'_> {
     /// The reduced system at `pose`, with each point's blocks for back-substitution;
     /// `None` if a point left B's view or a block is singular. With `parts` other than
     /// [`Parts::All`] only the pose blocks are computed (the correction's stay zero),
-    /// the same bit for bit.
+    /// the same bit for bit. Inlined into its two callers, each with `parts` constant
+    /// (issue 34).
+    #[inline(always)]
     fn build(
         &self,
         pose: &Pose,
