@@ -272,13 +272,14 @@ impl Problem<'_> {
             };
             let fold = folds.map_or(0, |f| usize::from(f[i] & 1));
             let r = &mut reduced[fold];
+            // `reduced` is accumulated from zeros by these alone ([`Reduced::accumulated`]).
             if all {
-                r.add_direct(wa, &la.d_pose, &la.d_correction, &la.residual);
-                r.add_direct(wb, &lb.d_pose, &lb.d_correction, &lb.residual);
+                r.add_direct_accumulated(wa, &la.d_pose, &la.d_correction, &la.residual);
+                r.add_direct_accumulated(wb, &lb.d_pose, &lb.d_correction, &lb.residual);
                 r.eliminate(&b);
             } else {
-                r.add_direct_pose(wa, &la.d_pose, &la.residual);
-                r.add_direct_pose(wb, &lb.d_pose, &lb.residual);
+                r.add_direct_pose_accumulated(wa, &la.d_pose, &la.residual);
+                r.add_direct_pose_accumulated(wb, &lb.d_pose, &lb.residual);
                 r.eliminate_pose(&b);
             }
             blocks.push(b);
