@@ -96,7 +96,7 @@ impl Reduced {
     }
 
     /// [`Reduced::add_direct`] on equations accumulated from [`Reduced::default`] by
-    /// `add_direct*` and `eliminate*` alone ([`Reduced::accumulated`]), the same bits.
+    /// `add_direct*` and `eliminate*` alone ([`Reduced::has_negative_zero`]), the same bits.
     pub(crate) fn add_direct_accumulated(
         &mut self,
         w: f64,
@@ -115,7 +115,7 @@ impl Reduced {
     }
 
     /// [`Reduced::add_direct_pose`] on equations accumulated from [`Reduced::default`] by
-    /// `add_direct*` and `eliminate*` alone ([`Reduced::accumulated`]), the same bits.
+    /// `add_direct*` and `eliminate*` alone ([`Reduced::has_negative_zero`]), the same bits.
     pub(crate) fn add_direct_pose_accumulated(
         &mut self,
         w: f64,
@@ -130,19 +130,20 @@ impl Reduced {
         products::add_cross(&mut self.pose_gradient, pose, e, w);
     }
 
-    /// Why the blocks of equations accumulated from [`Reduced::default`] (every entry
-    /// `+0`) by `add_direct*` and `eliminate*` alone hold no `−0`, so that
-    /// [`Reduced::zero_pose_terms_change_nothing`] need not look for one (issue 34): a
-    /// floating sum `a + b` is `−0` only when `a` and `b` both are, and a difference
-    /// `a − b` only when `a` is `−0` and `b` is `+0` (round to nearest), so an entry that
-    /// is not `−0` never becomes `−0` by adding or subtracting anything.
+    /// No `−0` in the blocks ([`Reduced::has_negative_zero`]), as equations accumulated
+    /// from zeros keep, for the tests.
     #[cfg(test)]
     pub(crate) fn accumulated(&self) -> bool {
         !self.has_negative_zero(true)
     }
 
     /// Whether a pose block (with `correction`, the pose-correction block too) holds a
-    /// `−0`.
+    /// `−0`. Never for equations accumulated from [`Reduced::default`] (every entry `+0`)
+    /// by `add_direct*` and `eliminate*` alone, so that the `_accumulated` forms need not
+    /// look for one (issue 34): a floating sum `a + b` is `−0` only when `a` and `b` both
+    /// are, and a difference `a − b` only when `a` is `−0` and `b` is `+0` (round to
+    /// nearest), so an entry that is not `−0` never becomes `−0` by adding or subtracting
+    /// anything.
     fn has_negative_zero(&self, correction: bool) -> bool {
         // Without early exits: these loops vectorise.
         let negative_zero = |m: &[f64]| {
@@ -169,7 +170,7 @@ impl Reduced {
     }
 
     /// [`Reduced::zero_pose_terms_change_nothing`], the blocks known to hold no `−0`
-    /// when `accumulated` ([`Reduced::accumulated`]).
+    /// when `accumulated` ([`Reduced::has_negative_zero`]).
     #[inline(always)]
     fn zero_pose_terms_skippable(
         &self,

@@ -272,7 +272,7 @@ impl Problem<'_> {
             };
             let fold = folds.map_or(0, |f| usize::from(f[i] & 1));
             let r = &mut reduced[fold];
-            // `reduced` is accumulated from zeros by these alone ([`Reduced::accumulated`]).
+            // `reduced` is accumulated from zeros by these alone: it holds no `−0` (evidence.rs).
             if all {
                 r.add_direct_accumulated(wa, &la.d_pose, &la.d_correction, &la.residual);
                 r.add_direct_accumulated(wb, &lb.d_pose, &lb.d_correction, &lb.residual);
