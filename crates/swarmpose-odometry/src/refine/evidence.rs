@@ -95,6 +95,66 @@ impl Reduced {
         products::add_cross(&mut self.pose_gradient, pose, e, w);
     }
 
+    /// [`Reduced::add_direct`] on equations accumulated from [`Reduced::default`] by
+    /// `add_direct*` and `eliminate*` alone ([`Reduced::has_negative_zero`]), the same bits.
+    pub(crate) fn add_direct_accumulated(
+        &mut self,
+        w: f64,
+        pose: &Matrix3x6,
+        corr: &Matrix3xK,
+        e: &Vector3<f64>,
+    ) {
+        debug_assert!(!self.has_negative_zero(true));
+        if !self.zero_pose_terms_skippable(w, pose, e, Some(corr), true) {
+            products::add_gram(&mut self.pose_pose, pose, w);
+            products::add_cross(&mut self.pose_correction, pose, corr, w);
+            products::add_cross(&mut self.pose_gradient, pose, e, w);
+        }
+        products::add_gram(&mut self.correction_correction, corr, w);
+        products::add_cross(&mut self.correction_gradient, corr, e, w);
+    }
+
+    /// [`Reduced::add_direct_pose`] on equations accumulated from [`Reduced::default`] by
+    /// `add_direct*` and `eliminate*` alone ([`Reduced::has_negative_zero`]), the same bits.
+    pub(crate) fn add_direct_pose_accumulated(
+        &mut self,
+        w: f64,
+        pose: &Matrix3x6,
+        e: &Vector3<f64>,
+    ) {
+        debug_assert!(!self.has_negative_zero(false));
+        if self.zero_pose_terms_skippable(w, pose, e, None, true) {
+            return;
+        }
+        products::add_gram(&mut self.pose_pose, pose, w);
+        products::add_cross(&mut self.pose_gradient, pose, e, w);
+    }
+
+    /// No `−0` in the blocks ([`Reduced::has_negative_zero`]), as equations accumulated
+    /// from zeros keep, for the tests.
+    #[cfg(test)]
+    pub(crate) fn accumulated(&self) -> bool {
+        !self.has_negative_zero(true)
+    }
+
+    /// Whether a pose block (with `correction`, the pose-correction block too) holds a
+    /// `−0`. Never for equations accumulated from [`Reduced::default`] (every entry `+0`)
+    /// by `add_direct*` and `eliminate*` alone, so that the `_accumulated` forms need not
+    /// look for one (issue 34): a floating sum `a + b` is `−0` only when `a` and `b` both
+    /// are, and a difference `a − b` only when `a` is `−0` and `b` is `+0` (round to
+    /// nearest), so an entry that is not `−0` never becomes `−0` by adding or subtracting
+    /// anything.
+    fn has_negative_zero(&self, correction: bool) -> bool {
+        // Without early exits: these loops vectorise.
+        let negative_zero = |m: &[f64]| {
+            let neg = (-0.0_f64).to_bits();
+            m.iter().fold(false, |a, v| a | (v.to_bits() == neg))
+        };
+        negative_zero(self.pose_pose.as_slice())
+            | negative_zero(self.pose_gradient.as_slice())
+            | (correction && negative_zero(self.pose_correction.as_slice()))
+    }
+
     /// Whether the pose terms of a measurement with a zero pose Jacobian (frame A's) may
     /// be skipped without changing a bit: each of their entries is then a sum of
     /// products with a zero factor, `±0` when the other factors (`w`, `e`, `corr`) are
@@ -106,28 +166,30 @@ impl Reduced {
         e: &Vector3<f64>,
         corr: Option<&Matrix3xK>,
     ) -> bool {
+        self.zero_pose_terms_skippable(w, pose, e, corr, false)
+    }
+
+    /// [`Reduced::zero_pose_terms_change_nothing`], the blocks known to hold no `−0`
+    /// when `accumulated` ([`Reduced::has_negative_zero`]).
+    #[inline(always)]
+    fn zero_pose_terms_skippable(
+        &self,
+        w: f64,
+        pose: &Matrix3x6,
+        e: &Vector3<f64>,
+        corr: Option<&Matrix3xK>,
+        accumulated: bool,
+    ) -> bool {
         // Without early exits: these loops vectorise.
         let all_zero = |m: &[f64]| m.iter().fold(0_u64, |a, v| a | (v.to_bits() << 1)) == 0;
         let finite = |m: &[f64]| m.iter().fold(true, |a, v| a & v.is_finite());
-        let negative_zero = |m: &[f64]| {
-            let neg = (-0.0_f64).to_bits();
-            m.iter().fold(false, |a, v| a | (v.to_bits() == neg))
-        };
         if !(all_zero(pose.as_slice()) && w.is_finite() && finite(e.as_slice())) {
             return false;
         }
-        match corr {
-            Some(c) => {
-                finite(c.as_slice())
-                    && !(negative_zero(self.pose_pose.as_slice())
-                        | negative_zero(self.pose_gradient.as_slice())
-                        | negative_zero(self.pose_correction.as_slice()))
-            }
-            None => {
-                !(negative_zero(self.pose_pose.as_slice())
-                    | negative_zero(self.pose_gradient.as_slice()))
-            }
+        if corr.is_some_and(|c| !finite(c.as_slice())) {
+            return false;
         }
+        accumulated || !self.has_negative_zero(corr.is_some())
     }
 
     /// [`Reduced::eliminate`] for the pose blocks only (the correction's unchanged).

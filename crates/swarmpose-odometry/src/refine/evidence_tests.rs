@@ -138,3 +138,65 @@ fn a_negative_zero_block_entry_is_not_skipped() {
     assert_eq!(want.pose_pose[(2, 3)].to_bits(), 0.0_f64.to_bits());
     assert!(same_bits(&r.pose_pose, &want.pose_pose));
 }
+
+/// Equations accumulated from zeros by `add_direct*` and `eliminate*` never hold a `−0`
+/// (so the `_accumulated` forms skip the scan for one), and those forms give nalgebra's
+/// bits: long seeded sequences of frame A's zero Jacobians, random ones, zeros of both
+/// signs, infinities and NaN ([`random`]'s entries).
+#[test]
+fn accumulated_equations_hold_no_negative_zero_and_keep_the_bits() {
+    let mut rng = ChaCha8Rng::seed_from_u64(3434);
+    let mut skipped = 0;
+    for trial in 0..400 {
+        let (mut got, mut want) = (Reduced::default(), Reduced::default());
+        let (mut got_pose, mut want_pose) = (Reduced::default(), Reduced::default());
+        for _ in 0..50 {
+            let pose: Matrix3x6 = zero_or_random(&mut rng);
+            let corr: Matrix3xK = random(&mut rng);
+            let e: Vector3<f64> = random(&mut rng);
+            let w = match rng.random_range(0..50) {
+                0 => f64::NAN,
+                1 => -0.0,
+                _ => rng.random_range(0.0..1.0),
+            };
+            skipped += usize::from(got_pose.zero_pose_terms_change_nothing(w, &pose, &e, None));
+            got.add_direct_accumulated(w, &pose, &corr, &e);
+            add_direct_nalgebra(&mut want, w, &pose, &corr, &e);
+            got_pose.add_direct_pose_accumulated(w, &pose, &e);
+            want_pose.pose_pose += pose.transpose() * pose * w;
+            want_pose.pose_gradient += pose.transpose() * e * w;
+            assert!(same(&got, &want), "add_direct_accumulated, trial {trial}");
+            assert!(same(&got_pose, &want_pose), "pose only, trial {trial}");
+            assert!(got.accumulated() && got_pose.accumulated(), "trial {trial}");
+            if rng.random_range(0..3) == 0 {
+                let b = PointBlocks {
+                    pp_inv: random::<3, 3>(&mut rng),
+                    pose: zero_or_random(&mut rng),
+                    correction: random(&mut rng),
+                    gradient: random(&mut rng),
+                };
+                got.eliminate(&b);
+                eliminate_nalgebra(&mut want, &b);
+                got_pose.eliminate_pose(&b);
+                want_pose.pose_pose -= b.pose.transpose() * b.pp_inv * b.pose;
+                want_pose.pose_gradient -= b.pose.transpose() * b.pp_inv * b.gradient;
+                assert!(got.accumulated() && got_pose.accumulated(), "trial {trial}");
+            }
+        }
+        assert!(
+            same(&got, &want) && same(&got_pose, &want_pose),
+            "trial {trial}"
+        );
+    }
+    // The zero Jacobians were skipped often, and not always.
+    assert!((2_000..19_000).contains(&skipped), "{skipped}");
+}
+
+/// The check that the `_accumulated` forms rely on sees a `−0` where there is one.
+#[test]
+fn a_negative_zero_is_not_accumulated() {
+    let mut r = Reduced::default();
+    assert!(r.accumulated());
+    r.pose_correction[(5, 1)] = -0.0;
+    assert!(!r.accumulated());
+}

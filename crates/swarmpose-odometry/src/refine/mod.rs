@@ -163,7 +163,9 @@ fn moved(pose: &Pose, xi: &Vector6<f64>) -> Pose {
 }
 
 /// The two measurements of one point, linearised (the Jacobians of `parts`), or `None`
-/// if B cannot see it.
+/// if B cannot see it. Inlined into each caller, where `parts` is a constant: the
+/// Jacobians it leaves zero are then neither written nor copied (issue 34).
+#[inline(always)]
 fn linearize(
     model: &StereoModel,
     pose: &Pose,
@@ -228,7 +230,9 @@ impl Problem<'_> {
     /// The reduced system at `pose`, with each point's blocks for back-substitution;
     /// `None` if a point left B's view or a block is singular. With `parts` other than
     /// [`Parts::All`] only the pose blocks are computed (the correction's stay zero),
-    /// the same bit for bit.
+    /// the same bit for bit. Inlined into its two callers, each with `parts` constant
+    /// (issue 34).
+    #[inline(always)]
     fn build(
         &self,
         pose: &Pose,
@@ -268,13 +272,14 @@ impl Problem<'_> {
             };
             let fold = folds.map_or(0, |f| usize::from(f[i] & 1));
             let r = &mut reduced[fold];
+            // `reduced` is accumulated from zeros by these alone: it holds no `−0` (evidence.rs).
             if all {
-                r.add_direct(wa, &la.d_pose, &la.d_correction, &la.residual);
-                r.add_direct(wb, &lb.d_pose, &lb.d_correction, &lb.residual);
+                r.add_direct_accumulated(wa, &la.d_pose, &la.d_correction, &la.residual);
+                r.add_direct_accumulated(wb, &lb.d_pose, &lb.d_correction, &lb.residual);
                 r.eliminate(&b);
             } else {
-                r.add_direct_pose(wa, &la.d_pose, &la.residual);
-                r.add_direct_pose(wb, &lb.d_pose, &lb.residual);
+                r.add_direct_pose_accumulated(wa, &la.d_pose, &la.residual);
+                r.add_direct_pose_accumulated(wb, &lb.d_pose, &lb.residual);
                 r.eliminate_pose(&b);
             }
             blocks.push(b);

@@ -214,7 +214,7 @@ impl StereoModel {
 
     /// [`StereoModel::in_reference`] computing only the Jacobians of `parts` (the others
     /// zero); those computed are bit for bit the same.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn in_reference_parts(
         &self,
         p: &Vector3<f64>,
@@ -263,7 +263,7 @@ impl StereoModel {
 
     /// [`StereoModel::in_current`] computing only the Jacobians of `parts` (the others
     /// zero); those computed are bit for bit the same.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn in_current_parts(
         &self,
         rot: &Matrix3<f64>,

@@ -6,7 +6,7 @@
 use nalgebra::{Matrix3, Vector3};
 
 use crate::nls::pose::Pose;
-use crate::refine::model::{Matrix3x6, Matrix3xK, StereoModel, StereoObservation};
+use crate::refine::model::{Matrix3x6, Matrix3xK, Parts, StereoModel, StereoObservation};
 
 /// A relative pose `T_ja`: rotation and translation (`P_j = R P_a + t`, metres).
 pub(super) type Relative = (Matrix3<f64>, Vector3<f64>);
@@ -31,7 +31,9 @@ pub(super) struct Jac {
 }
 
 /// The measurement `z` in keyframe `slot` of the point `p` anchored in keyframe `anchor`,
-/// `rel` from [`relative_poses`] over `n` keyframes.
+/// `rel` from [`relative_poses`] over `n` keyframes. Inlined: its large result is then
+/// built where it is used, not copied (issue 34).
+#[inline(always)]
 pub(super) fn linearize(
     model: &StereoModel,
     (rel, n): (&[Relative], usize),
@@ -62,4 +64,24 @@ pub(super) fn linearize(
         d_correction: l.d_correction,
         poses: Some((l.d_pose, l.d_h * dh_da)),
     })
+}
+
+/// [`linearize`]'s whitened residual and `∂e/∂p` alone, the same bits (the other
+/// Jacobians not computed: [`Parts::Point`]), or `None` when [`linearize`] gives none.
+#[inline(always)]
+pub(super) fn linearize_point(
+    model: &StereoModel,
+    (rel, n): (&[Relative], usize),
+    anchor: usize,
+    slot: usize,
+    p: &Vector3<f64>,
+    z: &StereoObservation,
+) -> Option<(Vector3<f64>, Matrix3<f64>)> {
+    let l = if slot == anchor {
+        model.in_reference_parts(p, z, Parts::Point)
+    } else {
+        let (rot, trans) = &rel[slot * n + anchor];
+        model.in_current_parts(rot, trans, p, z, Parts::Point)?
+    };
+    Some((l.residual, l.d_point))
 }

@@ -4,7 +4,7 @@
 use nalgebra::{Matrix3, Vector3};
 
 use super::Keyframe;
-use super::residual::{Relative, linearize, relative_poses};
+use super::residual::{Relative, linearize_point, relative_poses};
 use crate::nls::pose::Pose;
 use crate::nls::robust::huber;
 use crate::refine::model::{StereoModel, StereoObservation};
@@ -124,10 +124,12 @@ pub(super) fn tracks_of(
         let mut h = Matrix3::zeros();
         let mut g = Vector3::zeros();
         for (slot, z) in obs {
-            if let Some(j) = linearize(model, (rel, n), anchor, *slot, &t.point, z) {
-                let (w, _) = huber(j.residual.norm_squared(), k);
-                h += j.d_point.transpose() * j.d_point * w;
-                g += j.d_point.transpose() * j.residual * w;
+            if let Some((residual, d_point)) =
+                linearize_point(model, (rel, n), anchor, *slot, &t.point, z)
+            {
+                let (w, _) = huber(residual.norm_squared(), k);
+                h += d_point.transpose() * d_point * w;
+                g += d_point.transpose() * residual * w;
             }
         }
         if let Some(inv) = h.try_inverse() {
