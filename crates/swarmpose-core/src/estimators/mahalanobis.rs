@@ -119,6 +119,13 @@ pub fn refine_mahalanobis(
 /// normal equations `h`, `g` of a Gauss-Newton step on `pose` (the motion `dst = R src + t`)
 /// perturbed on the left by `(ω, ν)` (radians, metres, in the destination frame): residual
 /// `r = dst − pose·src`, Jacobian `[[q]×, −I]` with `q = pose·src`.
+///
+/// The same bits as `h += Jᵀ w J`, `g += Jᵀ w r` through nalgebra (issue 34), with the
+/// Jacobian's zeros left out: nalgebra sums `P = Jᵀ w` and `P J` term by term in order,
+/// and a term `0 · x` (`x` finite) is a zero, which leaves a sum unchanged unless the sum
+/// is itself zero, when only its sign can differ; `h` and `g` start at `+0` in every caller
+/// and never hold `-0` (`+0 + -0 = +0`), so such a zero adds nothing either way. When `w`
+/// or `P` is not finite (`0 · ∞` is NaN) the full products are taken.
 pub(crate) fn add_point(
     h: &mut Matrix6<f64>,
     g: &mut Vector6<f64>,
@@ -129,6 +136,46 @@ pub(crate) fn add_point(
 ) {
     let q = (pose * data.src()[i]).coords;
     let r = data.dst()[i].coords - q;
+    let (q0, q1, q2) = (q[0], q[1], q[2]);
+    let columns = &w.data.0; // columns[b][k] = w_kb
+    // P = Jᵀ w (6 × 3): rows 0-2 from the columns of [q]×, whose zero is left out; rows
+    // 3-5 are −w (−1 · x, the same bits as −x for finite x; the −0 terms left out).
+    let mut p = [[0.0f64; 3]; 6];
+    for (b, col) in columns.iter().enumerate() {
+        p[0][b] = q2 * col[1] + (-q1) * col[2];
+        p[1][b] = (-q2) * col[0] + q0 * col[2];
+        p[2][b] = q1 * col[0] + (-q0) * col[1];
+        for k in 0..3 {
+            p[3 + k][b] = -col[k];
+        }
+    }
+    // One sum tells: it is finite only when every term is (an infinity or NaN among them
+    // makes it ±∞ or NaN); a sum that overflows merely takes the full products.
+    let total: f64 = w.iter().sum::<f64>() + p.iter().flatten().sum::<f64>();
+    if !total.is_finite() {
+        add_point_full(h, g, &q, &r, w);
+        return;
+    }
+    for (a, pa) in p.iter().enumerate() {
+        // (P J)[a][c]: J's columns 0-2 are those of [q]×, 3-5 those of −I.
+        h[(a, 0)] += pa[1] * q2 + pa[2] * (-q1);
+        h[(a, 1)] += pa[0] * (-q2) + pa[2] * q0;
+        h[(a, 2)] += pa[0] * q1 + pa[1] * (-q0);
+        for k in 0..3 {
+            h[(a, 3 + k)] += -pa[k];
+        }
+        g[a] += pa[0] * r[0] + pa[1] * r[1] + pa[2] * r[2];
+    }
+}
+
+/// [`add_point`] through nalgebra's products with the full Jacobian `[[q]×, −I]`.
+fn add_point_full(
+    h: &mut Matrix6<f64>,
+    g: &mut Vector6<f64>,
+    q: &nalgebra::Vector3<f64>,
+    r: &nalgebra::Vector3<f64>,
+    w: &Matrix3<f64>,
+) {
     let mut j = Matrix3x6::<f64>::zeros();
     j.fixed_view_mut::<3, 3>(0, 0).copy_from(&q.cross_matrix());
     j.fixed_view_mut::<3, 3>(0, 3)
@@ -198,6 +245,55 @@ mod tests {
             "Mahalanobis beat isotropic least squares on the true inliers {better}/10"
         );
         assert_eq!(within, 10);
+    }
+
+    #[test]
+    fn add_point_has_the_bits_of_the_full_products() {
+        use rand::RngExt;
+        let mut rng = crate::rng::seeded(34);
+        let value = |rng: &mut crate::rng::SeededRng| -> f64 {
+            match rng.random_range(0..12) {
+                0 => 0.0,
+                1 => -0.0,
+                _ => rng.random_range(-50.0..50.0),
+            }
+        };
+        for case in 0..400 {
+            let n = 6;
+            let src: Vec<Point3<f64>> = (0..n)
+                .map(|_| Point3::new(value(&mut rng), value(&mut rng), value(&mut rng)))
+                .collect();
+            let dst: Vec<Point3<f64>> = (0..n)
+                .map(|_| Point3::new(value(&mut rng), value(&mut rng), value(&mut rng)))
+                .collect();
+            let data = Correspondences::new(src, dst).expect("valid");
+            let axis = Vector3::new(value(&mut rng), value(&mut rng), value(&mut rng)) * 0.01;
+            let pose = Isometry3::new(
+                Vector3::new(value(&mut rng), value(&mut rng), value(&mut rng)),
+                axis,
+            );
+            let (mut h, mut g) = (Matrix6::<f64>::zeros(), Vector6::<f64>::zeros());
+            let (mut h_ref, mut g_ref) = (Matrix6::<f64>::zeros(), Vector6::<f64>::zeros());
+            for i in 0..n {
+                let mut w = Matrix3::from_fn(|_, _| value(&mut rng));
+                if case % 4 == 0 {
+                    w = w * w.transpose(); // symmetric, as an information is
+                }
+                match rng.random_range(0..20) {
+                    0 => w[(rng.random_range(0..3), rng.random_range(0..3))] = f64::NAN,
+                    1 => w[(rng.random_range(0..3), rng.random_range(0..3))] = f64::INFINITY,
+                    2 => w *= 1e307, // P overflows
+                    _ => {}
+                }
+                add_point(&mut h, &mut g, &pose, &data, i, &w);
+                let q = (pose * data.src()[i]).coords;
+                let r = data.dst()[i].coords - q;
+                add_point_full(&mut h_ref, &mut g_ref, &q, &r, &w);
+            }
+            let bits = |m: &[f64]| m.iter().map(|v| v.to_bits()).collect::<Vec<u64>>();
+            assert_eq!(bits(h.as_slice()), bits(h_ref.as_slice()), "h, case {case}");
+            assert_eq!(bits(g.as_slice()), bits(g_ref.as_slice()), "g, case {case}");
+        }
     }
 
     #[test]

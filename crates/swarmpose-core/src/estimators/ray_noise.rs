@@ -281,16 +281,23 @@ fn em(
         let ln_prefactor = (gamma * GAUSS_NORM_3D).ln();
         let ln_bound = ln_prefactor - 1.5 * (2.0 * noise.floor).ln() - ln_outlier;
         let mut log_likelihood = 0.0;
+        // The isotropic model's covariance is the same for every row: its determinant,
+        // inverse and log-determinant once per round, not once per row.
+        let isotropic = (!ray).then(|| {
+            let v = 2.0 * noise.floor;
+            let det = v * v * v;
+            (det, Matrix3::identity() / v, 0.5 * det.ln())
+        });
         rows.clear();
         for i in 0..n {
             let q = rotation * src[i].coords;
             let e = dst[i].coords - q - pose.translation.vector;
-            let (det, information) = if ray {
-                let c = noise.residual_covariance(&q, &dst[i].coords);
-                (c.determinant(), c.try_inverse())
-            } else {
-                let v = 2.0 * noise.floor;
-                (v * v * v, Some(Matrix3::identity() / v))
+            let (det, information, half_ln_det) = match isotropic {
+                Some((det, w, half_ln_det)) => (det, Some(w), Some(half_ln_det)),
+                None => {
+                    let c = noise.residual_covariance(&q, &dst[i].coords);
+                    (c.determinant(), c.try_inverse(), None)
+                }
             };
             // det ≥ (2f)³ (every other part of the covariance is positive semidefinite), so
             // a row that is negligible under that bound needs no logarithm.
@@ -300,7 +307,8 @@ fn em(
                     if ln_bound - half_m < -NEGLIGIBLE {
                         f64::NEG_INFINITY
                     } else {
-                        ln_prefactor - 0.5 * det.ln() - half_m - ln_outlier
+                        let half_ln_det = half_ln_det.unwrap_or_else(|| 0.5 * det.ln());
+                        ln_prefactor - half_ln_det - half_m - ln_outlier
                     }
                 }
                 _ => f64::NEG_INFINITY,
@@ -503,64 +511,4 @@ fn scoring_step(
 }
 
 #[cfg(test)]
-mod tests {
-    use nalgebra::{Translation3, Vector3};
-
-    use super::*;
-    use crate::estimators::test_scenes::stereo_scene;
-    use crate::synthetic::SyntheticSpec;
-
-    #[test]
-    fn the_ray_model_is_chosen_for_stereo_noise_only() {
-        for seed in 0..5 {
-            let (data, truth, _) = stereo_scene(seed, 5);
-            let plain =
-                Correspondences::new(data.src().to_vec(), data.dst().to_vec()).expect("valid");
-            assert!(
-                choose(&plain, &truth, 0.3, 0.1).is_some(),
-                "stereo scene {seed}: isotropic chosen"
-            );
-            let spec = SyntheticSpec {
-                outlier_fraction: 0.5,
-                ..SyntheticSpec::default()
-            };
-            let s = spec.generate(seed).expect("valid");
-            assert!(
-                choose(&s.data, &s.truth, 3.368 * 0.02, 0.02).is_none(),
-                "isotropic scene {seed}: ray model chosen"
-            );
-        }
-    }
-
-    #[test]
-    fn the_choice_does_not_depend_on_the_unit() {
-        let (data, truth, _) = stereo_scene(3, 5);
-        let k = 1000.0;
-        let scaled = Correspondences::new(
-            data.src().iter().map(|p| p * k).collect(),
-            data.dst().iter().map(|p| p * k).collect(),
-        )
-        .expect("valid");
-        let plain = Correspondences::new(data.src().to_vec(), data.dst().to_vec()).expect("valid");
-        let truth_k = Isometry3::from_parts(
-            Translation3::from(truth.translation.vector * k),
-            truth.rotation,
-        );
-        let a = choose(&plain, &truth, 0.3, 0.1).expect("ray");
-        let b = choose(&scaled, &truth_k, 0.3 * k, 0.1 * k).expect("ray");
-        assert!((b.floor / (a.floor * k * k) - 1.0).abs() < 1e-6);
-        assert!((b.along * k * k / a.along - 1.0).abs() < 1e-6);
-        assert!((b.across / a.across - 1.0).abs() < 1e-6);
-    }
-
-    #[test]
-    fn covariance_is_along_and_across_the_ray() {
-        let m = RangeNoise::from_array([1e-4, 1e-3, 1e-2]);
-        let p = Point3::new(0.0, 0.0, 2.0);
-        let c = m.covariance(&p);
-        assert!((c[(2, 2)] - (1e-4 + 1e-3 * 16.0)).abs() < 1e-12);
-        assert!((c[(0, 0)] - (1e-4 + 1e-2 * 4.0)).abs() < 1e-12);
-        let u = Vector3::new(1.0, 0.0, 0.0);
-        assert!((u.dot(&(c * u)) - c[(0, 0)]).abs() < 1e-15);
-    }
-}
+mod tests;

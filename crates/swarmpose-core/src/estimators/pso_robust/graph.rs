@@ -100,12 +100,7 @@ impl PairGraph {
                 pairs.push((li as u32, lj as u32, 0));
             }
         }
-        for p in &mut pairs {
-            let (ri, rj) = (p.0 as usize * words, p.1 as usize * words);
-            p.2 = (0..words)
-                .map(|w| (rows[ri + w] & rows[rj + w]).count_ones())
-                .sum();
-        }
+        count_common(&mut pairs, &rows, words);
         let scored = rank_prefix(&mut pairs, max_pairs, m);
         let lanes = scored.next_multiple_of(LANES);
         let mut graph = Self {
@@ -311,6 +306,44 @@ impl PairGraph {
     }
 }
 
+/// Sets each pair's common-neighbour count from the adjacency `rows` (`words` words per
+/// row). Rows of up to 8 words (512 points; the default keeps 400) take a loop unrolled for
+/// their length.
+fn count_common(pairs: &mut [(u32, u32, u32)], rows: &[u64], words: usize) {
+    match words {
+        1 => count_common_fixed::<1>(pairs, rows),
+        2 => count_common_fixed::<2>(pairs, rows),
+        3 => count_common_fixed::<3>(pairs, rows),
+        4 => count_common_fixed::<4>(pairs, rows),
+        5 => count_common_fixed::<5>(pairs, rows),
+        6 => count_common_fixed::<6>(pairs, rows),
+        7 => count_common_fixed::<7>(pairs, rows),
+        8 => count_common_fixed::<8>(pairs, rows),
+        _ => {
+            for p in pairs {
+                let (ri, rj) = (p.0 as usize * words, p.1 as usize * words);
+                p.2 = common_count(&rows[ri..ri + words], &rows[rj..rj + words]);
+            }
+        }
+    }
+}
+
+/// [`count_common`] for rows of `W` words.
+fn count_common_fixed<const W: usize>(pairs: &mut [(u32, u32, u32)], rows: &[u64]) {
+    let rows = rows.as_chunks::<W>().0;
+    for p in pairs {
+        let (a, b) = (&rows[p.0 as usize], &rows[p.1 as usize]);
+        p.2 = common_count(a, b);
+    }
+}
+
+/// Number of bits set in both `a` and `b` (equal lengths): the common neighbours of two
+/// adjacency rows. Slices rather than indices, so the loop has no bounds checks and
+/// vectorises (integer sums: any order gives the same count).
+fn common_count(a: &[u64], b: &[u64]) -> u32 {
+    a.iter().zip(b).map(|(x, y)| (x & y).count_ones()).sum()
+}
+
 /// Moves the (at most) `max_pairs` pairs with the most common neighbours to the front, in
 /// rank order (more first, then by index), and returns how many that is. Counting sort on
 /// the neighbour count: `O(pairs + points)`, deterministic.
@@ -332,39 +365,179 @@ fn rank_prefix(pairs: &mut [(u32, u32, u32)], max_pairs: usize, points: usize) -
         cut -= 1;
     }
     // Stable partition: pairs above `cut`, then those at `cut` (index order) up to the cap.
+    let cut_count = cut as u32;
     let mut front: Vec<(u32, u32, u32)> = Vec::with_capacity(max_pairs.min(pairs.len()));
-    front.extend(pairs.iter().copied().filter(|p| p.2 > cut as u32));
+    front.extend(pairs.iter().copied().filter(|p| p.2 > cut_count));
+    let above_cut = front.len();
     front.extend(
         pairs
             .iter()
             .copied()
-            .filter(|p| p.2 == cut as u32)
-            .take(max_pairs - front.len()),
+            .filter(|p| p.2 == cut_count)
+            .take(max_pairs - above_cut),
     );
     // As above: unstable is the same order.
     front.sort_unstable_by(|x, y| y.2.cmp(&x.2).then((x.0, x.1).cmp(&(y.0, y.1))));
     let n = front.len();
-    // Put the ranked prefix first; the rest keep their order after it.
-    let mut rest: Vec<(u32, u32, u32)> = Vec::with_capacity(pairs.len() - n);
-    let mut taken_at_cut = n - pairs.iter().filter(|p| p.2 > cut as u32).count();
-    for p in pairs.iter() {
-        if p.2 > cut as u32 {
+    // The rest keep their order after the ranked prefix: compacted in place towards the
+    // end, walking from the back (a pair only moves right, onto one already read), without
+    // a second buffer of all pairs. The first `taken_at_cut` pairs at `cut` (index order)
+    // are in the prefix.
+    let taken_at_cut = n - above_cut;
+    let mut at_cut_left = histogram[cut];
+    let mut write = pairs.len();
+    for read in (0..pairs.len()).rev() {
+        let p = pairs[read];
+        if p.2 > cut_count {
             continue;
         }
-        if p.2 == cut as u32 && taken_at_cut > 0 {
-            taken_at_cut -= 1;
-            continue;
+        if p.2 == cut_count {
+            at_cut_left -= 1;
+            if at_cut_left < taken_at_cut {
+                continue;
+            }
         }
-        rest.push(*p);
+        write -= 1;
+        pairs[write] = p;
     }
+    debug_assert_eq!(write, n, "the prefix and the rest hold every pair once");
     pairs[..n].copy_from_slice(&front);
-    pairs[n..].copy_from_slice(&rest);
     n
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::rng::seeded;
+
+    /// `rank_prefix` as it was before the in-place compaction (issue 34): the reference.
+    fn rank_prefix_reference(
+        pairs: &mut [(u32, u32, u32)],
+        max_pairs: usize,
+        points: usize,
+    ) -> usize {
+        let order = |x: &(u32, u32, u32), y: &(u32, u32, u32)| {
+            y.2.cmp(&x.2).then((x.0, x.1).cmp(&(y.0, y.1)))
+        };
+        if pairs.len() <= max_pairs {
+            pairs.sort_unstable_by(order);
+            return pairs.len();
+        }
+        let mut histogram = vec![0usize; points + 1];
+        for p in pairs.iter() {
+            histogram[p.2 as usize] += 1;
+        }
+        let mut above = 0;
+        let mut cut = points;
+        while above + histogram[cut] < max_pairs && cut > 0 {
+            above += histogram[cut];
+            cut -= 1;
+        }
+        let mut front: Vec<(u32, u32, u32)> = Vec::with_capacity(max_pairs.min(pairs.len()));
+        front.extend(pairs.iter().copied().filter(|p| p.2 > cut as u32));
+        front.extend(
+            pairs
+                .iter()
+                .copied()
+                .filter(|p| p.2 == cut as u32)
+                .take(max_pairs - front.len()),
+        );
+        front.sort_unstable_by(order);
+        let n = front.len();
+        let mut rest: Vec<(u32, u32, u32)> = Vec::with_capacity(pairs.len() - n);
+        let mut taken_at_cut = n - pairs.iter().filter(|p| p.2 > cut as u32).count();
+        for p in pairs.iter() {
+            if p.2 > cut as u32 {
+                continue;
+            }
+            if p.2 == cut as u32 && taken_at_cut > 0 {
+                taken_at_cut -= 1;
+                continue;
+            }
+            rest.push(*p);
+        }
+        pairs[..n].copy_from_slice(&front);
+        pairs[n..].copy_from_slice(&rest);
+        n
+    }
+
+    #[test]
+    fn rank_prefix_matches_the_reference_on_random_pairs() {
+        let mut rng = seeded(34);
+        for case in 0..300 {
+            let points: usize = rng.random_range(2..60);
+            let len: usize = rng.random_range(0..400);
+            // Few distinct counts in some cases, so that ties at the cut are common.
+            let top = if case % 2 == 0 { 3 } else { points as u32 }.min(points as u32 - 1);
+            let mut pairs: Vec<(u32, u32, u32)> = (0..len)
+                .map(|_| {
+                    let i = rng.random_range(0..points as u32);
+                    (
+                        i,
+                        rng.random_range(0..points as u32),
+                        rng.random_range(0..=top),
+                    )
+                })
+                .collect();
+            if case % 3 == 0 {
+                pairs.sort_unstable_by_key(|p| (p.0, p.1));
+            }
+            let max_pairs = rng.random_range(1..=len.max(1) + 2);
+            let mut expected = pairs.clone();
+            let n_expected = rank_prefix_reference(&mut expected, max_pairs, points);
+            let n = rank_prefix(&mut pairs, max_pairs, points);
+            assert_eq!(n, n_expected, "case {case}");
+            assert_eq!(pairs, expected, "case {case}");
+        }
+    }
+
+    #[test]
+    fn count_common_matches_the_indexed_sum_for_every_row_length() {
+        let mut rng = seeded(36);
+        for words in 0..12 {
+            let m = 64 * words.max(1);
+            let rows: Vec<u64> = (0..m * words)
+                .map(|k| match k % 7 {
+                    0 => 0,
+                    1 => u64::MAX,
+                    _ => rng.random(),
+                })
+                .collect();
+            let mut pairs: Vec<(u32, u32, u32)> = (0..300)
+                .map(|_| {
+                    let i = rng.random_range(0..m as u32);
+                    (i, rng.random_range(0..m as u32), u32::MAX)
+                })
+                .collect();
+            count_common(&mut pairs, &rows, words);
+            for &(i, j, c) in &pairs {
+                let (ri, rj) = (i as usize * words, j as usize * words);
+                let expected: u32 = (0..words)
+                    .map(|w| (rows[ri + w] & rows[rj + w]).count_ones())
+                    .sum();
+                assert_eq!(c, expected, "{words} words, pair ({i}, {j})");
+            }
+        }
+    }
+
+    #[test]
+    fn common_count_matches_the_indexed_sum() {
+        let mut rng = seeded(35);
+        for _ in 0..200 {
+            let words: usize = rng.random_range(0..40);
+            let rows: Vec<u64> = (0..2 * words)
+                .map(|k| match k % 5 {
+                    0 => 0,
+                    1 => u64::MAX,
+                    _ => rng.random(),
+                })
+                .collect();
+            let expected: u32 = (0..words)
+                .map(|w| (rows[w] & rows[words + w]).count_ones())
+                .sum();
+            assert_eq!(common_count(&rows[..words], &rows[words..]), expected);
+        }
+    }
 
     #[test]
     fn rank_prefix_keeps_the_best_and_all_pairs() {
