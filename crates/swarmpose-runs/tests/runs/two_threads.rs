@@ -223,28 +223,12 @@ fn matching_ahead_gives_one_threads_matches() {
             let mut two = Odometry::new(camera_of(&seq), config.clone()).expect("engine");
             let mut expected = Vec::new();
             for i in 0..seq.len() {
-                let f = frame(i).expect("frame");
-                let r = one
-                    .track(swarmpose_odometry::StereoInput {
-                        left: f.left.view(),
-                        right: f.right.view(),
-                        timestamp_s: f.timestamp_s,
-                    })
-                    .expect("track");
-                expected.push(r);
+                expected.push(track_one(&mut one, &frame(i).expect("frame")));
             }
             // The first `before` frames one at a time, the rest on two threads.
             let mut got = Vec::new();
             for i in 0..before {
-                let f = frame(i).expect("frame");
-                let r = two
-                    .track(swarmpose_odometry::StereoInput {
-                        left: f.left.view(),
-                        right: f.right.view(),
-                        timestamp_s: f.timestamp_s,
-                    })
-                    .expect("track");
-                got.push(r);
+                got.push(track_one(&mut two, &frame(i).expect("frame")));
             }
             let end = two
                 .run_two_threads((before..seq.len()).map(frame), &mut |r| {
@@ -272,4 +256,14 @@ fn matching_ahead_gives_one_threads_matches() {
             }
         }
     }
+}
+
+/// `frame` through `odo` on the calling thread.
+fn track_one(odo: &mut Odometry, frame: &OwnedStereoFrame) -> FrameResult {
+    odo.track(swarmpose_odometry::StereoInput {
+        left: frame.left.view(),
+        right: frame.right.view(),
+        timestamp_s: frame.timestamp_s,
+    })
+    .expect("track")
 }
