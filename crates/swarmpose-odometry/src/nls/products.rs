@@ -115,27 +115,31 @@ pub(crate) fn tr_mul<const C1: usize, const C2: usize>(
 }
 
 /// `acc += t b`, the same bits as `*acc += t * b`.
-// The index form: `iter_mut().enumerate()` compiled to a fifth more instructions in the
-// window's system (callgrind, issue 34).
-#[allow(clippy::needless_range_loop)]
 #[inline(always)]
 pub(crate) fn add_product<const R: usize, const C: usize>(
     acc: &mut SMatrix<f64, R, C>,
     t: &SMatrix<f64, R, 3>,
     b: &SMatrix<f64, 3, C>,
 ) {
-    let (t, b, acc) = (&t.data.0, &b.data.0, &mut acc.data.0);
-    for j in 0..C {
-        for i in 0..R {
-            acc[j][i] += dot(t, i, &b[j]);
-        }
-    }
+    accumulate_product::<R, C, false>(acc, t, b);
 }
 
 /// `acc -= t b`, the same bits as `*acc -= t * b`.
-#[allow(clippy::needless_range_loop)] // the index form, as in `add_product`
 #[inline(always)]
 pub(crate) fn sub_product<const R: usize, const C: usize>(
+    acc: &mut SMatrix<f64, R, C>,
+    t: &SMatrix<f64, R, 3>,
+    b: &SMatrix<f64, 3, C>,
+) {
+    accumulate_product::<R, C, true>(acc, t, b);
+}
+
+/// [`add_product`], or [`sub_product`] when `SUBTRACT`.
+// The index form: `iter_mut().enumerate()` compiled to a fifth more instructions in the
+// window's system (callgrind, issue 34).
+#[allow(clippy::needless_range_loop)]
+#[inline(always)]
+fn accumulate_product<const R: usize, const C: usize, const SUBTRACT: bool>(
     acc: &mut SMatrix<f64, R, C>,
     t: &SMatrix<f64, R, 3>,
     b: &SMatrix<f64, 3, C>,
@@ -143,7 +147,12 @@ pub(crate) fn sub_product<const R: usize, const C: usize>(
     let (t, b, acc) = (&t.data.0, &b.data.0, &mut acc.data.0);
     for j in 0..C {
         for i in 0..R {
-            acc[j][i] -= dot(t, i, &b[j]);
+            let x = dot(t, i, &b[j]);
+            if SUBTRACT {
+                acc[j][i] -= x;
+            } else {
+                acc[j][i] += x;
+            }
         }
     }
 }

@@ -77,22 +77,12 @@ impl Reduced {
     /// The same bits as nalgebra's `pose.transpose() * pose * w` and the like, with the
     /// symmetric blocks computed on one triangle and mirrored ([`products`]).
     pub fn add_direct(&mut self, w: f64, pose: &Matrix3x6, corr: &Matrix3xK, e: &Vector3<f64>) {
-        if !self.zero_pose_terms_change_nothing(w, pose, e, Some(corr)) {
-            products::add_gram(&mut self.pose_pose, pose, w);
-            products::add_cross(&mut self.pose_correction, pose, corr, w);
-            products::add_cross(&mut self.pose_gradient, pose, e, w);
-        }
-        products::add_gram(&mut self.correction_correction, corr, w);
-        products::add_cross(&mut self.correction_gradient, corr, e, w);
+        self.add_direct_with(w, pose, corr, e, false);
     }
 
     /// [`Reduced::add_direct`] for the pose blocks only (the correction's unchanged).
     pub fn add_direct_pose(&mut self, w: f64, pose: &Matrix3x6, e: &Vector3<f64>) {
-        if self.zero_pose_terms_change_nothing(w, pose, e, None) {
-            return;
-        }
-        products::add_gram(&mut self.pose_pose, pose, w);
-        products::add_cross(&mut self.pose_gradient, pose, e, w);
+        self.add_direct_pose_with(w, pose, e, false);
     }
 
     /// [`Reduced::add_direct`] on equations accumulated from [`Reduced::default`] by
@@ -105,13 +95,7 @@ impl Reduced {
         e: &Vector3<f64>,
     ) {
         debug_assert!(!self.has_negative_zero(true));
-        if !self.zero_pose_terms_skippable(w, pose, e, Some(corr), true) {
-            products::add_gram(&mut self.pose_pose, pose, w);
-            products::add_cross(&mut self.pose_correction, pose, corr, w);
-            products::add_cross(&mut self.pose_gradient, pose, e, w);
-        }
-        products::add_gram(&mut self.correction_correction, corr, w);
-        products::add_cross(&mut self.correction_gradient, corr, e, w);
+        self.add_direct_with(w, pose, corr, e, true);
     }
 
     /// [`Reduced::add_direct_pose`] on equations accumulated from [`Reduced::default`] by
@@ -123,11 +107,42 @@ impl Reduced {
         e: &Vector3<f64>,
     ) {
         debug_assert!(!self.has_negative_zero(false));
-        if self.zero_pose_terms_skippable(w, pose, e, None, true) {
-            return;
+        self.add_direct_pose_with(w, pose, e, true);
+    }
+
+    /// [`Reduced::add_direct`]; `accumulated`: the blocks hold no `−0`
+    /// ([`Reduced::has_negative_zero`]), so that need not be checked.
+    #[inline(always)]
+    fn add_direct_with(
+        &mut self,
+        w: f64,
+        pose: &Matrix3x6,
+        corr: &Matrix3xK,
+        e: &Vector3<f64>,
+        accumulated: bool,
+    ) {
+        if !self.zero_pose_terms_skippable(w, pose, e, Some(corr), accumulated) {
+            products::add_gram(&mut self.pose_pose, pose, w);
+            products::add_cross(&mut self.pose_correction, pose, corr, w);
+            products::add_cross(&mut self.pose_gradient, pose, e, w);
         }
-        products::add_gram(&mut self.pose_pose, pose, w);
-        products::add_cross(&mut self.pose_gradient, pose, e, w);
+        products::add_gram(&mut self.correction_correction, corr, w);
+        products::add_cross(&mut self.correction_gradient, corr, e, w);
+    }
+
+    /// [`Reduced::add_direct_pose`]; `accumulated` as in [`Reduced::add_direct_with`].
+    #[inline(always)]
+    fn add_direct_pose_with(
+        &mut self,
+        w: f64,
+        pose: &Matrix3x6,
+        e: &Vector3<f64>,
+        accumulated: bool,
+    ) {
+        if !self.zero_pose_terms_skippable(w, pose, e, None, accumulated) {
+            products::add_gram(&mut self.pose_pose, pose, w);
+            products::add_cross(&mut self.pose_gradient, pose, e, w);
+        }
     }
 
     /// No `−0` in the blocks ([`Reduced::has_negative_zero`]), as equations accumulated
@@ -159,6 +174,7 @@ impl Reduced {
     /// be skipped without changing a bit: each of their entries is then a sum of
     /// products with a zero factor, `±0` when the other factors (`w`, `e`, `corr`) are
     /// finite, and adding `±0` changes no entry of the blocks but a `−0` (into `+0`).
+    #[cfg(test)]
     fn zero_pose_terms_change_nothing(
         &self,
         w: f64,
