@@ -60,48 +60,96 @@ pub fn test_pattern() -> Vec<[(f64, f64); 2]> {
         .collect()
 }
 
-/// The pattern rotated to each of [`ANGLE_STEPS`] orientations, as offsets into an image
-/// of a given row stride (pixels): `offsets[step][2 * k]` and `[2 * k + 1]` are test `k`.
-#[derive(Debug, Clone)]
-pub struct RotatedPattern {
-    stride: usize,
-    /// Offsets from the top-left corner of the square of side `2 SPAN + 1` around the
-    /// keypoint (non-negative, so a table is 2 KiB: the 30 stay in the first-level cache).
-    offsets: Vec<[u32; 512]>,
-}
-
 /// Half the side of the square holding every rotated test point, pixels.
 const SPAN: usize = PATTERN_RADIUS as usize + 1;
 
-impl RotatedPattern {
-    /// Builds the rotated offsets for images `stride` pixels wide.
-    #[must_use]
-    pub fn new(stride: usize) -> Self {
-        let pattern = test_pattern();
-        let offsets = (0..ANGLE_STEPS)
-            .map(|step| {
-                let a = step as f64 * std::f64::consts::TAU / ANGLE_STEPS as f64;
-                let (s, c) = a.sin_cos();
-                let mut o = [0u32; 512];
-                for (k, pair) in pattern.iter().enumerate() {
-                    for (j, &(x, y)) in pair.iter().enumerate() {
-                        let xr = (c * x - s * y).round() as i64 + SPAN as i64;
-                        let yr = (s * x + c * y).round() as i64 + SPAN as i64;
-                        // Beyond u32 only for images over 150 million pixels wide: an
-                        // offset out of the square, which `describe` refuses by panicking.
-                        o[2 * k + j] = u32::try_from(yr * stride as i64 + xr).unwrap_or(u32::MAX);
-                    }
-                }
-                o
-            })
-            .collect();
-        Self { stride, offsets }
-    }
+/// Side of the square holding every rotated test point, pixels.
+const SIDE: usize = 2 * SPAN + 1;
 
-    /// Row stride (pixels) the offsets were built for.
+/// Row stride of a [`Square`], bytes: one row is one 32-byte copy.
+const SQUARE_STRIDE: usize = 32;
+
+/// The smoothed pixels around a keypoint, copied for [`RotatedPattern::describe_with`]:
+/// row `r` of the image's square of side `2 SPAN + 1` in row `r`, columns `0..=2 SPAN`
+/// (the other bytes are never read). A fixed size, so that the 512 test reads need no
+/// bounds check; reused from one keypoint to the next.
+#[derive(Debug, Clone)]
+pub struct Square([u8; SQUARE_STRIDE * SQUARE_STRIDE]);
+
+impl Default for Square {
+    fn default() -> Self {
+        Self([0; SQUARE_STRIDE * SQUARE_STRIDE])
+    }
+}
+
+impl Square {
+    /// Copies the square of side `2 SPAN + 1` whose top-left pixel is at `start` in `data`
+    /// (rows `width` apart); `false` when it does not fit in `data`. Rows are copied 32
+    /// bytes at a time (the last one 29): the bytes past column `2 SPAN` are never read.
+    #[inline(always)]
+    fn fill(&mut self, data: &[u8], width: usize, start: usize) -> bool {
+        let Some(mut rest) = data.get(start..=start + 2 * SPAN * (width + 1)) else {
+            return false;
+        };
+        let (rows, last) = self.0.split_at_mut((SIDE - 1) * SQUARE_STRIDE);
+        for row in rows.chunks_exact_mut(SQUARE_STRIDE) {
+            // Only an image narrower than 3 pixels lacks the 3 bytes after a row.
+            let Some(src) = rest.get(..SQUARE_STRIDE) else {
+                return false;
+            };
+            row.copy_from_slice(src);
+            rest = rest.get(width..).unwrap_or_default();
+        }
+        match (last.get_mut(..SIDE), rest.get(..SIDE)) {
+            (Some(dst), Some(src)) => {
+                dst.copy_from_slice(src);
+                true
+            }
+            _ => false,
+        }
+    }
+}
+
+/// The pattern rotated to each of [`ANGLE_STEPS`] orientations, as offsets into a
+/// [`Square`] (`row * 32 + column`, below 1024): `first[step][k]` and `second[step][k]`
+/// are the two points of test `k`. Independent of the image (1 KiB a step).
+#[derive(Debug, Clone)]
+pub struct RotatedPattern {
+    first: Vec<[u16; 256]>,
+    second: Vec<[u16; 256]>,
+}
+
+impl Default for RotatedPattern {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl RotatedPattern {
+    /// Builds the rotated offsets.
     #[must_use]
-    pub fn stride(&self) -> usize {
-        self.stride
+    pub fn new() -> Self {
+        let pattern = test_pattern();
+        let (mut first, mut second) = (Vec::new(), Vec::new());
+        for step in 0..ANGLE_STEPS {
+            let a = step as f64 * std::f64::consts::TAU / ANGLE_STEPS as f64;
+            let (s, c) = a.sin_cos();
+            let mut o = [[0u16; 256]; 2];
+            for (k, pair) in pattern.iter().enumerate() {
+                for (j, &(x, y)) in pair.iter().enumerate() {
+                    let xr = (c * x - s * y).round() as i64 + SPAN as i64;
+                    let yr = (s * x + c * y).round() as i64 + SPAN as i64;
+                    // Within `0..=2 SPAN` (the points are inside PATTERN_RADIUS, a
+                    // rotation moves them by less than a pixel when rounded); the clamp
+                    // only proves it (`offsets_are_the_rotated_pattern`).
+                    let (xr, yr) = (xr.clamp(0, 2 * SPAN as i64), yr.clamp(0, 2 * SPAN as i64));
+                    o[j][k] = (yr as u16) * SQUARE_STRIDE as u16 + xr as u16;
+                }
+            }
+            first.push(o[0]);
+            second.push(o[1]);
+        }
+        Self { first, second }
     }
 
     /// Descriptor at `(x, y)` (pixels) for orientation `angle` (radians) on the smoothed
@@ -109,7 +157,6 @@ impl RotatedPattern {
     /// caller keeps `(x, y)` at least `PATTERN_RADIUS + 1` pixels from every edge (a
     /// point nearer the top or bottom gets an all-zero descriptor).
     #[must_use]
-    #[inline(always)]
     pub fn describe(
         &self,
         smooth: GrayView<'_>,
@@ -117,29 +164,57 @@ impl RotatedPattern {
         y: usize,
         angle: f32,
     ) -> BinaryDescriptor {
+        self.describe_with(smooth, x, y, angle, &mut Square::default())
+    }
+
+    /// [`RotatedPattern::describe`] with the pixels copied into `square` (reused between
+    /// calls: nothing of it is read before it is written).
+    #[must_use]
+    #[inline(always)]
+    pub fn describe_with(
+        &self,
+        smooth: GrayView<'_>,
+        x: usize,
+        y: usize,
+        angle: f32,
+        square: &mut Square,
+    ) -> BinaryDescriptor {
         let turns = angle / std::f32::consts::TAU;
         let step = ((turns - turns.floor()) * ANGLE_STEPS as f32).round() as usize % ANGLE_STEPS;
-        let o = &self.offsets[step];
-        let w = smooth.width;
         let mut out = [0u8; 32];
+        let (Some(first), Some(second)) = (self.first.get(step), self.second.get(step)) else {
+            return BinaryDescriptor(out);
+        };
         // The square around the keypoint (inside the image: the caller's promise).
         let start = y
             .checked_sub(SPAN)
-            .and_then(|top| (top * w + x).checked_sub(SPAN));
-        let Some(d) = start.and_then(|s| smooth.data.get(s..=s + 2 * SPAN * (w + 1))) else {
+            .and_then(|top| (top * smooth.width + x).checked_sub(SPAN));
+        if !start.is_some_and(|s| square.fill(smooth.data, smooth.width, s)) {
             return BinaryDescriptor(out);
-        };
-        for (byte, chunk) in out.iter_mut().zip(o.chunks_exact(16)) {
-            let mut b = 0u8;
-            for bit in 0..8 {
-                let p = d[chunk[2 * bit] as usize];
-                let q = d[chunk[2 * bit + 1] as usize];
-                b |= u8::from(p < q) << bit;
-            }
-            *byte = b;
+        }
+        let d = &square.0;
+        // The 256 comparisons (one byte each, 0 or 1), then packed eight to a byte.
+        let mut darker = [0u8; 256];
+        for ((t, &p), &q) in darker.iter_mut().zip(first).zip(second) {
+            *t = u8::from(d[usize::from(p) & 1023] < d[usize::from(q) & 1023]);
+        }
+        for (byte, eight) in out.iter_mut().zip(darker.chunks_exact(8)) {
+            *byte = pack_bits(eight);
         }
         BinaryDescriptor(out)
     }
+}
+
+/// The first 8 bytes of `flags` (each 0 or 1) as the bits of one byte, flag `j` in bit
+/// `j`: one multiplication puts flag `j` (bit `8 j` of the little-endian word) in bit
+/// `56 + j`, with no carry (every partial product is a distinct power of two).
+#[inline(always)]
+fn pack_bits(flags: &[u8]) -> u8 {
+    let mut word = [0u8; 8];
+    for (w, &f) in word.iter_mut().zip(flags) {
+        *w = f;
+    }
+    (u64::from_le_bytes(word).wrapping_mul(0x0102_0408_1020_4080) >> 56) as u8
 }
 
 #[cfg(test)]
@@ -157,7 +232,7 @@ mod tests {
             height: h,
             data: &img,
         };
-        let (pattern, tests) = (RotatedPattern::new(w), test_pattern());
+        let (pattern, tests) = (RotatedPattern::new(), test_pattern());
         let mut checked = 0;
         for y in SPAN..h - SPAN {
             for x in (SPAN..w - SPAN).step_by(7) {
@@ -181,6 +256,132 @@ mod tests {
             }
         }
         assert!(checked > 400, "{checked}");
+    }
+
+    /// The offsets of the descriptor as computed before the square copy (issue 34): into
+    /// the image itself, of row stride `w`.
+    fn offsets_in_image(w: usize) -> Vec<[u32; 512]> {
+        (0..ANGLE_STEPS)
+            .map(|step| {
+                let a = step as f64 * std::f64::consts::TAU / ANGLE_STEPS as f64;
+                let (s, c) = a.sin_cos();
+                let mut o = [0u32; 512];
+                for (k, pair) in test_pattern().iter().enumerate() {
+                    for (j, &(x, y)) in pair.iter().enumerate() {
+                        let xr = (c * x - s * y).round() as i64 + SPAN as i64;
+                        let yr = (s * x + c * y).round() as i64 + SPAN as i64;
+                        o[2 * k + j] = u32::try_from(yr * w as i64 + xr).unwrap_or(u32::MAX);
+                    }
+                }
+                o
+            })
+            .collect()
+    }
+
+    /// The descriptor as computed before the square copy, from [`offsets_in_image`]:
+    /// each read from the image bounds-checked.
+    fn describe_in_image(
+        offsets: &[[u32; 512]],
+        smooth: GrayView<'_>,
+        x: usize,
+        y: usize,
+        angle: f32,
+    ) -> [u8; 32] {
+        let w = smooth.width;
+        let turns = angle / std::f32::consts::TAU;
+        let step = ((turns - turns.floor()) * ANGLE_STEPS as f32).round() as usize % ANGLE_STEPS;
+        let o = &offsets[step];
+        let mut out = [0u8; 32];
+        let start = y
+            .checked_sub(SPAN)
+            .and_then(|top| (top * w + x).checked_sub(SPAN));
+        let Some(d) = start.and_then(|s| smooth.data.get(s..=s + 2 * SPAN * (w + 1))) else {
+            return out;
+        };
+        for (byte, chunk) in out.iter_mut().zip(o.chunks_exact(16)) {
+            let mut b = 0u8;
+            for bit in 0..8 {
+                let p = d[chunk[2 * bit] as usize];
+                let q = d[chunk[2 * bit + 1] as usize];
+                b |= u8::from(p < q) << bit;
+            }
+            *byte = b;
+        }
+        out
+    }
+
+    /// [`RotatedPattern::describe_with`] gives the descriptor read from the image itself,
+    /// byte for byte: at every pixel of seeded random images (the edges included, where
+    /// both give all zeros or read the rows' neighbours), at every angle step, with one
+    /// square reused from call to call (filled with noise first).
+    #[test]
+    fn describe_is_the_describe_in_the_image() {
+        let pattern = RotatedPattern::new();
+        let mut square = Square::default();
+        let noise = crate::test_noise::noise_bytes(square.0.len(), 99);
+        square.0.copy_from_slice(&noise);
+        let mut checked = [0usize; 2];
+        for (w, h, seed) in [
+            (3, 40, 1),
+            (29, 31, 2),
+            (30, 33, 3),
+            (31, 29, 4),
+            (64, 45, 5),
+        ] {
+            let img = crate::test_noise::noise_bytes(w * h, seed);
+            let offsets = offsets_in_image(w);
+            let view = GrayView {
+                width: w,
+                height: h,
+                data: &img,
+            };
+            for step in 0..ANGLE_STEPS {
+                // On the step, and either side of the rounding between two steps.
+                let centre = step as f32 * std::f32::consts::TAU / ANGLE_STEPS as f32;
+                let half = 0.5 * std::f32::consts::TAU / ANGLE_STEPS as f32;
+                for angle in [centre, centre + half * 0.999, centre - half * 1.001 - 12.0] {
+                    for y in 0..h {
+                        for x in 0..w {
+                            let want = describe_in_image(&offsets, view, x, y, angle);
+                            let got = pattern.describe_with(view, x, y, angle, &mut square);
+                            assert_eq!(got.0, want, "{w}x{h} ({x}, {y}) angle {angle}");
+                            checked[usize::from(want != [0; 32])] += 1;
+                        }
+                    }
+                }
+            }
+        }
+        // Both kinds: squares outside the image, and real descriptors.
+        assert!(checked[0] > 1000 && checked[1] > 10_000, "{checked:?}");
+    }
+
+    /// The clamp in [`RotatedPattern::new`] changes no offset: every rotated point is
+    /// inside the square.
+    #[test]
+    fn offsets_are_the_rotated_pattern() {
+        let pattern = RotatedPattern::new();
+        for step in 0..ANGLE_STEPS {
+            let a = step as f64 * std::f64::consts::TAU / ANGLE_STEPS as f64;
+            let (s, c) = a.sin_cos();
+            for (k, pair) in test_pattern().iter().enumerate() {
+                for (j, &(x, y)) in pair.iter().enumerate() {
+                    let xr = (c * x - s * y).round() as i64 + SPAN as i64;
+                    let yr = (s * x + c * y).round() as i64 + SPAN as i64;
+                    assert!((0..SIDE as i64).contains(&xr) && (0..SIDE as i64).contains(&yr));
+                    let o = [pattern.first[step][k], pattern.second[step][k]][j];
+                    assert_eq!(i64::from(o), yr * SQUARE_STRIDE as i64 + xr);
+                }
+            }
+        }
+    }
+
+    /// [`pack_bits`] on every byte: flag `j` lands in bit `j`.
+    #[test]
+    fn pack_bits_is_bit_by_bit() {
+        for byte in 0..=255u8 {
+            let flags: Vec<u8> = (0..8).map(|j| (byte >> j) & 1).collect();
+            assert_eq!(pack_bits(&flags), byte);
+        }
     }
 
     #[test]

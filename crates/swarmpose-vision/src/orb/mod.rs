@@ -15,7 +15,7 @@ use crate::features::{BinaryDescriptor, FeatureExtractor, Features, GrayView, Ke
 use crate::image::blur5;
 use crate::simd;
 
-use brief::{PATTERN_RADIUS, RotatedPattern};
+use brief::{PATTERN_RADIUS, RotatedPattern, Square};
 use fast::{Corner, FastScratch, centroid_angle, disc_half_widths, fast9, harris};
 
 /// Radius of the orientation disc, pixels (ORB's half patch size).
@@ -232,16 +232,9 @@ fn describe_in(
         height: image.height,
         data: &s.smooth,
     };
-    // The pattern's offsets depend on the row stride only: built once per image width.
-    if s.pattern
-        .as_ref()
-        .is_some_and(|p| p.stride() != image.width)
-    {
-        s.pattern = None;
-    }
-    let pattern = s
-        .pattern
-        .get_or_insert_with(|| RotatedPattern::new(image.width));
+    // The pattern's offsets are into a copy of the keypoint's square: built once.
+    let pattern = s.pattern.get_or_insert_with(RotatedPattern::new);
+    let mut square = Square::default();
     let inside = |k: &Keypoint| {
         let (x, y) = (k.x.round(), k.y.round());
         x >= BORDER as f32
@@ -254,7 +247,7 @@ fn describe_in(
     for k in keypoints {
         out.push(if inside(k) {
             let (x, y) = (k.x.round() as usize, k.y.round() as usize);
-            pattern.describe(view, x, y, k.angle)
+            pattern.describe_with(view, x, y, k.angle, &mut square)
         } else {
             // Too close to the border for the pattern: an all-zero descriptor (rarely
             // the nearest neighbour of anything real).
