@@ -361,14 +361,18 @@ impl crate::simd::Kernel for Blur5<'_> {
 #[inline(always)]
 fn blur5_in(img: GrayView<'_>, tmp: &mut Vec<u16>, out: &mut Vec<u8>) {
     let (w, h) = (img.width, img.height);
-    tmp.clear();
+    let d = img.data;
+    // Every element of `tmp` and `out` is written below when the image holds its `w h`
+    // pixels: nothing to clear then (a short image leaves zeros, as before).
+    if d.len() < w * h {
+        tmp.clear();
+        out.clear();
+    }
     tmp.resize(w * h, 0);
-    out.clear();
     out.resize(w * h, 0);
     if w == 0 || h == 0 {
         return;
     }
-    let d = img.data;
     for (row, trow) in d.chunks_exact(w).zip(tmp.chunks_exact_mut(w)) {
         let at = |x: usize, dx: isize| -> u16 {
             let xx = (x as isize + dx).clamp(0, w as isize - 1) as usize;
@@ -426,6 +430,27 @@ mod sampling_bits;
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// [`blur5`] into buffers left by a larger image (not cleared) gives what it gives
+    /// into new ones, also for an image shorter than its size says (zero rows).
+    #[test]
+    fn blur_into_used_buffers() {
+        let (w, h) = (37, 23);
+        let data = crate::test_noise::noise_bytes(w * h, 5);
+        let (mut tmp, mut out) = (vec![7u16; 2 * w * h], vec![9u8; 2 * w * h]);
+        for len in [w * h, w * h - 3 * w - 5, w * h] {
+            let img = GrayView {
+                width: w,
+                height: h,
+                data: &data[..len],
+            };
+            let (mut t, mut o) = (Vec::new(), Vec::new());
+            blur5(img, &mut t, &mut o);
+            blur5(img, &mut tmp, &mut out);
+            assert_eq!(out, o, "{len} pixels");
+            assert_eq!(tmp, t, "{len} pixels");
+        }
+    }
 
     #[test]
     fn bilinear_and_blur() {

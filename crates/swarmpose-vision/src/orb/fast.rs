@@ -78,6 +78,9 @@ fn run4(p: [u8; 8], side: impl Fn(u8) -> bool) -> bool {
 #[derive(Debug, Clone, Default)]
 pub struct FastScratch {
     scores: Vec<u16>,
+    /// `scores` holds zeros only: a call leaves it so (it zeroes the scores it wrote), and
+    /// the next then clears nothing. False while a call runs (a panic leaves it false).
+    scores_zero: bool,
     candidates: Vec<Corner>,
     pass: Vec<u8>,
 }
@@ -131,13 +134,21 @@ fn fast9_in(
     }
     let FastScratch {
         scores,
+        scores_zero,
         candidates,
         pass,
     } = scratch;
-    scores.clear();
+    // All zeros, cleared only when a call did not finish.
+    if !*scores_zero {
+        scores.clear();
+    }
     scores.resize(w * h, 0);
+    *scores_zero = false;
     let d = img.data;
     candidates.clear();
+    // The corners found so far are `candidates[..count]`; the vector is kept 8 longer
+    // than that, as slots for the next chunk's.
+    let mut count = 0;
     let (x0, n) = (border, w - 2 * border);
     pass.clear();
     pass.resize(n, 0);
@@ -179,7 +190,20 @@ fn fast9_in(
                 .iter()
                 .rev()
                 .fold(0u64, |w, &f| (w << 8) | u64::from(f));
-            let mut found = [Corner { x: 0, y, score: 0 }; 8];
+            if word == 0 {
+                continue;
+            }
+            if candidates.len() < count + 8 {
+                candidates.resize(
+                    count + 8,
+                    Corner {
+                        x: 0,
+                        y: 0,
+                        score: 0,
+                    },
+                );
+            }
+            let found = &mut candidates[count..count + 8];
             let mut kept = 0;
             while word != 0 {
                 let k = base + (word.trailing_zeros() / 8) as usize;
@@ -213,9 +237,10 @@ fn fast9_in(
                 found[kept & 7] = Corner { x, y, score: s };
                 kept += usize::from(corner);
             }
-            candidates.extend_from_slice(&found[..kept]);
+            count += kept;
         }
     }
+    candidates.truncate(count);
     for &c in candidates.iter() {
         let i = c.y * w + c.x;
         let s = c.score;
@@ -227,6 +252,11 @@ fn fast9_in(
             out.push(c);
         }
     }
+    // The only nonzero scores are the candidates': back to all zeros.
+    for c in candidates.iter() {
+        scores[c.y * w + c.x] = 0;
+    }
+    *scores_zero = true;
 }
 
 /// Harris corner response `det(M) - 0.04 trace(M)^2` of the structure tensor summed over
@@ -385,6 +415,49 @@ mod tests {
             assert!(t > 60 || out.len() > 20, "{} corners at {t}", out.len());
             assert_eq!(out, fast9_by_definition(img, t, 3), "threshold {t}");
         }
+    }
+
+    /// One scratch reused over images of other sizes, thresholds and borders, and one
+    /// left by an interrupted call (scores not zero), give the corners by definition; a
+    /// finished call leaves the scores all zero.
+    #[test]
+    fn reused_scratch_gives_the_corners_by_definition() {
+        let mut s = FastScratch::default();
+        let mut out = Vec::new();
+        for (i, (w, h, t, border)) in [
+            (97, 61, 10, 3),
+            (61, 97, 20, 5),
+            (50, 40, 5, 3),
+            (97, 61, 1, 8),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let data = crate::test_noise::noise_bytes(w * h, 20 + i as u32);
+            let img = GrayView {
+                width: w,
+                height: h,
+                data: &data,
+            };
+            fast9(img, t, border, &mut s, &mut out);
+            assert!(out.len() > 20, "{}", out.len());
+            assert_eq!(out, fast9_by_definition(img, t, border), "image {i}");
+            assert!(
+                s.scores_zero && s.scores.iter().all(|&v| v == 0),
+                "image {i}"
+            );
+        }
+        // As a panic would leave it.
+        s.scores.iter_mut().for_each(|v| *v = 900);
+        s.scores_zero = false;
+        let data = crate::test_noise::noise_bytes(97 * 61, 30);
+        let img = GrayView {
+            width: 97,
+            height: 61,
+            data: &data,
+        };
+        fast9(img, 10, 3, &mut s, &mut out);
+        assert_eq!(out, fast9_by_definition(img, 10, 3));
     }
 
     #[test]
