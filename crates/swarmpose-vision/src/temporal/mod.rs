@@ -137,11 +137,15 @@ fn nearest_both_in<D: Descriptor>(
             .collect(),
         None => vec![(0, xs_a.len()); b_kps.len()],
     };
-    // Items of b in column order, contiguous.
-    let b_sorted: Vec<(usize, f32, &D)> = order_b.iter().map(|&j| (j, b_kps[j].y, &b[j])).collect();
+    // Items of b in column order, contiguous, with the range of a's sorted positions each
+    // sees; their best matches in the same order (`best_b_sorted[k]` is item `k`'s).
+    let b_sorted: Vec<(usize, f32, (usize, usize), &D)> = order_b
+        .iter()
+        .map(|&j| (j, b_kps[j].y, a_range[j], &b[j]))
+        .collect();
     let none = (usize::MAX, f32::INFINITY, f32::INFINITY);
     let mut best_a = vec![none; a.len()];
-    let mut best_b = vec![none; b.len()];
+    let mut best_b_sorted = vec![none; b_sorted.len()];
     for (pos, &i) in order_a.iter().enumerate() {
         let (ka, da) = (&a_kps[i], &a[i]);
         let (lo, hi, scan) = match window {
@@ -161,8 +165,15 @@ fn nearest_both_in<D: Descriptor>(
             None => (0, b.len(), (0, b.len())),
         };
         let best = &mut best_a[i];
-        for (k, &(j, yb, db)) in b_sorted.iter().enumerate().take(scan.1).skip(scan.0) {
-            let (ra, rb) = a_range[j];
+        // The items scanned and their best matches, as slices of one length (no bounds
+        // check per item); none when the scan is empty.
+        let (Some(items), Some(bests)) = (
+            b_sorted.get(scan.0..scan.1),
+            best_b_sorted.get_mut(scan.0..scan.1),
+        ) else {
+            continue;
+        };
+        for (k, (&(j, yb, (ra, rb), db), best_j)) in (scan.0..).zip(items.iter().zip(bests)) {
             // Not beyond the window (a NaN row is not beyond it, as before).
             let rows = window.is_none_or(|w| (ka.y - yb).abs().partial_cmp(&w) != Some(Greater));
             let a_sees = rows && k >= lo && k < hi;
@@ -171,14 +182,16 @@ fn nearest_both_in<D: Descriptor>(
             // of the window is infinite, which changes no best.
             let d = da.distance(db);
             offer(best, j, if a_sees { d } else { f32::INFINITY });
-            offer(&mut best_b[j], i, if b_sees { d } else { f32::INFINITY });
+            offer(best_j, i, if b_sees { d } else { f32::INFINITY });
         }
     }
     let found = |m: Best| (m.0 != usize::MAX).then_some(m);
-    (
-        best_a.into_iter().map(found).collect(),
-        best_b.into_iter().map(found).collect(),
-    )
+    // Back from column order to b's order.
+    let mut found_b = vec![None; b.len()];
+    for (&(j, ..), &m) in b_sorted.iter().zip(&best_b_sorted) {
+        found_b[j] = found(m);
+    }
+    (best_a.into_iter().map(found).collect(), found_b)
 }
 
 /// Mutual nearest neighbours between features `a` and `b` (keypoints and descriptors,
