@@ -117,6 +117,50 @@ impl<D: Descriptor> crate::simd::Kernel for NearestBoth<'_, D> {
     }
 }
 
+/// An item of a during [`nearest_both_in`]: its keypoint, descriptor, index and position
+/// in column order, and the window.
+struct A<'a, D> {
+    ka: &'a Keypoint,
+    da: &'a D,
+    i: usize,
+    pos: usize,
+    window: Option<f32>,
+}
+
+impl<D: Descriptor> A<'_, D> {
+    /// Offers the distance to each of `items` (items of b in column order, with the range
+    /// of a's positions each sees) to the item's best match (`bests`, the same length)
+    /// and, when `A_SEES` (the items are in a's window), to a's (`best`). An item beyond
+    /// the window's rows offers nothing.
+    #[inline(always)]
+    fn scan<const A_SEES: bool>(
+        &self,
+        items: &[(usize, f32, (usize, usize), &D)],
+        bests: &mut [Best],
+        best: &mut Best,
+    ) {
+        let A {
+            ka,
+            da,
+            i,
+            pos,
+            window,
+        } = *self;
+        for (&(j, yb, (ra, rb), db), best_j) in items.iter().zip(bests) {
+            // Not beyond the window (a NaN row is not beyond it, as before).
+            let rows = window.is_none_or(|w| (ka.y - yb).abs().partial_cmp(&w) != Some(Greater));
+            let b_sees = rows && pos >= ra && pos < rb;
+            // Without branches on the window (they are unpredictable): a distance out
+            // of the window is infinite, which changes no best.
+            let d = da.distance(db);
+            if A_SEES {
+                offer(best, j, if rows { d } else { f32::INFINITY });
+            }
+            offer(best_j, i, if b_sees { d } else { f32::INFINITY });
+        }
+    }
+}
+
 /// [`nearest_both`], inlined into each instruction set's compilation.
 #[inline(always)]
 fn nearest_both_in<D: Descriptor>(
@@ -162,27 +206,38 @@ fn nearest_both_in<D: Descriptor>(
                 );
                 (lo, hi, scan)
             }
-            None => (0, b.len(), (0, b.len())),
+            None => (0, b_sorted.len(), (0, b_sorted.len())),
         };
         let best = &mut best_a[i];
-        // The items scanned and their best matches, as slices of one length (no bounds
-        // check per item); none when the scan is empty.
-        let (Some(items), Some(bests)) = (
-            b_sorted.get(scan.0..scan.1),
-            best_b_sorted.get_mut(scan.0..scan.1),
-        ) else {
-            continue;
+        // The scan in three parts, in column order: a sees the middle one's items only
+        // (`lo..hi`, empty when the window is), the scan's extra items either side only
+        // see a (when their own window holds it).
+        let mid_lo = lo.clamp(scan.0, scan.1.max(scan.0));
+        let mid_hi = hi.clamp(mid_lo, scan.1.max(mid_lo));
+        let one = A {
+            ka,
+            da,
+            i,
+            pos,
+            window,
         };
-        for (k, (&(j, yb, (ra, rb), db), best_j)) in (scan.0..).zip(items.iter().zip(bests)) {
-            // Not beyond the window (a NaN row is not beyond it, as before).
-            let rows = window.is_none_or(|w| (ka.y - yb).abs().partial_cmp(&w) != Some(Greater));
-            let a_sees = rows && k >= lo && k < hi;
-            let b_sees = rows && pos >= ra && pos < rb;
-            // Without branches on the window (they are unpredictable): a distance out
-            // of the window is infinite, which changes no best.
-            let d = da.distance(db);
-            offer(best, j, if a_sees { d } else { f32::INFINITY });
-            offer(best_j, i, if b_sees { d } else { f32::INFINITY });
+        for (range, a_sees) in [
+            (scan.0..mid_lo, false),
+            (mid_lo..mid_hi, true),
+            (mid_hi..scan.1, false),
+        ] {
+            // The items and their best matches, as slices of one length (no bounds check
+            // per item); none when the range is empty.
+            let (Some(items), Some(bests)) =
+                (b_sorted.get(range.clone()), best_b_sorted.get_mut(range))
+            else {
+                continue;
+            };
+            if a_sees {
+                one.scan::<true>(items, bests, best);
+            } else {
+                one.scan::<false>(items, bests, best);
+            }
         }
     }
     let found = |m: Best| (m.0 != usize::MAX).then_some(m);
@@ -290,7 +345,15 @@ mod tests {
         };
         let (ka, a) = set(300);
         let (kb, b) = set(250);
-        for window in [None, Some(0.25), Some(7.5), Some(20.0), Some(1000.0)] {
+        for window in [
+            None,
+            Some(-1.0),
+            Some(0.0),
+            Some(0.25),
+            Some(7.5),
+            Some(20.0),
+            Some(1000.0),
+        ] {
             let (ab, ba) = nearest_both(&ka, &a, &kb, &b, window);
             assert_eq!(ab, nearest_one_way(&ka, &a, &kb, &b, window), "{window:?}");
             assert_eq!(ba, nearest_one_way(&kb, &b, &ka, &a, window), "{window:?}");
