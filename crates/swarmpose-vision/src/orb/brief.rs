@@ -1,6 +1,7 @@
 //! Steered (rotated) BRIEF: 256 intensity comparisons on a smoothed image over a fixed
 //! test pattern, rotated to the keypoint orientation in 30 discrete steps.
 
+use super::pack_bits;
 use crate::features::{BinaryDescriptor, GrayView};
 
 /// Radius of the disc holding every test point, pixels. A rotated point stays within
@@ -205,18 +206,6 @@ impl RotatedPattern {
     }
 }
 
-/// The first 8 bytes of `flags` (each 0 or 1) as the bits of one byte, flag `j` in bit
-/// `j`: one multiplication puts flag `j` (bit `8 j` of the little-endian word) in bit
-/// `56 + j`, with no carry (every partial product is a distinct power of two).
-#[inline(always)]
-fn pack_bits(flags: &[u8]) -> u8 {
-    let mut word = [0u8; 8];
-    for (w, &f) in word.iter_mut().zip(flags) {
-        *w = f;
-    }
-    (u64::from_le_bytes(word).wrapping_mul(0x0102_0408_1020_4080) >> 56) as u8
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -372,15 +361,6 @@ mod tests {
                     assert_eq!(i64::from(o), yr * SQUARE_STRIDE as i64 + xr);
                 }
             }
-        }
-    }
-
-    /// [`pack_bits`] on every byte: flag `j` lands in bit `j`.
-    #[test]
-    fn pack_bits_is_bit_by_bit() {
-        for byte in 0..=255u8 {
-            let flags: Vec<u8> = (0..8).map(|j| (byte >> j) & 1).collect();
-            assert_eq!(pack_bits(&flags), byte);
         }
     }
 

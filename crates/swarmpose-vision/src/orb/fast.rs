@@ -1,6 +1,7 @@
 //! FAST-9 corners (Rosten & Drummond) with a 3x3 non-maximum suppression, and the
 //! Harris response and intensity-centroid orientation used to rank and orient them.
 
+use super::pack_bits;
 use crate::features::GrayView;
 use crate::simd;
 
@@ -217,14 +218,20 @@ fn fast9_in(
                     p0[k], p1[k], p2[k], p3[k], p4[k], p5[k], p6[k], p7[k], p8[k], p9[k], p10[k],
                     p11[k], p12[k], p13[k], p14[k], p15[k],
                 ];
-                let (mut bright, mut dark) = (0u32, 0u32);
+                // The sides as flags (one byte each, 0 or 1), packed into 16-bit masks,
+                // point `j` in bit `j`.
+                let (mut above, mut below) = ([0u8; 16], [0u8; 16]);
                 let (mut sb, mut sd) = (0u32, 0u32);
-                for (j, &p) in ring.iter().enumerate() {
-                    bright |= u32::from(p > hi8) << j;
-                    dark |= u32::from(p < lo8) << j;
+                for ((a, b), &p) in above.iter_mut().zip(&mut below).zip(&ring) {
+                    *a = u8::from(p > hi8);
+                    *b = u8::from(p < lo8);
                     sb += u32::from(p.saturating_sub(hi8));
                     sd += u32::from(lo8.saturating_sub(p));
                 }
+                let mask = |flags: &[u8; 16]| {
+                    u32::from(pack_bits(&flags[..8])) | u32::from(pack_bits(&flags[8..])) << 8
+                };
+                let (bright, dark) = (mask(&above), mask(&below));
                 let (is_bright, is_dark) = (has_run9(bright), has_run9(dark));
                 let score = match (is_bright, is_dark) {
                     (true, true) => sb.max(sd),

@@ -195,6 +195,18 @@ impl OrbExtractor {
     }
 }
 
+/// The first 8 bytes of `flags` (each 0 or 1) as the bits of one byte, flag `j` in bit
+/// `j`: one multiplication puts flag `j` (bit `8 j` of the little-endian word) in bit
+/// `56 + j`, with no carry (every partial product is a distinct power of two).
+#[inline(always)]
+fn pack_bits(flags: &[u8]) -> u8 {
+    let mut word = [0u8; 8];
+    for (w, &f) in word.iter_mut().zip(flags) {
+        *w = f;
+    }
+    (u64::from_le_bytes(word).wrapping_mul(0x0102_0408_1020_4080) >> 56) as u8
+}
+
 /// A call of [`OrbExtractor::detect`] for [`simd::dispatch`].
 struct Detect<'a>(&'a OrbExtractor, GrayView<'a>, &'a mut Scratch);
 
@@ -285,6 +297,15 @@ mod tests {
         (0..w * h)
             .map(|i| cells[(i / w / 4) * (w / 4 + 1) + (i % w) / 4])
             .collect()
+    }
+
+    /// [`pack_bits`] on every byte: flag `j` lands in bit `j`.
+    #[test]
+    fn pack_bits_is_bit_by_bit() {
+        for byte in 0..=255u8 {
+            let flags: Vec<u8> = (0..8).map(|j| (byte >> j) & 1).collect();
+            assert_eq!(pack_bits(&flags), byte);
+        }
     }
 
     #[test]
