@@ -140,9 +140,10 @@ impl RotatedPattern {
                 for (j, &(x, y)) in pair.iter().enumerate() {
                     let xr = (c * x - s * y).round() as i64 + SPAN as i64;
                     let yr = (s * x + c * y).round() as i64 + SPAN as i64;
-                    // Within `0..=2 SPAN` (the points are inside PATTERN_RADIUS, a
-                    // rotation moves them by less than a pixel when rounded); the clamp
-                    // only proves it (`offsets_are_the_rotated_pattern`).
+                    // Within `0..=2 SPAN` already (the points are inside PATTERN_RADIUS,
+                    // and rounding moves them by less than a pixel): the clamp changes no
+                    // offset (`offsets_are_the_rotated_pattern`), it only keeps every one
+                    // inside the square whatever the pattern.
                     let (xr, yr) = (xr.clamp(0, 2 * SPAN as i64), yr.clamp(0, 2 * SPAN as i64));
                     o[j][k] = (yr as u16) * SQUARE_STRIDE as u16 + xr as u16;
                 }
@@ -156,7 +157,8 @@ impl RotatedPattern {
     /// Descriptor at `(x, y)` (pixels) for orientation `angle` (radians) on the smoothed
     /// image `smooth`; bit `k` is set when test point 1 is darker than test point 2. The
     /// caller keeps `(x, y)` at least `PATTERN_RADIUS + 1` pixels from every edge (a
-    /// point nearer the top or bottom gets an all-zero descriptor).
+    /// point nearer the top or bottom, or in an image narrower than 3 pixels, gets an
+    /// all-zero descriptor; one nearer the left or right reads the neighbouring rows).
     #[must_use]
     pub fn describe(
         &self,
