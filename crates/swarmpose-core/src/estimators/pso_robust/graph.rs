@@ -100,7 +100,7 @@ impl PairGraph {
                 pairs.push((li as u32, lj as u32, 0));
             }
         }
-        count_common(&mut pairs, &rows, words);
+        count_common_dispatched(&mut pairs, &rows, words);
         let scored = rank_prefix(&mut pairs, max_pairs, m);
         let lanes = scored.next_multiple_of(LANES);
         let mut graph = Self {
@@ -306,9 +306,27 @@ impl PairGraph {
     }
 }
 
+/// [`count_common`] compiled for the best instruction set of this CPU through [`pulp`]'s
+/// runtime dispatch (x86-64-v3 has POPCNT: the target's baseline counts bits with a dozen
+/// shifts and masks per word). Integer counts: the same in every instruction set.
+fn count_common_dispatched(pairs: &mut [(u32, u32, u32)], rows: &[u64], words: usize) {
+    /// The call, as pulp's unit of dispatch.
+    struct Kernel<'a>(&'a mut [(u32, u32, u32)], &'a [u64], usize);
+    impl pulp::WithSimd for Kernel<'_> {
+        type Output = ();
+        #[inline(always)]
+        fn with_simd<S: pulp::Simd>(self, _simd: S) {
+            count_common(self.0, self.1, self.2);
+        }
+    }
+    pulp::Arch::new().dispatch(Kernel(pairs, rows, words));
+}
+
 /// Sets each pair's common-neighbour count from the adjacency `rows` (`words` words per
 /// row). Rows of up to 8 words (512 points; the default keeps 400) take a loop unrolled for
-/// their length.
+/// their length. Inlined into its callers, so that [`count_common_dispatched`] compiles it
+/// for the instruction set it dispatches to.
+#[inline(always)]
 fn count_common(pairs: &mut [(u32, u32, u32)], rows: &[u64], words: usize) {
     match words {
         1 => count_common_fixed::<1>(pairs, rows),
@@ -329,6 +347,7 @@ fn count_common(pairs: &mut [(u32, u32, u32)], rows: &[u64], words: usize) {
 }
 
 /// [`count_common`] for rows of `W` words.
+#[inline(always)]
 fn count_common_fixed<const W: usize>(pairs: &mut [(u32, u32, u32)], rows: &[u64]) {
     let rows = rows.as_chunks::<W>().0;
     for p in pairs {
@@ -340,6 +359,7 @@ fn count_common_fixed<const W: usize>(pairs: &mut [(u32, u32, u32)], rows: &[u64
 /// Number of bits set in both `a` and `b` (equal lengths): the common neighbours of two
 /// adjacency rows. Slices rather than indices, so the loop has no bounds checks and
 /// vectorises (integer sums: any order gives the same count).
+#[inline(always)]
 fn common_count(a: &[u64], b: &[u64]) -> u32 {
     a.iter().zip(b).map(|(x, y)| (x & y).count_ones()).sum()
 }
@@ -509,7 +529,10 @@ mod tests {
                     (i, rng.random_range(0..m as u32), u32::MAX)
                 })
                 .collect();
+            let mut dispatched = pairs.clone();
             count_common(&mut pairs, &rows, words);
+            count_common_dispatched(&mut dispatched, &rows, words);
+            assert_eq!(pairs, dispatched, "{words} words: baseline and dispatched");
             for &(i, j, c) in &pairs {
                 let (ri, rj) = (i as usize * words, j as usize * words);
                 let expected: u32 = (0..words)
