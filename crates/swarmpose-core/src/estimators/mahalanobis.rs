@@ -19,7 +19,9 @@
 //! this lets the precise lateral positions of far points count without their depth noise
 //! pulling the translation.
 
-use nalgebra::{Isometry3, Matrix3, Matrix3x6, Matrix6, Translation3, UnitQuaternion, Vector6};
+use nalgebra::{
+    Isometry3, Matrix3, Matrix3x6, Matrix6, Rotation3, Translation3, UnitQuaternion, Vector6,
+};
 
 use crate::error::PoseError;
 use crate::geometry::{Correspondences, MIN_CORRESPONDENCES};
@@ -55,9 +57,9 @@ pub fn refine_mahalanobis(
             "the Mahalanobis gate must be positive, got {gate}"
         )));
     }
-    let information = |pose: &Isometry3<f64>, i: usize| -> Option<Matrix3<f64>> {
-        let r = pose.rotation.to_rotation_matrix();
-        (r.matrix() * src_cov[i] * r.matrix().transpose() + dst_cov[i]).try_inverse()
+    // The rotation's matrix once per step, not once per row (the same bits).
+    let information = |r: &Rotation3<f64>, i: usize| -> Option<Matrix3<f64>> {
+        inverse3(&(r.matrix() * src_cov[i] * r.matrix().transpose() + dst_cov[i]))
     };
     let select = |pose: &Isometry3<f64>, gate: f64, out: &mut Vec<usize>| {
         let rot = pose.rotation.to_rotation_matrix();
@@ -67,8 +69,7 @@ pub fn refine_mahalanobis(
             // rᵀ Σ⁻¹ r ≥ |r|² / tr Σ (tr Σ_s is rotation-invariant): most wrong matches
             // fail without an inversion.
             r.norm_squared() < gate * (src_cov[i].trace() + dst_cov[i].trace())
-                && (rot.matrix() * src_cov[i] * rot.matrix().transpose() + dst_cov[i])
-                    .try_inverse()
+                && inverse3(&(rot.matrix() * src_cov[i] * rot.matrix().transpose() + dst_cov[i]))
                     .is_some_and(|w| r.dot(&(w * r)) < gate)
         }));
     };
@@ -88,8 +89,9 @@ pub fn refine_mahalanobis(
         for _ in 0..STEPS_PER_ROUND {
             let mut h = Matrix6::<f64>::zeros();
             let mut g = Vector6::<f64>::zeros();
+            let rot = pose.rotation.to_rotation_matrix();
             for &i in &inliers {
-                let Some(w) = information(&pose, i) else {
+                let Some(w) = information(&rot, i) else {
                     continue;
                 };
                 add_point(&mut h, &mut g, &pose, data, i, &w);
@@ -182,6 +184,40 @@ fn add_point_full(
         .copy_from(&(-Matrix3::identity()));
     *h += j.transpose() * w * j;
     *g += j.transpose() * w * r;
+}
+
+/// The determinant and the inverse (`None` when the determinant is zero) of a 3 × 3
+/// matrix: nalgebra's `determinant()` and `try_inverse()` for three dimensions, the same
+/// operations in the same order (so the same bits), with the determinant computed once and
+/// inline (issue 34: the estimator inverts a covariance per row and round).
+#[inline]
+pub(crate) fn determinant_and_inverse(m: &Matrix3<f64>) -> (f64, Option<Matrix3<f64>>) {
+    let [[m11, m21, m31], [m12, m22, m32], [m13, m23, m33]] = m.data.0;
+    let minor_m12_m23 = m22 * m33 - m32 * m23;
+    let minor_m11_m23 = m21 * m33 - m31 * m23;
+    let minor_m11_m22 = m21 * m32 - m31 * m22;
+    let determinant = m11 * minor_m12_m23 - m12 * minor_m11_m23 + m13 * minor_m11_m22;
+    if determinant == 0.0 {
+        return (determinant, None);
+    }
+    let inverse = Matrix3::new(
+        minor_m12_m23 / determinant,
+        (m13 * m32 - m33 * m12) / determinant,
+        (m12 * m23 - m22 * m13) / determinant,
+        -minor_m11_m23 / determinant,
+        (m11 * m33 - m31 * m13) / determinant,
+        (m13 * m21 - m23 * m11) / determinant,
+        minor_m11_m22 / determinant,
+        (m12 * m31 - m32 * m11) / determinant,
+        (m11 * m22 - m21 * m12) / determinant,
+    );
+    (determinant, Some(inverse))
+}
+
+/// [`determinant_and_inverse`]'s inverse: nalgebra's `try_inverse()` for 3 × 3, inline.
+#[inline]
+pub(crate) fn inverse3(m: &Matrix3<f64>) -> Option<Matrix3<f64>> {
+    determinant_and_inverse(m).1
 }
 
 /// `pose` moved by the solution `δ = (ω, ν)` of `h δ = −g` ([`add_point`]'s
@@ -293,6 +329,38 @@ mod tests {
             let bits = |m: &[f64]| m.iter().map(|v| v.to_bits()).collect::<Vec<u64>>();
             assert_eq!(bits(h.as_slice()), bits(h_ref.as_slice()), "h, case {case}");
             assert_eq!(bits(g.as_slice()), bits(g_ref.as_slice()), "g, case {case}");
+        }
+    }
+
+    #[test]
+    fn determinant_and_inverse_have_nalgebras_bits() {
+        use rand::RngExt;
+        let mut rng = crate::rng::seeded(35);
+        let bits = |m: &Matrix3<f64>| m.iter().map(|v| v.to_bits()).collect::<Vec<u64>>();
+        for case in 0..4000 {
+            let mut m = Matrix3::from_fn(|_, _| match rng.random_range(0..10) {
+                0 => 0.0,
+                1 => -0.0,
+                2 => rng.random_range(-3..=3) as f64, // small integers: exact zero determinants
+                _ => rng.random_range(-1e3..1e3),
+            });
+            match case % 7 {
+                0 => m = m * m.transpose(), // symmetric, as a covariance is
+                1 => m[(rng.random_range(0..3), rng.random_range(0..3))] = f64::NAN,
+                2 => m[(rng.random_range(0..3), rng.random_range(0..3))] = f64::NEG_INFINITY,
+                3 => m *= 1e-120, // the determinant underflows
+                4 => m *= 1e110,  // the determinant overflows
+                5 => m.set_column(2, &m.column(0).clone_owned()), // singular
+                _ => {}
+            }
+            let (det, inverse) = determinant_and_inverse(&m);
+            assert_eq!(det.to_bits(), m.determinant().to_bits(), "case {case}: {m}");
+            let expected = m.try_inverse();
+            assert_eq!(inverse.is_some(), expected.is_some(), "case {case}: {m}");
+            if let (Some(a), Some(b)) = (inverse, expected) {
+                assert_eq!(bits(&a), bits(&b), "case {case}: {m}");
+            }
+            assert_eq!(inverse3(&m).map(|a| bits(&a)), inverse.map(|a| bits(&a)));
         }
     }
 

@@ -40,7 +40,7 @@
 
 use nalgebra::{Isometry3, Matrix3, Matrix6, Point3, Vector3};
 
-use super::mahalanobis::{self, add_point};
+use super::mahalanobis::{self, add_point, determinant_and_inverse, inverse3};
 use super::mixture::outlier_volume;
 use crate::geometry::{Correspondences, MIN_CORRESPONDENCES};
 
@@ -202,10 +202,8 @@ fn second_motion(data: &Correspondences, ray: &Fitted, consensus: &[bool]) -> f6
             .map(|i| {
                 let added = ray.inlier[i] && !consensus[i];
                 let q = rotation * data.src()[i].coords;
-                let information = ray
-                    .noise
-                    .residual_covariance(&q, &data.dst()[i].coords)
-                    .try_inverse();
+                let information =
+                    inverse3(&ray.noise.residual_covariance(&q, &data.dst()[i].coords));
                 Row {
                     weight: if added && information.is_some() {
                         1.0
@@ -296,7 +294,8 @@ fn em(
                 Some((det, w, half_ln_det)) => (det, Some(w), Some(half_ln_det)),
                 None => {
                     let c = noise.residual_covariance(&q, &dst[i].coords);
-                    (c.determinant(), c.try_inverse(), None)
+                    let (det, w) = determinant_and_inverse(&c);
+                    (det, w, None)
                 }
             };
             // det ≥ (2f)³ (every other part of the covariance is positive semidefinite), so
@@ -436,7 +435,7 @@ fn solve_scaled(f: &Matrix3<f64>, s: &Vector3<f64>) -> Option<Vector3<f64>> {
     }
     let d = d.map(|v| 1.0 / v.sqrt());
     let scaled = Matrix3::from_fn(|i, j| f[(i, j)] * d[i] * d[j]);
-    let y = scaled.try_inverse()? * s.component_mul(&d);
+    let y = inverse3(&scaled)? * s.component_mul(&d);
     Some(y.component_mul(&d))
 }
 
@@ -466,7 +465,7 @@ fn scoring_step(
             let w = if step == 0 {
                 row.information
             } else {
-                match noise.residual_covariance(&q, &d).try_inverse() {
+                match inverse3(&noise.residual_covariance(&q, &d)) {
                     Some(w) => w,
                     None => continue,
                 }
