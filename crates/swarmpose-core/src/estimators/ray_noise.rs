@@ -38,11 +38,12 @@
 //! `f` by `k²` and `α` by `k⁻²`, leaves `β`), and the tests are in nats, so the choice and
 //! the fit do not depend on the unit.
 
-use nalgebra::{Isometry3, Matrix3, Matrix6, Point3, Vector3};
+use nalgebra::{Isometry3, Matrix3, Matrix6, Point3, Vector3, Vector6};
 
 use super::mahalanobis::{self, add_point, determinant_and_inverse, inverse3};
 use super::mixture::outlier_volume;
 use crate::geometry::{Correspondences, MIN_CORRESPONDENCES};
+use crate::simd;
 
 /// A noise model that grows with the range along and across the viewing ray from each
 /// frame's origin, fitted by `pso` from the residuals of plain coordinates (see
@@ -387,22 +388,34 @@ fn gauss_newton_step(
     pose: &Isometry3<f64>,
     rows: &[Row],
 ) -> Option<Isometry3<f64>> {
-    let mut h = Matrix6::<f64>::zeros();
-    let mut g = nalgebra::Vector6::<f64>::zeros();
-    for (i, row) in rows.iter().enumerate() {
-        if row.weight < MIN_WEIGHT {
-            continue;
-        }
-        add_point(
-            &mut h,
-            &mut g,
-            pose,
-            data,
-            i,
-            &(row.information * row.weight),
-        );
-    }
+    let (h, g) = simd::dispatch(WeightedNormalEquations { data, pose, rows });
     mahalanobis::gauss_newton_step(pose, &h, &g).map(|(moved, _)| moved)
+}
+
+/// The normal equations of [`gauss_newton_step`]: a [`simd::Kernel`], compiled for the
+/// best instruction set of the CPU (the same operations, so the same bits).
+struct WeightedNormalEquations<'a> {
+    data: &'a Correspondences,
+    pose: &'a Isometry3<f64>,
+    rows: &'a [Row],
+}
+
+impl simd::Kernel for WeightedNormalEquations<'_> {
+    type Output = (Matrix6<f64>, Vector6<f64>);
+
+    #[inline(always)]
+    fn run(self) -> Self::Output {
+        let mut h = Matrix6::<f64>::zeros();
+        let mut g = Vector6::<f64>::zeros();
+        for (i, row) in self.rows.iter().enumerate() {
+            if row.weight < MIN_WEIGHT {
+                continue;
+            }
+            let w = row.information * row.weight;
+            add_point(&mut h, &mut g, self.pose, self.data, i, &w);
+        }
+        (h, g)
+    }
 }
 
 /// The isotropic M step: `2 f = Σ w |e|² / (3 Σ w)`.

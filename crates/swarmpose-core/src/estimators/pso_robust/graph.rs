@@ -306,20 +306,21 @@ impl PairGraph {
     }
 }
 
-/// [`count_common`] compiled for the best instruction set of this CPU through [`pulp`]'s
-/// runtime dispatch (x86-64-v3 has POPCNT: the target's baseline counts bits with a dozen
-/// shifts and masks per word). Integer counts: the same in every instruction set.
+/// [`count_common`] compiled for the best instruction set of this CPU
+/// ([`crate::simd::dispatch`]; x86-64-v3 has POPCNT: the target's baseline counts bits
+/// with a dozen shifts and masks per word). Integer counts: the same in every instruction
+/// set.
 fn count_common_dispatched(pairs: &mut [(u32, u32, u32)], rows: &[u64], words: usize) {
-    /// The call, as pulp's unit of dispatch.
+    /// The call, as a kernel.
     struct Kernel<'a>(&'a mut [(u32, u32, u32)], &'a [u64], usize);
-    impl pulp::WithSimd for Kernel<'_> {
+    impl crate::simd::Kernel for Kernel<'_> {
         type Output = ();
         #[inline(always)]
-        fn with_simd<S: pulp::Simd>(self, _simd: S) {
+        fn run(self) {
             count_common(self.0, self.1, self.2);
         }
     }
-    pulp::Arch::new().dispatch(Kernel(pairs, rows, words));
+    crate::simd::dispatch(Kernel(pairs, rows, words));
 }
 
 /// Sets each pair's common-neighbour count from the adjacency `rows` (`words` words per
