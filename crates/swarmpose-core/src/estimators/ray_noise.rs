@@ -70,7 +70,8 @@ impl RangeNoise {
     }
 
     /// The covariance `K(q) + K(d)` of a residual with rotated source `q = R s` and
-    /// destination `d`.
+    /// destination `d`. Inlined into [`EStep`]'s compilations.
+    #[inline(always)]
     fn residual_covariance(&self, q: &Vector3<f64>, d: &Vector3<f64>) -> Matrix3<f64> {
         let (q2, d2) = (q.norm_squared(), d.norm_squared());
         Matrix3::identity() * (2.0 * self.floor + self.across * (q2 + d2))
@@ -279,7 +280,6 @@ fn em(
         let ln_outlier = ((1.0 - gamma) / volume).ln();
         let ln_prefactor = (gamma * GAUSS_NORM_3D).ln();
         let ln_bound = ln_prefactor - 1.5 * (2.0 * noise.floor).ln() - ln_outlier;
-        let mut log_likelihood = 0.0;
         // The isotropic model's covariance is the same for every row: its determinant,
         // inverse and log-determinant once per round, not once per row.
         let isotropic = (!ray).then(|| {
@@ -287,46 +287,17 @@ fn em(
             let det = v * v * v;
             (det, Matrix3::identity() / v, 0.5 * det.ln())
         });
-        rows.clear();
-        for i in 0..n {
-            let q = rotation * src[i].coords;
-            let e = dst[i].coords - q - pose.translation.vector;
-            let (det, information, half_ln_det) = match isotropic {
-                Some((det, w, half_ln_det)) => (det, Some(w), Some(half_ln_det)),
-                None => {
-                    let c = noise.residual_covariance(&q, &dst[i].coords);
-                    let (det, w) = determinant_and_inverse(&c);
-                    (det, w, None)
-                }
-            };
-            // det ≥ (2f)³ (every other part of the covariance is positive semidefinite), so
-            // a row that is negligible under that bound needs no logarithm.
-            let gap = match information {
-                Some(w) if det > 0.0 && det.is_finite() => {
-                    let half_m = 0.5 * e.dot(&(w * e));
-                    if ln_bound - half_m < -NEGLIGIBLE {
-                        f64::NEG_INFINITY
-                    } else {
-                        let half_ln_det = half_ln_det.unwrap_or_else(|| 0.5 * det.ln());
-                        ln_prefactor - half_ln_det - half_m - ln_outlier
-                    }
-                }
-                _ => f64::NEG_INFINITY,
-            };
-            let weight = if gap < -NEGLIGIBLE {
-                log_likelihood += ln_outlier;
-                0.0
-            } else {
-                // ln(a + b) = ln b + ln(1 + a/b), a/b = e^gap.
-                let ratio = gap.exp();
-                log_likelihood += ln_outlier + ratio.ln_1p();
-                ratio / (1.0 + ratio)
-            };
-            rows.push(Row {
-                weight,
-                information: information.unwrap_or_else(Matrix3::zeros),
-            });
-        }
+        let log_likelihood = simd::dispatch(EStep {
+            data,
+            rotation: &rotation,
+            translation: &pose.translation.vector,
+            noise: &noise,
+            isotropic,
+            ln_outlier,
+            ln_prefactor,
+            ln_bound,
+            rows: &mut rows,
+        });
         if !log_likelihood.is_finite() {
             return None;
         }
@@ -379,6 +350,85 @@ fn em(
         log_likelihood: last,
         inlier: rows.iter().map(|r| r.weight >= 0.5).collect(),
     })
+}
+
+/// One E step of [`em`] (its per-round constants computed by it): each row's posterior
+/// inlier weight and information into `rows`, and the log-likelihood summed over the rows
+/// in order. A [`simd::Kernel`], compiled for the best instruction set of the CPU (the same
+/// operations and library calls, so the same bits).
+struct EStep<'a> {
+    data: &'a Correspondences,
+    rotation: &'a Matrix3<f64>,
+    translation: &'a Vector3<f64>,
+    noise: &'a RangeNoise,
+    /// The isotropic model's determinant, information and half log-determinant.
+    isotropic: Option<(f64, Matrix3<f64>, f64)>,
+    ln_outlier: f64,
+    ln_prefactor: f64,
+    ln_bound: f64,
+    rows: &'a mut Vec<Row>,
+}
+
+impl simd::Kernel for EStep<'_> {
+    type Output = f64;
+
+    #[inline(always)]
+    fn run(self) -> f64 {
+        let Self {
+            data,
+            rotation,
+            translation,
+            noise,
+            isotropic,
+            ln_outlier,
+            ln_prefactor,
+            ln_bound,
+            rows,
+        } = self;
+        let (src, dst) = (data.src(), data.dst());
+        let mut log_likelihood = 0.0;
+        rows.clear();
+        for i in 0..data.len() {
+            let q = rotation * src[i].coords;
+            let e = dst[i].coords - q - translation;
+            let (det, information, half_ln_det) = match isotropic {
+                Some((det, w, half_ln_det)) => (det, Some(w), Some(half_ln_det)),
+                None => {
+                    let c = noise.residual_covariance(&q, &dst[i].coords);
+                    let (det, w) = determinant_and_inverse(&c);
+                    (det, w, None)
+                }
+            };
+            // det ≥ (2f)³ (every other part of the covariance is positive semidefinite), so
+            // a row that is negligible under that bound needs no logarithm.
+            let gap = match information {
+                Some(w) if det > 0.0 && det.is_finite() => {
+                    let half_m = 0.5 * e.dot(&(w * e));
+                    if ln_bound - half_m < -NEGLIGIBLE {
+                        f64::NEG_INFINITY
+                    } else {
+                        let half_ln_det = half_ln_det.unwrap_or_else(|| 0.5 * det.ln());
+                        ln_prefactor - half_ln_det - half_m - ln_outlier
+                    }
+                }
+                _ => f64::NEG_INFINITY,
+            };
+            let weight = if gap < -NEGLIGIBLE {
+                log_likelihood += ln_outlier;
+                0.0
+            } else {
+                // ln(a + b) = ln b + ln(1 + a/b), a/b = e^gap.
+                let ratio = gap.exp();
+                log_likelihood += ln_outlier + ratio.ln_1p();
+                ratio / (1.0 + ratio)
+            };
+            rows.push(Row {
+                weight,
+                information: information.unwrap_or_else(Matrix3::zeros),
+            });
+        }
+        log_likelihood
+    }
 }
 
 /// One Gauss-Newton step of the motion on the weighted Mahalanobis residuals, with the
