@@ -38,12 +38,13 @@
 //! `f` by `k²` and `α` by `k⁻²`, leaves `β`), and the tests are in nats, so the choice and
 //! the fit do not depend on the unit.
 
-use nalgebra::{Isometry3, Matrix3, Matrix6, Point3, Vector3, Vector6};
+use nalgebra::{Isometry3, Matrix3, Point3, Vector3};
 
-use super::mahalanobis::{self, add_point, determinant_and_inverse, inverse3};
+use super::mahalanobis::{self, inverse3};
 use super::mixture::outlier_volume;
 use crate::geometry::{Correspondences, MIN_CORRESPONDENCES};
 use crate::simd;
+use kernels::{EStep, Scoring, WeightedNormalEquations};
 
 /// A noise model that grows with the range along and across the viewing ray from each
 /// frame's origin, fitted by `pso` from the residuals of plain coordinates (see
@@ -352,85 +353,6 @@ fn em(
     })
 }
 
-/// One E step of [`em`] (its per-round constants computed by it): each row's posterior
-/// inlier weight and information into `rows`, and the log-likelihood summed over the rows
-/// in order. A [`simd::Kernel`], compiled for the best instruction set of the CPU (the same
-/// operations and library calls, so the same bits).
-struct EStep<'a> {
-    data: &'a Correspondences,
-    rotation: &'a Matrix3<f64>,
-    translation: &'a Vector3<f64>,
-    noise: &'a RangeNoise,
-    /// The isotropic model's determinant, information and half log-determinant.
-    isotropic: Option<(f64, Matrix3<f64>, f64)>,
-    ln_outlier: f64,
-    ln_prefactor: f64,
-    ln_bound: f64,
-    rows: &'a mut Vec<Row>,
-}
-
-impl simd::Kernel for EStep<'_> {
-    type Output = f64;
-
-    #[inline(always)]
-    fn run(self) -> f64 {
-        let Self {
-            data,
-            rotation,
-            translation,
-            noise,
-            isotropic,
-            ln_outlier,
-            ln_prefactor,
-            ln_bound,
-            rows,
-        } = self;
-        let (src, dst) = (data.src(), data.dst());
-        let mut log_likelihood = 0.0;
-        rows.clear();
-        for i in 0..data.len() {
-            let q = rotation * src[i].coords;
-            let e = dst[i].coords - q - translation;
-            let (det, information, half_ln_det) = match isotropic {
-                Some((det, w, half_ln_det)) => (det, Some(w), Some(half_ln_det)),
-                None => {
-                    let c = noise.residual_covariance(&q, &dst[i].coords);
-                    let (det, w) = determinant_and_inverse(&c);
-                    (det, w, None)
-                }
-            };
-            // det ≥ (2f)³ (every other part of the covariance is positive semidefinite), so
-            // a row that is negligible under that bound needs no logarithm.
-            let gap = match information {
-                Some(w) if det > 0.0 && det.is_finite() => {
-                    let half_m = 0.5 * e.dot(&(w * e));
-                    if ln_bound - half_m < -NEGLIGIBLE {
-                        f64::NEG_INFINITY
-                    } else {
-                        let half_ln_det = half_ln_det.unwrap_or_else(|| 0.5 * det.ln());
-                        ln_prefactor - half_ln_det - half_m - ln_outlier
-                    }
-                }
-                _ => f64::NEG_INFINITY,
-            };
-            let weight = if gap < -NEGLIGIBLE {
-                log_likelihood += ln_outlier;
-                0.0
-            } else {
-                // ln(a + b) = ln b + ln(1 + a/b), a/b = e^gap.
-                let ratio = gap.exp();
-                log_likelihood += ln_outlier + ratio.ln_1p();
-                ratio / (1.0 + ratio)
-            };
-            rows.push(Row {
-                weight,
-                information: information.unwrap_or_else(Matrix3::zeros),
-            });
-        }
-        log_likelihood
-    }
-}
-
 /// One Gauss-Newton step of the motion on the weighted Mahalanobis residuals, with the
 /// left perturbation of [`super::mahalanobis`].
 fn gauss_newton_step(
@@ -440,32 +362,6 @@ fn gauss_newton_step(
 ) -> Option<Isometry3<f64>> {
     let (h, g) = simd::dispatch(WeightedNormalEquations { data, pose, rows });
     mahalanobis::gauss_newton_step(pose, &h, &g).map(|(moved, _)| moved)
-}
-
-/// The normal equations of [`gauss_newton_step`]: a [`simd::Kernel`], compiled for the
-/// best instruction set of the CPU (the same operations, so the same bits).
-struct WeightedNormalEquations<'a> {
-    data: &'a Correspondences,
-    pose: &'a Isometry3<f64>,
-    rows: &'a [Row],
-}
-
-impl simd::Kernel for WeightedNormalEquations<'_> {
-    type Output = (Matrix6<f64>, Vector6<f64>);
-
-    #[inline(always)]
-    fn run(self) -> Self::Output {
-        let mut h = Matrix6::<f64>::zeros();
-        let mut g = Vector6::<f64>::zeros();
-        for (i, row) in self.rows.iter().enumerate() {
-            if row.weight < MIN_WEIGHT {
-                continue;
-            }
-            let w = row.information * row.weight;
-            add_point(&mut h, &mut g, self.pose, self.data, i, &w);
-        }
-        (h, g)
-    }
 }
 
 /// The isotropic M step: `2 f = Σ w |e|² / (3 Σ w)`.
@@ -491,6 +387,7 @@ fn isotropic_step(
 /// very different scales (`f`, `α`, `β` differ by orders of magnitude): scaled to unit
 /// diagonal, then the closed-form inverse. The same operations in every build (nalgebra's
 /// LU gave a debug and a release build different answers here).
+#[inline(always)]
 fn solve_scaled(f: &Matrix3<f64>, s: &Vector3<f64>) -> Option<Vector3<f64>> {
     let d = Vector3::new(f[(0, 0)], f[(1, 1)], f[(2, 2)]);
     if !d.iter().all(|v| *v > 0.0 && v.is_finite()) {
@@ -509,6 +406,24 @@ fn solve_scaled(f: &Matrix3<f64>, s: &Vector3<f64>) -> Option<Vector3<f64>> {
 /// `|q|² q qᵀ + |d|² d dᵀ` and `(|q|² + |d|²) I - q qᵀ - d dᵀ`, so each `W M_k` is a
 /// multiple of `W` plus rank-one terms.
 fn scoring_step(
+    data: &Correspondences,
+    pose: &Isometry3<f64>,
+    rows: &[Row],
+    noise: RangeNoise,
+    floor: f64,
+) -> Option<RangeNoise> {
+    simd::dispatch(Scoring {
+        data,
+        pose,
+        rows,
+        noise,
+        floor,
+    })
+}
+
+/// The body of [`scoring_step`], inlined into [`Scoring`]'s compilations.
+#[inline(always)]
+fn scoring_body(
     data: &Correspondences,
     pose: &Isometry3<f64>,
     rows: &[Row],
@@ -572,5 +487,6 @@ fn scoring_step(
     Some(noise)
 }
 
+mod kernels;
 #[cfg(test)]
 mod tests;
