@@ -151,35 +151,7 @@ impl PairGraph {
     #[inline]
     pub(super) fn score(&self, q: &UnitQuaternion<f64>) -> (usize, f64) {
         let m: Matrix3<f32> = q.to_rotation_matrix().into_inner().cast::<f32>();
-        let [ax, ay, az] = &self.a;
-        let [bx, by, bz] = &self.b;
-        // Independent lanes (the arrays are padded to a multiple of LANES), so the
-        // compiler can vectorise the sums without reassociating floating point.
-        let mut support = [0u32; LANES];
-        let mut cost = [0.0f32; LANES];
-        let chunks = ax
-            .as_chunks::<LANES>()
-            .0
-            .iter()
-            .zip(ay.as_chunks::<LANES>().0)
-            .zip(az.as_chunks::<LANES>().0);
-        let chunks = chunks.zip(
-            bx.as_chunks::<LANES>()
-                .0
-                .iter()
-                .zip(by.as_chunks::<LANES>().0)
-                .zip(bz.as_chunks::<LANES>().0),
-        );
-        for ((((x, y), z), ((u, v), w)), inv) in chunks.zip(self.inv_tol2.as_chunks::<LANES>().0) {
-            for l in 0..LANES {
-                let ex = u[l] - (m[(0, 0)] * x[l] + m[(0, 1)] * y[l] + m[(0, 2)] * z[l]);
-                let ey = v[l] - (m[(1, 0)] * x[l] + m[(1, 1)] * y[l] + m[(1, 2)] * z[l]);
-                let ez = w[l] - (m[(2, 0)] * x[l] + m[(2, 1)] * y[l] + m[(2, 2)] * z[l]);
-                let r = (ex * ex + ey * ey + ez * ez) * inv[l];
-                support[l] += u32::from(r < 1.0);
-                cost[l] += r.min(1.0);
-            }
-        }
+        let (support, cost) = simd::dispatch(Score { graph: self, m });
         // Padding pairs have zero residual: they "support" every rotation.
         let support = support.iter().sum::<u32>() as usize - self.padding;
         let cost: f32 = cost.iter().sum();
@@ -283,6 +255,53 @@ impl PairGraph {
             })
             .max()
             .unwrap_or(0)
+    }
+}
+
+/// The lanes of [`PairGraph::score`]: per lane, the scored pairs supporting rotation `m`
+/// and the truncated cost. A [`simd::Kernel`], compiled for the best instruction set of
+/// the CPU (the same f32 operations on every lane).
+struct Score<'a> {
+    graph: &'a PairGraph,
+    m: Matrix3<f32>,
+}
+
+impl simd::Kernel for Score<'_> {
+    type Output = ([u32; LANES], [f32; LANES]);
+
+    #[inline(always)]
+    fn run(self) -> Self::Output {
+        let (graph, m) = (self.graph, self.m);
+        let [ax, ay, az] = &graph.a;
+        let [bx, by, bz] = &graph.b;
+        // Independent lanes (the arrays are padded to a multiple of LANES), so the
+        // compiler can vectorise the sums without reassociating floating point.
+        let mut support = [0u32; LANES];
+        let mut cost = [0.0f32; LANES];
+        let chunks = ax
+            .as_chunks::<LANES>()
+            .0
+            .iter()
+            .zip(ay.as_chunks::<LANES>().0)
+            .zip(az.as_chunks::<LANES>().0);
+        let chunks = chunks.zip(
+            bx.as_chunks::<LANES>()
+                .0
+                .iter()
+                .zip(by.as_chunks::<LANES>().0)
+                .zip(bz.as_chunks::<LANES>().0),
+        );
+        for ((((x, y), z), ((u, v), w)), inv) in chunks.zip(graph.inv_tol2.as_chunks::<LANES>().0) {
+            for l in 0..LANES {
+                let ex = u[l] - (m[(0, 0)] * x[l] + m[(0, 1)] * y[l] + m[(0, 2)] * z[l]);
+                let ey = v[l] - (m[(1, 0)] * x[l] + m[(1, 1)] * y[l] + m[(1, 2)] * z[l]);
+                let ez = w[l] - (m[(2, 0)] * x[l] + m[(2, 1)] * y[l] + m[(2, 2)] * z[l]);
+                let r = (ex * ex + ey * ey + ez * ez) * inv[l];
+                support[l] += u32::from(r < 1.0);
+                cost[l] += r.min(1.0);
+            }
+        }
+        (support, cost)
     }
 }
 

@@ -226,3 +226,61 @@ fn consistency_matches_the_reference_in_every_instruction_set() {
         );
     }
 }
+
+#[test]
+fn scores_have_the_same_bits_in_every_instruction_set() {
+    use nalgebra::{Isometry3, Point3, Vector3};
+    let mut rng = seeded(39);
+    for case in 0..20 {
+        let n: usize = rng.random_range(10..200);
+        let truth = Isometry3::new(
+            Vector3::new(0.3, -0.1, 1.0),
+            Vector3::new(0.02, rng.random_range(-0.2..0.2), 0.01),
+        );
+        let src: Vec<Point3<f64>> = (0..n)
+            .map(|_| {
+                Point3::new(
+                    rng.random_range(-10.0..10.0),
+                    rng.random_range(-2.0..2.0),
+                    rng.random_range(4.0..40.0),
+                )
+            })
+            .collect();
+        let dst: Vec<Point3<f64>> = src
+            .iter()
+            .map(|p| {
+                if rng.random_range(0..3) == 0 {
+                    Point3::new(rng.random_range(-10.0..10.0), 0.0, 20.0)
+                } else {
+                    truth * p + Vector3::new(rng.random_range(-0.05..0.05), 0.0, 0.0)
+                }
+            })
+            .collect();
+        let data = Correspondences::new(src, dst).expect("valid");
+        let graph = PairGraph::build(&data, (0..n).collect(), Tolerance::Uniform(0.1), 500, 0.0);
+        assert!(graph.scored() > 0, "case {case}: no scored pair");
+        for _ in 0..20 {
+            let axis = Vector3::new(
+                rng.random_range(-0.3..0.3),
+                rng.random_range(-0.3..0.3),
+                rng.random_range(-0.3..0.3),
+            );
+            let q = if case % 4 == 0 {
+                truth.rotation
+            } else {
+                UnitQuaternion::from_scaled_axis(axis)
+            };
+            // The lanes themselves (the score rounds the cost), and the score.
+            let m: Matrix3<f32> = q.to_rotation_matrix().into_inner().cast::<f32>();
+            let kernel = || Score { graph: &graph, m };
+            let lanes = |(s, c): ([u32; LANES], [f32; LANES])| (s, c.map(f32::to_bits));
+            assert_eq!(
+                lanes(simd::dispatch(kernel())),
+                lanes(simd::baseline(|| simd::dispatch(kernel()))),
+                "case {case}"
+            );
+            let (a, b) = (graph.score(&q), simd::baseline(|| graph.score(&q)));
+            assert_eq!((a.0, a.1.to_bits()), (b.0, b.1.to_bits()), "case {case}");
+        }
+    }
+}
