@@ -22,7 +22,8 @@
 use nalgebra::{Isometry3, Matrix3, Matrix3x6, Matrix6, Translation3, UnitQuaternion, Vector6};
 
 use crate::error::PoseError;
-use crate::geometry::{Correspondences, MIN_CORRESPONDENCES};
+use crate::geometry::{Correspondences, CovariancePair, MIN_CORRESPONDENCES};
+use crate::simd;
 
 /// 99 % quantile of χ² with 3 degrees of freedom, the default gate: `3.368²`, the square
 /// of the isotropic threshold multiplier.
@@ -55,10 +56,6 @@ pub fn refine_mahalanobis(
             "the Mahalanobis gate must be positive, got {gate}"
         )));
     }
-    let information = |pose: &Isometry3<f64>, i: usize| -> Option<Matrix3<f64>> {
-        let r = pose.rotation.to_rotation_matrix();
-        (r.matrix() * src_cov[i] * r.matrix().transpose() + dst_cov[i]).try_inverse()
-    };
     let select = |pose: &Isometry3<f64>, gate: f64, out: &mut Vec<usize>| {
         let rot = pose.rotation.to_rotation_matrix();
         out.clear();
@@ -67,8 +64,7 @@ pub fn refine_mahalanobis(
             // rᵀ Σ⁻¹ r ≥ |r|² / tr Σ (tr Σ_s is rotation-invariant): most wrong matches
             // fail without an inversion.
             r.norm_squared() < gate * (src_cov[i].trace() + dst_cov[i].trace())
-                && (rot.matrix() * src_cov[i] * rot.matrix().transpose() + dst_cov[i])
-                    .try_inverse()
+                && inverse3(&(rot.matrix() * src_cov[i] * rot.matrix().transpose() + dst_cov[i]))
                     .is_some_and(|w| r.dot(&(w * r)) < gate)
         }));
     };
@@ -86,14 +82,12 @@ pub fn refine_mahalanobis(
             return Err(too_few(inliers.len()));
         }
         for _ in 0..STEPS_PER_ROUND {
-            let mut h = Matrix6::<f64>::zeros();
-            let mut g = Vector6::<f64>::zeros();
-            for &i in &inliers {
-                let Some(w) = information(&pose, i) else {
-                    continue;
-                };
-                add_point(&mut h, &mut g, &pose, data, i, &w);
-            }
+            let (h, g) = simd::dispatch(NormalEquations {
+                pose: &pose,
+                data,
+                covariance: (src_cov, dst_cov),
+                rows: &inliers,
+            });
             let Some((moved, step)) = gauss_newton_step(&pose, &h, &g) else {
                 break;
             };
@@ -115,6 +109,38 @@ pub fn refine_mahalanobis(
     Ok((pose, inliers))
 }
 
+/// The normal equations `(h, g)` of a Gauss-Newton step on `pose` over `rows` of `data`,
+/// each weighted by its information `(R Σ_s Rᵀ + Σ_d)⁻¹` (rows whose covariance is
+/// singular left out), in the order of `rows`: a [`simd::Kernel`], compiled for the best
+/// instruction set of the CPU (the same operations, so the same bits).
+struct NormalEquations<'a> {
+    pose: &'a Isometry3<f64>,
+    data: &'a Correspondences,
+    covariance: CovariancePair<'a>,
+    rows: &'a [usize],
+}
+
+impl simd::Kernel for NormalEquations<'_> {
+    type Output = (Matrix6<f64>, Vector6<f64>);
+
+    #[inline(always)]
+    fn run(self) -> Self::Output {
+        let (src_cov, dst_cov) = self.covariance;
+        let mut h = Matrix6::<f64>::zeros();
+        let mut g = Vector6::<f64>::zeros();
+        // The rotation's matrix once per step, not once per row (the same bits).
+        let r = self.pose.rotation.to_rotation_matrix();
+        for &i in self.rows {
+            let information =
+                inverse3(&(r.matrix() * src_cov[i] * r.matrix().transpose() + dst_cov[i]));
+            if let Some(w) = information {
+                add_point(&mut h, &mut g, self.pose, self.data, i, &w);
+            }
+        }
+        (h, g)
+    }
+}
+
 /// Adds correspondence `i` of `data`, weighted by the 3x3 information `w` (1/m²), to the
 /// normal equations `h`, `g` of a Gauss-Newton step on `pose` (the motion `dst = R src + t`)
 /// perturbed on the left by `(ω, ν)` (radians, metres, in the destination frame): residual
@@ -125,7 +151,9 @@ pub fn refine_mahalanobis(
 /// and a term `0 · x` (`x` finite) is a zero, which leaves a sum unchanged unless the sum
 /// is itself zero, when only its sign can differ; `h` and `g` start at `+0` in every caller
 /// and never hold `-0` (`+0 + -0 = +0`), so such a zero adds nothing either way. When `w`
-/// or `P` is not finite (`0 · ∞` is NaN) the full products are taken.
+/// or `P` is not finite (`0 · ∞` is NaN) the full products are taken. Inlined into the
+/// [`simd::Kernel`]s that call it.
+#[inline(always)]
 pub(crate) fn add_point(
     h: &mut Matrix6<f64>,
     g: &mut Vector6<f64>,
@@ -182,6 +210,40 @@ fn add_point_full(
         .copy_from(&(-Matrix3::identity()));
     *h += j.transpose() * w * j;
     *g += j.transpose() * w * r;
+}
+
+/// The determinant and the inverse (`None` when the determinant is zero) of a 3 × 3
+/// matrix: nalgebra's `determinant()` and `try_inverse()` for three dimensions, the same
+/// operations in the same order (so the same bits), with the determinant computed once and
+/// inline (issue 34: the estimator inverts a covariance per row and round).
+#[inline(always)]
+pub(crate) fn determinant_and_inverse(m: &Matrix3<f64>) -> (f64, Option<Matrix3<f64>>) {
+    let [[m11, m21, m31], [m12, m22, m32], [m13, m23, m33]] = m.data.0;
+    let minor_m12_m23 = m22 * m33 - m32 * m23;
+    let minor_m11_m23 = m21 * m33 - m31 * m23;
+    let minor_m11_m22 = m21 * m32 - m31 * m22;
+    let determinant = m11 * minor_m12_m23 - m12 * minor_m11_m23 + m13 * minor_m11_m22;
+    if determinant == 0.0 {
+        return (determinant, None);
+    }
+    let inverse = Matrix3::new(
+        minor_m12_m23 / determinant,
+        (m13 * m32 - m33 * m12) / determinant,
+        (m12 * m23 - m22 * m13) / determinant,
+        -minor_m11_m23 / determinant,
+        (m11 * m33 - m31 * m13) / determinant,
+        (m13 * m21 - m23 * m11) / determinant,
+        minor_m11_m22 / determinant,
+        (m12 * m31 - m32 * m11) / determinant,
+        (m11 * m22 - m21 * m12) / determinant,
+    );
+    (determinant, Some(inverse))
+}
+
+/// [`determinant_and_inverse`]'s inverse: nalgebra's `try_inverse()` for 3 × 3, inline.
+#[inline(always)]
+pub(crate) fn inverse3(m: &Matrix3<f64>) -> Option<Matrix3<f64>> {
+    determinant_and_inverse(m).1
 }
 
 /// `pose` moved by the solution `δ = (ω, ν)` of `h δ = −g` ([`add_point`]'s
@@ -293,6 +355,116 @@ mod tests {
             let bits = |m: &[f64]| m.iter().map(|v| v.to_bits()).collect::<Vec<u64>>();
             assert_eq!(bits(h.as_slice()), bits(h_ref.as_slice()), "h, case {case}");
             assert_eq!(bits(g.as_slice()), bits(g_ref.as_slice()), "g, case {case}");
+        }
+    }
+
+    #[test]
+    fn normal_equations_have_the_same_bits_in_every_instruction_set() {
+        use rand::RngExt;
+        let mut rng = crate::rng::seeded(37);
+        let value = |rng: &mut crate::rng::SeededRng| -> f64 {
+            match rng.random_range(0..40) {
+                0 => 0.0,
+                1 => -0.0,
+                2 => f64::NAN,
+                3 => f64::INFINITY,
+                _ => rng.random_range(-20.0..20.0),
+            }
+        };
+        // Every NaN as one: Rust leaves a NaN's sign and payload unspecified (x86 passes on
+        // the first operand's NaN, and SSE and AVX code may order the operands of a
+        // commutative operation differently); the callers only ask whether a value is finite.
+        let bits = |m: &[f64]| {
+            m.iter()
+                .map(|v| if v.is_nan() { u64::MAX } else { v.to_bits() })
+                .collect::<Vec<u64>>()
+        };
+        for case in 0..200 {
+            let n = 40;
+            // Points and poses finite (the correspondences reject others); covariances any.
+            let finite = |rng: &mut crate::rng::SeededRng| {
+                let v = value(rng);
+                if v.is_finite() { v } else { -0.0 }
+            };
+            let point = |rng: &mut crate::rng::SeededRng| {
+                Point3::new(finite(rng), finite(rng), finite(rng))
+            };
+            let src: Vec<Point3<f64>> = (0..n).map(|_| point(&mut rng)).collect();
+            let dst: Vec<Point3<f64>> = (0..n).map(|_| point(&mut rng)).collect();
+            let cov = |rng: &mut crate::rng::SeededRng| {
+                let a = Matrix3::from_fn(|_, _| value(rng));
+                if rng.random_range(0..4) == 0 {
+                    a
+                } else {
+                    a * a.transpose()
+                }
+            };
+            let sc: Vec<Matrix3<f64>> = (0..n).map(|_| cov(&mut rng)).collect();
+            let dc: Vec<Matrix3<f64>> = (0..n).map(|_| cov(&mut rng)).collect();
+            let data = Correspondences::new(src, dst).expect("valid");
+            let axis = Vector3::new(finite(&mut rng), finite(&mut rng), finite(&mut rng)) * 0.01;
+            let t = Vector3::new(finite(&mut rng), finite(&mut rng), finite(&mut rng));
+            let pose = Isometry3::new(t, axis);
+            let rows: Vec<usize> = (0..n).filter(|_| rng.random_range(0..3) > 0).collect();
+            let kernel = || NormalEquations {
+                pose: &pose,
+                data: &data,
+                covariance: (&sc, &dc),
+                rows: &rows,
+            };
+            let (h, g) = simd::dispatch(kernel());
+            let (h_ref, g_ref) = simd::baseline(|| simd::dispatch(kernel()));
+            assert_eq!(bits(h.as_slice()), bits(h_ref.as_slice()), "h, case {case}");
+            assert_eq!(bits(g.as_slice()), bits(g_ref.as_slice()), "g, case {case}");
+        }
+        // And whole refinements on stereo scenes.
+        for seed in 0..4 {
+            let (data, truth, _) = stereo_scene(seed, 5);
+            let fit = || refine_mahalanobis(&data, &truth, CHI2_3_99, 10).expect("refined");
+            let ((pose, inliers), (pose_ref, inliers_ref)) = (fit(), simd::baseline(fit));
+            assert_eq!(inliers, inliers_ref);
+            let pose_bits = |p: &Isometry3<f64>| {
+                bits(
+                    &[
+                        p.translation.vector.as_slice(),
+                        p.rotation.coords.as_slice(),
+                    ]
+                    .concat(),
+                )
+            };
+            assert_eq!(pose_bits(&pose), pose_bits(&pose_ref), "scene {seed}");
+        }
+    }
+
+    #[test]
+    fn determinant_and_inverse_have_nalgebras_bits() {
+        use rand::RngExt;
+        let mut rng = crate::rng::seeded(35);
+        let bits = |m: &Matrix3<f64>| m.iter().map(|v| v.to_bits()).collect::<Vec<u64>>();
+        for case in 0..4000 {
+            let mut m = Matrix3::from_fn(|_, _| match rng.random_range(0..10) {
+                0 => 0.0,
+                1 => -0.0,
+                2 => rng.random_range(-3..=3) as f64, // small integers: exact zero determinants
+                _ => rng.random_range(-1e3..1e3),
+            });
+            match case % 7 {
+                0 => m = m * m.transpose(), // symmetric, as a covariance is
+                1 => m[(rng.random_range(0..3), rng.random_range(0..3))] = f64::NAN,
+                2 => m[(rng.random_range(0..3), rng.random_range(0..3))] = f64::NEG_INFINITY,
+                3 => m *= 1e-120, // the determinant underflows
+                4 => m *= 1e110,  // the determinant overflows
+                5 => m.set_column(2, &m.column(0).clone_owned()), // singular
+                _ => {}
+            }
+            let (det, inverse) = determinant_and_inverse(&m);
+            assert_eq!(det.to_bits(), m.determinant().to_bits(), "case {case}: {m}");
+            let expected = m.try_inverse();
+            assert_eq!(inverse.is_some(), expected.is_some(), "case {case}: {m}");
+            if let (Some(a), Some(b)) = (inverse, expected) {
+                assert_eq!(bits(&a), bits(&b), "case {case}: {m}");
+            }
+            assert_eq!(inverse3(&m).map(|a| bits(&a)), inverse.map(|a| bits(&a)));
         }
     }
 

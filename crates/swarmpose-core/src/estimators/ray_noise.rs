@@ -38,11 +38,13 @@
 //! `f` by `k²` and `α` by `k⁻²`, leaves `β`), and the tests are in nats, so the choice and
 //! the fit do not depend on the unit.
 
-use nalgebra::{Isometry3, Matrix3, Matrix6, Point3, Vector3};
+use nalgebra::{Isometry3, Matrix3, Point3, Vector3};
 
-use super::mahalanobis::{self, add_point};
+use super::mahalanobis::{self, inverse3};
 use super::mixture::outlier_volume;
 use crate::geometry::{Correspondences, MIN_CORRESPONDENCES};
+use crate::simd;
+use kernels::{EStep, Scoring, WeightedNormalEquations};
 
 /// A noise model that grows with the range along and across the viewing ray from each
 /// frame's origin, fitted by `pso` from the residuals of plain coordinates (see
@@ -69,7 +71,8 @@ impl RangeNoise {
     }
 
     /// The covariance `K(q) + K(d)` of a residual with rotated source `q = R s` and
-    /// destination `d`.
+    /// destination `d`. Inlined into [`EStep`]'s compilations.
+    #[inline(always)]
     fn residual_covariance(&self, q: &Vector3<f64>, d: &Vector3<f64>) -> Matrix3<f64> {
         let (q2, d2) = (q.norm_squared(), d.norm_squared());
         Matrix3::identity() * (2.0 * self.floor + self.across * (q2 + d2))
@@ -202,10 +205,8 @@ fn second_motion(data: &Correspondences, ray: &Fitted, consensus: &[bool]) -> f6
             .map(|i| {
                 let added = ray.inlier[i] && !consensus[i];
                 let q = rotation * data.src()[i].coords;
-                let information = ray
-                    .noise
-                    .residual_covariance(&q, &data.dst()[i].coords)
-                    .try_inverse();
+                let information =
+                    inverse3(&ray.noise.residual_covariance(&q, &data.dst()[i].coords));
                 Row {
                     weight: if added && information.is_some() {
                         1.0
@@ -280,7 +281,6 @@ fn em(
         let ln_outlier = ((1.0 - gamma) / volume).ln();
         let ln_prefactor = (gamma * GAUSS_NORM_3D).ln();
         let ln_bound = ln_prefactor - 1.5 * (2.0 * noise.floor).ln() - ln_outlier;
-        let mut log_likelihood = 0.0;
         // The isotropic model's covariance is the same for every row: its determinant,
         // inverse and log-determinant once per round, not once per row.
         let isotropic = (!ray).then(|| {
@@ -288,45 +288,17 @@ fn em(
             let det = v * v * v;
             (det, Matrix3::identity() / v, 0.5 * det.ln())
         });
-        rows.clear();
-        for i in 0..n {
-            let q = rotation * src[i].coords;
-            let e = dst[i].coords - q - pose.translation.vector;
-            let (det, information, half_ln_det) = match isotropic {
-                Some((det, w, half_ln_det)) => (det, Some(w), Some(half_ln_det)),
-                None => {
-                    let c = noise.residual_covariance(&q, &dst[i].coords);
-                    (c.determinant(), c.try_inverse(), None)
-                }
-            };
-            // det ≥ (2f)³ (every other part of the covariance is positive semidefinite), so
-            // a row that is negligible under that bound needs no logarithm.
-            let gap = match information {
-                Some(w) if det > 0.0 && det.is_finite() => {
-                    let half_m = 0.5 * e.dot(&(w * e));
-                    if ln_bound - half_m < -NEGLIGIBLE {
-                        f64::NEG_INFINITY
-                    } else {
-                        let half_ln_det = half_ln_det.unwrap_or_else(|| 0.5 * det.ln());
-                        ln_prefactor - half_ln_det - half_m - ln_outlier
-                    }
-                }
-                _ => f64::NEG_INFINITY,
-            };
-            let weight = if gap < -NEGLIGIBLE {
-                log_likelihood += ln_outlier;
-                0.0
-            } else {
-                // ln(a + b) = ln b + ln(1 + a/b), a/b = e^gap.
-                let ratio = gap.exp();
-                log_likelihood += ln_outlier + ratio.ln_1p();
-                ratio / (1.0 + ratio)
-            };
-            rows.push(Row {
-                weight,
-                information: information.unwrap_or_else(Matrix3::zeros),
-            });
-        }
+        let log_likelihood = simd::dispatch(EStep {
+            data,
+            rotation: &rotation,
+            translation: &pose.translation.vector,
+            noise: &noise,
+            isotropic,
+            ln_outlier,
+            ln_prefactor,
+            ln_bound,
+            rows: &mut rows,
+        });
         if !log_likelihood.is_finite() {
             return None;
         }
@@ -388,21 +360,7 @@ fn gauss_newton_step(
     pose: &Isometry3<f64>,
     rows: &[Row],
 ) -> Option<Isometry3<f64>> {
-    let mut h = Matrix6::<f64>::zeros();
-    let mut g = nalgebra::Vector6::<f64>::zeros();
-    for (i, row) in rows.iter().enumerate() {
-        if row.weight < MIN_WEIGHT {
-            continue;
-        }
-        add_point(
-            &mut h,
-            &mut g,
-            pose,
-            data,
-            i,
-            &(row.information * row.weight),
-        );
-    }
+    let (h, g) = simd::dispatch(WeightedNormalEquations { data, pose, rows });
     mahalanobis::gauss_newton_step(pose, &h, &g).map(|(moved, _)| moved)
 }
 
@@ -429,6 +387,7 @@ fn isotropic_step(
 /// very different scales (`f`, `α`, `β` differ by orders of magnitude): scaled to unit
 /// diagonal, then the closed-form inverse. The same operations in every build (nalgebra's
 /// LU gave a debug and a release build different answers here).
+#[inline(always)]
 fn solve_scaled(f: &Matrix3<f64>, s: &Vector3<f64>) -> Option<Vector3<f64>> {
     let d = Vector3::new(f[(0, 0)], f[(1, 1)], f[(2, 2)]);
     if !d.iter().all(|v| *v > 0.0 && v.is_finite()) {
@@ -436,7 +395,7 @@ fn solve_scaled(f: &Matrix3<f64>, s: &Vector3<f64>) -> Option<Vector3<f64>> {
     }
     let d = d.map(|v| 1.0 / v.sqrt());
     let scaled = Matrix3::from_fn(|i, j| f[(i, j)] * d[i] * d[j]);
-    let y = scaled.try_inverse()? * s.component_mul(&d);
+    let y = inverse3(&scaled)? * s.component_mul(&d);
     Some(y.component_mul(&d))
 }
 
@@ -447,6 +406,24 @@ fn solve_scaled(f: &Matrix3<f64>, s: &Vector3<f64>) -> Option<Vector3<f64>> {
 /// `|q|² q qᵀ + |d|² d dᵀ` and `(|q|² + |d|²) I - q qᵀ - d dᵀ`, so each `W M_k` is a
 /// multiple of `W` plus rank-one terms.
 fn scoring_step(
+    data: &Correspondences,
+    pose: &Isometry3<f64>,
+    rows: &[Row],
+    noise: RangeNoise,
+    floor: f64,
+) -> Option<RangeNoise> {
+    simd::dispatch(Scoring {
+        data,
+        pose,
+        rows,
+        noise,
+        floor,
+    })
+}
+
+/// The body of [`scoring_step`], inlined into [`Scoring`]'s compilations.
+#[inline(always)]
+fn scoring_body(
     data: &Correspondences,
     pose: &Isometry3<f64>,
     rows: &[Row],
@@ -466,7 +443,7 @@ fn scoring_step(
             let w = if step == 0 {
                 row.information
             } else {
-                match noise.residual_covariance(&q, &d).try_inverse() {
+                match inverse3(&noise.residual_covariance(&q, &d)) {
                     Some(w) => w,
                     None => continue,
                 }
@@ -510,5 +487,6 @@ fn scoring_step(
     Some(noise)
 }
 
+mod kernels;
 #[cfg(test)]
 mod tests;

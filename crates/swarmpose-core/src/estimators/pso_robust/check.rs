@@ -22,7 +22,7 @@ use super::graph::PairGraph;
 use super::{Found, PsoEstimator};
 use crate::error::PoseError;
 use crate::estimators::consensus::Tolerance;
-use crate::estimators::mahalanobis::refine_mahalanobis;
+use crate::estimators::mahalanobis::{inverse3, refine_mahalanobis};
 use crate::geometry::{Correspondences, MIN_CORRESPONDENCES};
 use crate::rng::SeededRng;
 
@@ -168,7 +168,7 @@ impl PsoEstimator {
                 let cov = c + dst_cov[j];
                 // eᵀ Σ⁻¹ e ≥ |e|² / tr Σ: most pairs fail without an inversion.
                 e.norm_squared() < gate * cov.trace()
-                    && cov.try_inverse().is_some_and(|w| e.dot(&(w * e)) < gate)
+                    && inverse3(&cov).is_some_and(|w| e.dot(&(w * e)) < gate)
             },
         )
     }

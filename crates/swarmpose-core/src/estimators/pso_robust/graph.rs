@@ -14,6 +14,7 @@ use crate::arun::arun_pairs;
 use crate::estimators::consensus::Tolerance;
 use crate::geometry::{Correspondences, particle_from_rotation};
 use crate::rng::SeededRng;
+use crate::simd;
 
 /// Cost changes below this fraction of one pair's truncation cost do not count.
 const COST_QUANTUM: f64 = 0.01;
@@ -57,8 +58,6 @@ impl PairGraph {
     ) -> Self {
         let m = points.len();
         let words = m.div_ceil(64);
-        let mut rows = vec![0u64; m * words];
-        let mut pairs = Vec::new();
         let (src, dst) = (data.src(), data.dst());
         // Single precision, structure of arrays: the inner loop vectorises. Lengths of
         // tens of metres keep ~5 µm of precision, far below any useful δ.
@@ -75,32 +74,13 @@ impl PairGraph {
             column(&|g| dst[g].z),
         );
         let tl = column(&|g| tol.at(g));
-        let min_len = min_len_m as f32;
-        let mut consistent = vec![false; m];
-        for li in 0..m {
-            let j0 = li + 1;
-            let row = &mut consistent[j0..];
-            let (ax, ay, az, ti) = (sx[li], sy[li], sz[li], tl[li]);
-            let (bx, by, bz) = (dx[li], dy[li], dz[li]);
-            let others = sx[j0..]
-                .iter()
-                .zip(&sy[j0..])
-                .zip(&sz[j0..])
-                .zip(dx[j0..].iter().zip(&dy[j0..]).zip(&dz[j0..]))
-                .zip(&tl[j0..]);
-            for (flag, ((((x, y), z), ((u, v), w)), t)) in row.iter_mut().zip(others) {
-                let la = ((ax - x) * (ax - x) + (ay - y) * (ay - y) + (az - z) * (az - z)).sqrt();
-                let lb = ((bx - u) * (bx - u) + (by - v) * (by - v) + (bz - w) * (bz - w)).sqrt();
-                *flag = (la >= min_len) & ((la - lb).abs() < ti + t);
-            }
-            for (k, _) in row.iter().enumerate().filter(|(_, f)| **f) {
-                let lj = j0 + k;
-                rows[li * words + lj / 64] |= 1 << (lj % 64);
-                rows[lj * words + li / 64] |= 1 << (li % 64);
-                pairs.push((li as u32, lj as u32, 0));
-            }
-        }
-        count_common(&mut pairs, &rows, words);
+        let (rows, mut pairs) = simd::dispatch(Consistency {
+            s: [&sx, &sy, &sz],
+            d: [&dx, &dy, &dz],
+            tol: &tl,
+            min_len: min_len_m as f32,
+        });
+        count_common_dispatched(&mut pairs, &rows, words);
         let scored = rank_prefix(&mut pairs, max_pairs, m);
         let lanes = scored.next_multiple_of(LANES);
         let mut graph = Self {
@@ -171,35 +151,7 @@ impl PairGraph {
     #[inline]
     pub(super) fn score(&self, q: &UnitQuaternion<f64>) -> (usize, f64) {
         let m: Matrix3<f32> = q.to_rotation_matrix().into_inner().cast::<f32>();
-        let [ax, ay, az] = &self.a;
-        let [bx, by, bz] = &self.b;
-        // Independent lanes (the arrays are padded to a multiple of LANES), so the
-        // compiler can vectorise the sums without reassociating floating point.
-        let mut support = [0u32; LANES];
-        let mut cost = [0.0f32; LANES];
-        let chunks = ax
-            .as_chunks::<LANES>()
-            .0
-            .iter()
-            .zip(ay.as_chunks::<LANES>().0)
-            .zip(az.as_chunks::<LANES>().0);
-        let chunks = chunks.zip(
-            bx.as_chunks::<LANES>()
-                .0
-                .iter()
-                .zip(by.as_chunks::<LANES>().0)
-                .zip(bz.as_chunks::<LANES>().0),
-        );
-        for ((((x, y), z), ((u, v), w)), inv) in chunks.zip(self.inv_tol2.as_chunks::<LANES>().0) {
-            for l in 0..LANES {
-                let ex = u[l] - (m[(0, 0)] * x[l] + m[(0, 1)] * y[l] + m[(0, 2)] * z[l]);
-                let ey = v[l] - (m[(1, 0)] * x[l] + m[(1, 1)] * y[l] + m[(1, 2)] * z[l]);
-                let ez = w[l] - (m[(2, 0)] * x[l] + m[(2, 1)] * y[l] + m[(2, 2)] * z[l]);
-                let r = (ex * ex + ey * ey + ez * ez) * inv[l];
-                support[l] += u32::from(r < 1.0);
-                cost[l] += r.min(1.0);
-            }
-        }
+        let (support, cost) = simd::dispatch(Score { graph: self, m });
         // Padding pairs have zero residual: they "support" every rotation.
         let support = support.iter().sum::<u32>() as usize - self.padding;
         let cost: f32 = cost.iter().sum();
@@ -306,9 +258,133 @@ impl PairGraph {
     }
 }
 
+/// The lanes of [`PairGraph::score`]: per lane, the scored pairs supporting rotation `m`
+/// and the truncated cost. A [`simd::Kernel`], compiled for the best instruction set of
+/// the CPU (the same f32 operations on every lane).
+struct Score<'a> {
+    graph: &'a PairGraph,
+    m: Matrix3<f32>,
+}
+
+impl simd::Kernel for Score<'_> {
+    type Output = ([u32; LANES], [f32; LANES]);
+
+    #[inline(always)]
+    fn run(self) -> Self::Output {
+        let (graph, m) = (self.graph, self.m);
+        let [ax, ay, az] = &graph.a;
+        let [bx, by, bz] = &graph.b;
+        // Independent lanes (the arrays are padded to a multiple of LANES), so the
+        // compiler can vectorise the sums without reassociating floating point.
+        let mut support = [0u32; LANES];
+        let mut cost = [0.0f32; LANES];
+        let chunks = ax
+            .as_chunks::<LANES>()
+            .0
+            .iter()
+            .zip(ay.as_chunks::<LANES>().0)
+            .zip(az.as_chunks::<LANES>().0);
+        let chunks = chunks.zip(
+            bx.as_chunks::<LANES>()
+                .0
+                .iter()
+                .zip(by.as_chunks::<LANES>().0)
+                .zip(bz.as_chunks::<LANES>().0),
+        );
+        for ((((x, y), z), ((u, v), w)), inv) in chunks.zip(graph.inv_tol2.as_chunks::<LANES>().0) {
+            for l in 0..LANES {
+                let ex = u[l] - (m[(0, 0)] * x[l] + m[(0, 1)] * y[l] + m[(0, 2)] * z[l]);
+                let ey = v[l] - (m[(1, 0)] * x[l] + m[(1, 1)] * y[l] + m[(1, 2)] * z[l]);
+                let ez = w[l] - (m[(2, 0)] * x[l] + m[(2, 1)] * y[l] + m[(2, 2)] * z[l]);
+                let r = (ex * ex + ey * ey + ez * ez) * inv[l];
+                support[l] += u32::from(r < 1.0);
+                cost[l] += r.min(1.0);
+            }
+        }
+        (support, cost)
+    }
+}
+
+/// The length-consistent pairs of the points whose coordinates are the columns `s`
+/// (source) and `d` (destination), metres, with tolerances `tol`: the adjacency rows
+/// (bitsets of `⌈m / 64⌉` words per point) and the pairs `(i, j, 0)`, `i < j`, in
+/// lexicographic order. A [`simd::Kernel`], compiled for the best instruction set of the
+/// CPU (the same IEEE operations on every pair; the rest is integer).
+struct Consistency<'a> {
+    s: [&'a [f32]; 3],
+    d: [&'a [f32]; 3],
+    tol: &'a [f32],
+    /// Least source length, metres.
+    min_len: f32,
+}
+
+impl simd::Kernel for Consistency<'_> {
+    type Output = (Vec<u64>, Vec<(u32, u32, u32)>);
+
+    #[inline(always)]
+    fn run(self) -> Self::Output {
+        let ([sx, sy, sz], [dx, dy, dz], tl, min_len) = (self.s, self.d, self.tol, self.min_len);
+        let m = tl.len();
+        let words = m.div_ceil(64);
+        let mut rows = vec![0u64; m * words];
+        let mut pairs = Vec::new();
+        let mut consistent = vec![false; m];
+        for li in 0..m {
+            let j0 = li + 1;
+            let row = &mut consistent[j0..];
+            let (ax, ay, az, ti) = (sx[li], sy[li], sz[li], tl[li]);
+            let (bx, by, bz) = (dx[li], dy[li], dz[li]);
+            let others = sx[j0..]
+                .iter()
+                .zip(&sy[j0..])
+                .zip(&sz[j0..])
+                .zip(dx[j0..].iter().zip(&dy[j0..]).zip(&dz[j0..]))
+                .zip(&tl[j0..]);
+            for (flag, ((((x, y), z), ((u, v), w)), t)) in row.iter_mut().zip(others) {
+                let la = ((ax - x) * (ax - x) + (ay - y) * (ay - y) + (az - z) * (az - z)).sqrt();
+                let lb = ((bx - u) * (bx - u) + (by - v) * (by - v) + (bz - w) * (bz - w)).sqrt();
+                *flag = (la >= min_len) & ((la - lb).abs() < ti + t);
+            }
+            // The flags 64 at a time as a bitset, then its set bits in ascending order.
+            for (c, chunk) in row.chunks(64).enumerate() {
+                let mut bits = chunk
+                    .iter()
+                    .enumerate()
+                    .fold(0u64, |b, (k, &f)| b | (u64::from(f) << k));
+                while bits != 0 {
+                    let lj = j0 + 64 * c + bits.trailing_zeros() as usize;
+                    bits &= bits - 1;
+                    rows[li * words + lj / 64] |= 1 << (lj % 64);
+                    rows[lj * words + li / 64] |= 1 << (li % 64);
+                    pairs.push((li as u32, lj as u32, 0));
+                }
+            }
+        }
+        (rows, pairs)
+    }
+}
+
+/// [`count_common`] compiled for the best instruction set of this CPU
+/// ([`simd::dispatch`]; x86-64-v3 has POPCNT: the target's baseline counts bits with a
+/// dozen shifts and masks per word). Integer counts: the same in every instruction set.
+fn count_common_dispatched(pairs: &mut [(u32, u32, u32)], rows: &[u64], words: usize) {
+    /// The call, as a kernel.
+    struct Kernel<'a>(&'a mut [(u32, u32, u32)], &'a [u64], usize);
+    impl simd::Kernel for Kernel<'_> {
+        type Output = ();
+        #[inline(always)]
+        fn run(self) {
+            count_common(self.0, self.1, self.2);
+        }
+    }
+    simd::dispatch(Kernel(pairs, rows, words));
+}
+
 /// Sets each pair's common-neighbour count from the adjacency `rows` (`words` words per
 /// row). Rows of up to 8 words (512 points; the default keeps 400) take a loop unrolled for
-/// their length.
+/// their length. Inlined into its callers, so that [`count_common_dispatched`] compiles it
+/// for the instruction set it dispatches to.
+#[inline(always)]
 fn count_common(pairs: &mut [(u32, u32, u32)], rows: &[u64], words: usize) {
     match words {
         1 => count_common_fixed::<1>(pairs, rows),
@@ -329,6 +405,7 @@ fn count_common(pairs: &mut [(u32, u32, u32)], rows: &[u64], words: usize) {
 }
 
 /// [`count_common`] for rows of `W` words.
+#[inline(always)]
 fn count_common_fixed<const W: usize>(pairs: &mut [(u32, u32, u32)], rows: &[u64]) {
     let rows = rows.as_chunks::<W>().0;
     for p in pairs {
@@ -340,6 +417,7 @@ fn count_common_fixed<const W: usize>(pairs: &mut [(u32, u32, u32)], rows: &[u64
 /// Number of bits set in both `a` and `b` (equal lengths): the common neighbours of two
 /// adjacency rows. Slices rather than indices, so the loop has no bounds checks and
 /// vectorises (integer sums: any order gives the same count).
+#[inline(always)]
 fn common_count(a: &[u64], b: &[u64]) -> u32 {
     a.iter().zip(b).map(|(x, y)| (x & y).count_ones()).sum()
 }
@@ -406,154 +484,4 @@ fn rank_prefix(pairs: &mut [(u32, u32, u32)], max_pairs: usize, points: usize) -
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::rng::seeded;
-
-    /// `rank_prefix` as it was before the in-place compaction (issue 34): the reference.
-    fn rank_prefix_reference(
-        pairs: &mut [(u32, u32, u32)],
-        max_pairs: usize,
-        points: usize,
-    ) -> usize {
-        let order = |x: &(u32, u32, u32), y: &(u32, u32, u32)| {
-            y.2.cmp(&x.2).then((x.0, x.1).cmp(&(y.0, y.1)))
-        };
-        if pairs.len() <= max_pairs {
-            pairs.sort_unstable_by(order);
-            return pairs.len();
-        }
-        let mut histogram = vec![0usize; points + 1];
-        for p in pairs.iter() {
-            histogram[p.2 as usize] += 1;
-        }
-        let mut above = 0;
-        let mut cut = points;
-        while above + histogram[cut] < max_pairs && cut > 0 {
-            above += histogram[cut];
-            cut -= 1;
-        }
-        let mut front: Vec<(u32, u32, u32)> = Vec::with_capacity(max_pairs.min(pairs.len()));
-        front.extend(pairs.iter().copied().filter(|p| p.2 > cut as u32));
-        front.extend(
-            pairs
-                .iter()
-                .copied()
-                .filter(|p| p.2 == cut as u32)
-                .take(max_pairs - front.len()),
-        );
-        front.sort_unstable_by(order);
-        let n = front.len();
-        let mut rest: Vec<(u32, u32, u32)> = Vec::with_capacity(pairs.len() - n);
-        let mut taken_at_cut = n - pairs.iter().filter(|p| p.2 > cut as u32).count();
-        for p in pairs.iter() {
-            if p.2 > cut as u32 {
-                continue;
-            }
-            if p.2 == cut as u32 && taken_at_cut > 0 {
-                taken_at_cut -= 1;
-                continue;
-            }
-            rest.push(*p);
-        }
-        pairs[..n].copy_from_slice(&front);
-        pairs[n..].copy_from_slice(&rest);
-        n
-    }
-
-    #[test]
-    fn rank_prefix_matches_the_reference_on_random_pairs() {
-        let mut rng = seeded(34);
-        for case in 0..300 {
-            let points: usize = rng.random_range(2..60);
-            let len: usize = rng.random_range(0..400);
-            // Few distinct counts in some cases, so that ties at the cut are common.
-            let top = if case % 2 == 0 { 3 } else { points as u32 }.min(points as u32 - 1);
-            let mut pairs: Vec<(u32, u32, u32)> = (0..len)
-                .map(|_| {
-                    let i = rng.random_range(0..points as u32);
-                    (
-                        i,
-                        rng.random_range(0..points as u32),
-                        rng.random_range(0..=top),
-                    )
-                })
-                .collect();
-            if case % 3 == 0 {
-                pairs.sort_unstable_by_key(|p| (p.0, p.1));
-            }
-            let max_pairs = rng.random_range(1..=len.max(1) + 2);
-            let mut expected = pairs.clone();
-            let n_expected = rank_prefix_reference(&mut expected, max_pairs, points);
-            let n = rank_prefix(&mut pairs, max_pairs, points);
-            assert_eq!(n, n_expected, "case {case}");
-            assert_eq!(pairs, expected, "case {case}");
-        }
-    }
-
-    #[test]
-    fn count_common_matches_the_indexed_sum_for_every_row_length() {
-        let mut rng = seeded(36);
-        for words in 0..12 {
-            let m = 64 * words.max(1);
-            let rows: Vec<u64> = (0..m * words)
-                .map(|k| match k % 7 {
-                    0 => 0,
-                    1 => u64::MAX,
-                    _ => rng.random(),
-                })
-                .collect();
-            let mut pairs: Vec<(u32, u32, u32)> = (0..300)
-                .map(|_| {
-                    let i = rng.random_range(0..m as u32);
-                    (i, rng.random_range(0..m as u32), u32::MAX)
-                })
-                .collect();
-            count_common(&mut pairs, &rows, words);
-            for &(i, j, c) in &pairs {
-                let (ri, rj) = (i as usize * words, j as usize * words);
-                let expected: u32 = (0..words)
-                    .map(|w| (rows[ri + w] & rows[rj + w]).count_ones())
-                    .sum();
-                assert_eq!(c, expected, "{words} words, pair ({i}, {j})");
-            }
-        }
-    }
-
-    #[test]
-    fn common_count_matches_the_indexed_sum() {
-        let mut rng = seeded(35);
-        for _ in 0..200 {
-            let words: usize = rng.random_range(0..40);
-            let rows: Vec<u64> = (0..2 * words)
-                .map(|k| match k % 5 {
-                    0 => 0,
-                    1 => u64::MAX,
-                    _ => rng.random(),
-                })
-                .collect();
-            let expected: u32 = (0..words)
-                .map(|w| (rows[w] & rows[words + w]).count_ones())
-                .sum();
-            assert_eq!(common_count(&rows[..words], &rows[words..]), expected);
-        }
-    }
-
-    #[test]
-    fn rank_prefix_keeps_the_best_and_all_pairs() {
-        let mut pairs: Vec<(u32, u32, u32)> = (0..10)
-            .map(|k| (k, k + 1, [3, 7, 1, 7, 0, 5, 5, 2, 9, 5][k as usize]))
-            .collect();
-        let before = pairs.clone();
-        let n = rank_prefix(&mut pairs, 4, 20);
-        assert_eq!(n, 4);
-        let counts: Vec<u32> = pairs[..4].iter().map(|p| p.2).collect();
-        assert_eq!(counts, vec![9, 7, 7, 5]);
-        assert_eq!(pairs[3], (5, 6, 5)); // first of the tied 5s by index
-        let mut a = before;
-        let mut b = pairs.clone();
-        a.sort_unstable();
-        b.sort_unstable();
-        assert_eq!(a, b);
-    }
-}
+mod tests;

@@ -58,3 +58,40 @@ fn covariance_is_along_and_across_the_ray() {
     let u = Vector3::new(1.0, 0.0, 0.0);
     assert!((u.dot(&(c * u)) - c[(0, 0)]).abs() < 1e-15);
 }
+
+#[test]
+fn the_fits_have_the_same_bits_in_every_instruction_set() {
+    let bits = |f: &Fitted| {
+        let p = &f.pose;
+        let mut v: Vec<u64> = [
+            p.translation.vector.as_slice(),
+            p.rotation.coords.as_slice(),
+        ]
+        .concat()
+        .iter()
+        .map(|x| x.to_bits())
+        .collect();
+        v.extend(f.noise.as_array().map(f64::to_bits));
+        v.push(f.log_likelihood.to_bits());
+        (v, f.inlier.clone())
+    };
+    for seed in 0..4 {
+        let (data, truth, _) = stereo_scene(seed, 3);
+        let plain = Correspondences::new(data.src().to_vec(), data.dst().to_vec()).expect("valid");
+        for ray in [true, false] {
+            let start = RangeNoise::from_array([1e-4, if ray { 1e-7 } else { 0.0 }, 0.0]);
+            let fit = || em(&plain, &truth, 0.3, start, 1e-12, ray, f64::INFINITY);
+            let (a, b) = (fit(), crate::simd::baseline(fit));
+            assert_eq!(
+                a.as_ref().map(bits),
+                b.as_ref().map(bits),
+                "seed {seed}, ray {ray}"
+            );
+        }
+        let choice = |d: &Correspondences| choose(d, &truth, 0.3, 0.1).map(|n| n.as_array());
+        assert_eq!(
+            choice(&plain).map(|a| a.map(f64::to_bits)),
+            crate::simd::baseline(|| choice(&plain)).map(|a| a.map(f64::to_bits)),
+        );
+    }
+}
