@@ -40,7 +40,7 @@ pub mod estimators;
 pub mod geometry;
 pub mod pso;
 pub mod rng;
-mod simd;
+pub mod simd;
 pub mod synthetic;
 
 pub use arun::{arun, arun_weighted};

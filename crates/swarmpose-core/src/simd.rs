@@ -1,9 +1,12 @@
-//! Runtime dispatch of the hot loops (issue 34): each is written once, in plain Rust, and
-//! compiled twice: for the baseline of the target (SSE2 on x86_64) and, through [`pulp`]'s
-//! runtime dispatch, for the best instruction set the CPU reports (x86-64-v3: AVX2,
-//! POPCNT, BMI, FMA). The arithmetic is the same code in both, integer or IEEE (Rust
-//! contracts no multiply-add on its own; library calls such as `ln` are the same calls),
-//! so both give the same results bit for bit; the tests compare them.
+//! Runtime dispatch of the hot loops (issue 34), for every crate of the workspace: each
+//! kernel is written once, in plain Rust shaped for the compiler's vectoriser (slices of one
+//! length, no bounds checks, no branches in the inner loop), and compiled twice: for the
+//! baseline of the target (SSE2 on x86_64; NEON on aarch64, where it is the baseline) and,
+//! through [`pulp`]'s runtime dispatch, for the best instruction set the CPU reports
+//! (x86-64-v3: AVX2, POPCNT, BMI, FMA). The arithmetic is the same code in both, integer or
+//! IEEE (Rust contracts no multiply-add on its own; library calls such as `ln` are the same
+//! calls), so both give the same results bit for bit; the tests compare them. One switch,
+//! [`baseline`], turns the dispatch off on a thread for the kernels of every crate.
 
 use std::cell::Cell;
 
@@ -16,7 +19,7 @@ thread_local! {
 /// implementation marks `run` `#[inline(always)]`, and the functions it calls too: that is
 /// what compiles them into each instruction set's copy (a closure would be compiled once,
 /// for the baseline, and called from every copy).
-pub(crate) trait Kernel {
+pub trait Kernel {
     /// What the kernel returns.
     type Output;
     /// Calls the kernel.
@@ -38,7 +41,7 @@ impl<K: Kernel> pulp::WithSimd for Dispatched<K> {
 /// Runs `kernel` compiled for the best instruction set of this CPU, or for the target's
 /// baseline inside [`baseline`].
 #[inline(always)]
-pub(crate) fn dispatch<K: Kernel>(kernel: K) -> K::Output {
+pub fn dispatch<K: Kernel>(kernel: K) -> K::Output {
     if BASELINE.with(Cell::get) {
         kernel.run()
     } else {
@@ -48,8 +51,7 @@ pub(crate) fn dispatch<K: Kernel>(kernel: K) -> K::Output {
 
 /// Runs `op` with every kernel it calls on this thread compiled for the target's
 /// baseline only (no runtime dispatch): the path the tests compare with.
-#[cfg(test)]
-pub(crate) fn baseline<R>(op: impl FnOnce() -> R) -> R {
+pub fn baseline<R>(op: impl FnOnce() -> R) -> R {
     /// Restores the previous setting, even when `op` panics.
     struct Restore(bool);
     impl Drop for Restore {
@@ -59,4 +61,20 @@ pub(crate) fn baseline<R>(op: impl FnOnce() -> R) -> R {
     }
     let _restore = Restore(BASELINE.with(|b| b.replace(true)));
     op()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{BASELINE, baseline};
+
+    /// [`baseline`] is scoped: the dispatch comes back after it, also after a panic.
+    #[test]
+    fn baseline_is_scoped() {
+        let inside = baseline(|| BASELINE.with(std::cell::Cell::get));
+        assert!(inside);
+        assert!(!BASELINE.with(std::cell::Cell::get));
+        let panicked = std::panic::catch_unwind(|| baseline(|| panic!("inside")));
+        assert!(panicked.is_err());
+        assert!(!BASELINE.with(std::cell::Cell::get));
+    }
 }

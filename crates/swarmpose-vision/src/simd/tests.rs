@@ -126,14 +126,3 @@ fn random_images_give_corners_and_matches() {
     );
     assert!(matches.len() > 20, "{} matches", matches.len());
 }
-
-/// [`baseline`] is scoped: the dispatch comes back after it, also after a panic.
-#[test]
-fn baseline_is_scoped() {
-    let inside = baseline(|| super::BASELINE.with(std::cell::Cell::get));
-    assert!(inside);
-    assert!(!super::BASELINE.with(std::cell::Cell::get));
-    let panicked = std::panic::catch_unwind(|| baseline(|| panic!("inside")));
-    assert!(panicked.is_err());
-    assert!(!super::BASELINE.with(std::cell::Cell::get));
-}
