@@ -27,8 +27,8 @@ pub mod split;
 
 use nalgebra::{Isometry3, Matrix6, Vector3, Vector6};
 
-use evidence::{PointBlocks, Reduced};
-use model::{Linearized, Matrix3xK, Parts, StereoModel, StereoObservation};
+use evidence::{PoseBlocks, Reduced};
+use model::{Linearized, Parts, StereoModel, StereoObservation};
 
 use crate::nls::lm::{Damping, LeastSquares};
 use crate::nls::pose::Pose;
@@ -190,8 +190,10 @@ fn fit_point(
 ) -> Option<(Vector3<f64>, f64)> {
     for _ in 0..2 {
         let (la, lb) = linearize(model, pose, &p, a, b, Parts::Point)?;
-        let h = la.d_point.transpose() * la.d_point + lb.d_point.transpose() * lb.d_point;
-        let g = la.d_point.transpose() * la.residual + lb.d_point.transpose() * lb.residual;
+        // `aᵀ a + bᵀ b` as nalgebra sums it, without the transposed copies ([`products`]).
+        let (da, db) = (&la.d_point, &lb.d_point);
+        let h = products::tr_mul(da, da) + products::tr_mul(db, db);
+        let g = products::tr_mul(da, &la.residual) + products::tr_mul(db, &lb.residual);
         p -= h.try_inverse()? * g;
     }
     let (a2, b2) = model.residuals2(&pose.rot, &pose.trans, &p, a, b)?;
@@ -238,7 +240,7 @@ impl Problem<'_> {
         pose: &Pose,
         points: &[Vector3<f64>],
         folds: Option<&[u8]>,
-        blocks: &mut Vec<PointBlocks>,
+        blocks: &mut Vec<PoseBlocks>,
         parts: Parts,
     ) -> Option<[Reduced; 2]> {
         let k = self.config.huber_k;
@@ -258,15 +260,9 @@ impl Problem<'_> {
             let wb = huber_weight(lb.residual.norm_squared(), k);
             // The nalgebra expressions `aᵀ b w + …`, bit for bit ([`products`]).
             let hpp = products::gram(&la.d_point, wa) + products::gram(&lb.d_point, wb);
-            let b = PointBlocks {
+            let b = PoseBlocks {
                 pp_inv: point_inverse(&hpp)?,
                 pose: products::cross(&lb.d_point, &lb.d_pose, wb),
-                correction: if all {
-                    products::cross(&la.d_point, &la.d_correction, wa)
-                        + products::cross(&lb.d_point, &lb.d_correction, wb)
-                } else {
-                    Matrix3xK::zeros()
-                },
                 gradient: products::cross(&la.d_point, &la.residual, wa)
                     + products::cross(&lb.d_point, &lb.residual, wb),
             };
@@ -276,11 +272,13 @@ impl Problem<'_> {
             if all {
                 r.add_direct_accumulated(wa, &la.d_pose, &la.d_correction, &la.residual);
                 r.add_direct_accumulated(wb, &lb.d_pose, &lb.d_correction, &lb.residual);
-                r.eliminate(&b);
+                let hpc = products::cross(&la.d_point, &la.d_correction, wa)
+                    + products::cross(&lb.d_point, &lb.d_correction, wb);
+                r.eliminate(&b.with_correction(hpc));
             } else {
                 r.add_direct_pose_accumulated(wa, &la.d_pose, &la.residual);
                 r.add_direct_pose_accumulated(wb, &lb.d_pose, &lb.residual);
-                r.eliminate_pose(&b);
+                r.eliminate_pose_blocks(&b);
             }
             blocks.push(b);
         }
@@ -288,7 +286,7 @@ impl Problem<'_> {
     }
 
     /// Levenberg-Marquardt from `pose` and `points`; returns the iterations done.
-    fn solve(&self, pose: &mut Pose, points: &mut [Vector3<f64>]) -> Result<usize, RefineError> {
+    fn solve(&self, pose: &mut Pose, points: &mut Vec<Vector3<f64>>) -> Result<usize, RefineError> {
         let cost = self.cost(pose, points);
         let mut lm = PairLm {
             problem: self,
@@ -316,9 +314,9 @@ const PAIR_DAMPING: Damping = Damping {
 struct PairLm<'p, 'a> {
     problem: &'p Problem<'a>,
     pose: &'p mut Pose,
-    points: &'p mut [Vector3<f64>],
+    points: &'p mut Vec<Vector3<f64>>,
     /// Each point's blocks for back-substitution.
-    blocks: Vec<PointBlocks>,
+    blocks: Vec<PoseBlocks>,
     /// The points moved by the last step.
     trial: Vec<Vector3<f64>>,
     /// The robust cost at `pose`, `points`.
@@ -383,7 +381,8 @@ impl LeastSquares for PairLm<'_, '_> {
     fn accept(&mut self) {
         if let Some((next, c)) = self.step.1.take() {
             *self.pose = next;
-            self.points.copy_from_slice(&self.trial);
+            // The buffers swapped, not copied: `trial` is written whole before it is read.
+            std::mem::swap(self.points, &mut self.trial);
             self.cost = c;
         }
     }
@@ -563,7 +562,7 @@ impl Problem<'_> {
         &self,
         pose: &Pose,
         points: &[Vector3<f64>],
-        blocks: &[PointBlocks],
+        blocks: &[PoseBlocks],
     ) -> (f64, Vec<noise::Score>) {
         let k = self.config.huber_k;
         let (reference, current) = (self.reference, self.current);

@@ -136,20 +136,21 @@ fn add_track(
         add_product(&mut point.hpp, &dpw, &j.d_point);
         add_product(&mut point.gp, &dpw, &j.residual);
         add_product(&mut point.hpc, &dpw, &j.d_correction);
-        let Some((dj, da)) = j.poses else {
+        // By reference: the two 3x6 blocks are not copied out (issue 34).
+        let Some((dj, da)) = &j.poses else {
             continue;
         };
         let pair = [(var(*slot), dj), (var(anchor), da)];
-        for (v1, b1) in &pair {
-            let Some(v1) = *v1 else { continue };
+        for &(v1, b1) in &pair {
+            let Some(v1) = v1 else { continue };
             let b1w = b1.transpose() * w;
             let score = b1w * j.residual;
             let hpx = (&mut sc.hpx, &mut sc.hgx);
             add_hpx(hpx, point.start, v1, (&(dpw * b1), &score));
             sc.gradient[v1] += score;
             add_product(&mut sc.pose_calibration[v1], &b1w, &j.d_correction);
-            for (v2, b2) in &pair {
-                let Some(v2) = *v2 else { continue };
+            for &(v2, b2) in &pair {
+                let Some(v2) = v2 else { continue };
                 add_product(&mut sc.blocks[v1 * m + v2], &b1w, b2);
             }
         }
