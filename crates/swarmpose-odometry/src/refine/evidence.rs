@@ -113,6 +113,7 @@ impl Reduced {
 
     /// [`Reduced::add_direct`] on equations accumulated from [`Reduced::default`] by
     /// `add_direct*` and `eliminate*` alone ([`Reduced::has_negative_zero`]), the same bits.
+    #[inline(always)]
     pub(crate) fn add_direct_accumulated(
         &mut self,
         w: f64,
@@ -126,6 +127,7 @@ impl Reduced {
 
     /// [`Reduced::add_direct_pose`] on equations accumulated from [`Reduced::default`] by
     /// `add_direct*` and `eliminate*` alone ([`Reduced::has_negative_zero`]), the same bits.
+    #[inline(always)]
     pub(crate) fn add_direct_pose_accumulated(
         &mut self,
         w: f64,
@@ -252,6 +254,7 @@ impl Reduced {
     }
 
     /// Eliminates one point: subtracts `H_xp H_pp⁻¹ H_py` and `H_xp H_pp⁻¹ g_p`.
+    #[inline(always)]
     pub fn eliminate(&mut self, b: &PointBlocks) {
         let tp = products::tr_mul(&b.pose, &b.pp_inv);
         let cp = products::tr_mul(&b.correction, &b.pp_inv);
