@@ -215,6 +215,7 @@ impl StereoModel {
 
     /// The measurement in frame A of the point `p`: whitened residual and Jacobians.
     #[must_use]
+    #[inline(always)]
     pub fn in_reference(&self, p: &Vector3<f64>, z: &StereoObservation) -> Linearized {
         self.in_reference_parts(p, z, Parts::All)
     }
@@ -258,6 +259,7 @@ impl StereoModel {
     /// The measurement in frame B of the point `p` for the pose `(rot, trans)` of A in B
     /// (`P_B = rot P_A + trans`), or `None` when the point is not in front of camera B.
     #[must_use]
+    #[inline(always)]
     pub fn in_current(
         &self,
         rot: &Matrix3<f64>,
