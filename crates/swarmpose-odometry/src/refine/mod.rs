@@ -294,10 +294,13 @@ impl Problem<'_> {
     #[inline(always)]
     fn solve(&self, pose: &mut Pose, points: &mut Vec<Vector3<f64>>) -> Result<usize, RefineError> {
         let cost = self.cost(pose, points);
+        // As large as `points`: swapped with it, it leaves the next round room.
+        let mut trial = Vec::with_capacity(points.capacity());
+        trial.extend_from_slice(points);
         let mut lm = PairLm {
             problem: self,
             blocks: Vec::with_capacity(points.len()),
-            trial: points.to_vec(),
+            trial,
             pose,
             points,
             cost,
