@@ -440,6 +440,7 @@ impl Workspace {
 /// the solution moves with the calibration terms `c` as `∂ξ/∂c = −S⁻¹ S_ξc`, so their
 /// covariance `Σ_c` adds `G Σ_c Gᵀ` with `G` the newest pose's rows of `S⁻¹ S_ξc`.
 /// `None` when `S` is not positive definite. `factor` and `columns` are buffers.
+#[inline(always)]
 fn newest_covariance(
     sc: &Scratch,
     (observations, tracks): (usize, &Tracks),
@@ -468,9 +469,11 @@ fn newest_covariance(
     let block: Matrix6<f64> = columns.fixed_view::<6, 6>(n - 6, 0).into_owned();
     let block = (block + block.transpose()) * 0.5;
     let classic = sc.chi2 / dof;
-    let cluster = block
-        .try_inverse()
-        .and_then(|info| cluster_factor(&mut track_scores(sc, tracks, columns), &info));
+    // A match, not a closure: the scores are compiled inside the dispatched copy.
+    let cluster = match block.try_inverse() {
+        Some(info) => cluster_factor(&mut track_scores(sc, tracks, columns), &info),
+        None => None,
+    };
     let mut cov = block * variance_factor(classic, cluster);
     let mut g = Matrix6xK::zeros();
     for (v, sxc) in pose_calibration.iter().enumerate() {
@@ -485,25 +488,25 @@ fn newest_covariance(
 /// columns of `S⁻¹`), `r_t` the track's score over every free pose with its point
 /// eliminated, all its measurements in the window together: at the track's position in
 /// its anchor keyframe.
+// A loop, not an iterator's map: compiled inside the dispatched copy.
+#[inline(always)]
 fn track_scores(sc: &Scratch, tracks: &Tracks, columns: &DMatrix<f64>) -> Vec<Score> {
-    tracks
-        .iter()
-        .zip(&sc.elim)
-        .map(|((_, obs), e)| {
-            let mut g = Vector6::zeros();
-            for i in e.start..e.end {
-                let (v, hpx) = &sc.hpx[i];
-                let r = sc.hgx[i] - hpx.transpose() * (e.hpp_inv * e.gp);
-                g += columns.fixed_view::<6, 6>(6 * v, 0).transpose() * r;
-            }
-            let z = obs[0].1;
-            Score {
-                u: z.u,
-                v: z.v,
-                r: g,
-            }
-        })
-        .collect()
+    let mut scores = Vec::with_capacity(tracks.len());
+    for ((_, obs), e) in tracks.iter().zip(&sc.elim) {
+        let mut g = Vector6::zeros();
+        for i in e.start..e.end {
+            let (v, hpx) = &sc.hpx[i];
+            let r = sc.hgx[i] - hpx.transpose() * (e.hpp_inv * e.gp);
+            g += columns.fixed_view::<6, 6>(6 * v, 0).transpose() * r;
+        }
+        let z = obs[0].1;
+        scores.push(Score {
+            u: z.u,
+            v: z.v,
+            r: g,
+        });
+    }
+    scores
 }
 
 #[cfg(test)]
