@@ -65,6 +65,7 @@ impl Damping {
     const FLOOR: f64 = 1e-9;
 
     /// Whether `lambda` is past the ceiling.
+    #[inline(always)]
     fn stalled(&self, lambda: f64) -> bool {
         if self.ceiling_tried {
             lambda > self.ceiling
@@ -76,6 +77,7 @@ impl Damping {
     /// One iteration's damped steps on `problem`, linearised at cost `current`: `lambda`
     /// grows tenfold until a step lowers the cost, and that step is taken (`lambda` then
     /// shrinks tenfold).
+    #[inline(always)]
     pub(crate) fn steps<P: LeastSquares + ?Sized>(
         &self,
         problem: &mut P,
@@ -106,6 +108,7 @@ impl Damping {
     ///
     /// # Errors
     /// The problem's, when it cannot be linearised (its state as the last step left it).
+    #[inline(always)]
     pub(crate) fn minimise<P: LeastSquares + ?Sized>(
         &self,
         problem: &mut P,

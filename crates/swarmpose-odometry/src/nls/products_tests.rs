@@ -100,6 +100,22 @@ fn sub_product_is_nalgebra_bit_for_bit() {
     assert_eq!(ok, 20_000);
 }
 
+/// `fit_point`'s normal equations (`aᵀ a` and `aᵀ e` of its 3x3 Jacobians), NaN now and
+/// then among the entries.
+#[test]
+fn three_by_three_tr_mul_is_nalgebra_bit_for_bit() {
+    let ok = trials(|rng| {
+        let mut a: SMatrix<f64, 3, 3> = random(rng);
+        let e: SMatrix<f64, 3, 1> = random(rng);
+        if rng.random_range(0..16) == 0 {
+            a[(rng.random_range(0..3), rng.random_range(0..3))] = f64::NAN;
+        }
+        same_bits(&tr_mul(&a, &a), &(a.transpose() * a))
+            && same_bits(&tr_mul(&a, &e), &(a.transpose() * e))
+    });
+    assert_eq!(ok, 20_000);
+}
+
 /// The check itself can fail: a reassociated sum differs from nalgebra's in some bits.
 #[test]
 fn a_reassociated_sum_is_caught() {

@@ -5,6 +5,7 @@
 
 /// Huber weight and cost `(w, ρ)` of a squared whitened norm `s2`, threshold `k` on the
 /// norm.
+#[inline(always)]
 pub(crate) fn huber(s2: f64, k: f64) -> (f64, f64) {
     if s2 <= k * k {
         (1.0, s2)
@@ -15,11 +16,13 @@ pub(crate) fn huber(s2: f64, k: f64) -> (f64, f64) {
 }
 
 /// The Huber weight alone ([`huber`]'s first value).
+#[inline(always)]
 pub(crate) fn huber_weight(s2: f64, k: f64) -> f64 {
     huber(s2, k).0
 }
 
 /// The Huber cost alone ([`huber`]'s second value).
+#[inline(always)]
 pub(crate) fn huber_cost(s2: f64, k: f64) -> f64 {
     huber(s2, k).1
 }

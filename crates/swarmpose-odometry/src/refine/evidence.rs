@@ -70,6 +70,32 @@ pub struct PointBlocks {
     pub gradient: Vector3<f64>,
 }
 
+/// A point's blocks for back-substitution on the pose alone: [`PointBlocks`] without
+/// `H_pc`, which the pose's Levenberg-Marquardt never reads back (a third fewer bytes
+/// kept per point and iteration, issue 34).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct PoseBlocks {
+    /// `H_pp⁻¹`.
+    pub(crate) pp_inv: Matrix3<f64>,
+    /// `H_pT`.
+    pub(crate) pose: Matrix3x6,
+    /// `g_p`.
+    pub(crate) gradient: Vector3<f64>,
+}
+
+impl PoseBlocks {
+    /// The point's blocks with its `H_pc`.
+    #[inline(always)]
+    pub(crate) fn with_correction(&self, correction: Matrix3xK) -> PointBlocks {
+        PointBlocks {
+            pp_inv: self.pp_inv,
+            pose: self.pose,
+            correction,
+            gradient: self.gradient,
+        }
+    }
+}
+
 impl Reduced {
     /// Adds the direct (pose, correction) terms of one measurement, `J_xᵀ w J_y` and
     /// `J_xᵀ w e`.
@@ -87,6 +113,7 @@ impl Reduced {
 
     /// [`Reduced::add_direct`] on equations accumulated from [`Reduced::default`] by
     /// `add_direct*` and `eliminate*` alone ([`Reduced::has_negative_zero`]), the same bits.
+    #[inline(always)]
     pub(crate) fn add_direct_accumulated(
         &mut self,
         w: f64,
@@ -100,6 +127,7 @@ impl Reduced {
 
     /// [`Reduced::add_direct_pose`] on equations accumulated from [`Reduced::default`] by
     /// `add_direct*` and `eliminate*` alone ([`Reduced::has_negative_zero`]), the same bits.
+    #[inline(always)]
     pub(crate) fn add_direct_pose_accumulated(
         &mut self,
         w: f64,
@@ -210,12 +238,23 @@ impl Reduced {
 
     /// [`Reduced::eliminate`] for the pose blocks only (the correction's unchanged).
     pub fn eliminate_pose(&mut self, b: &PointBlocks) {
+        self.eliminate_pose_blocks(&PoseBlocks {
+            pp_inv: b.pp_inv,
+            pose: b.pose,
+            gradient: b.gradient,
+        });
+    }
+
+    /// [`Reduced::eliminate_pose`] from the pose's blocks alone, the same bits.
+    #[inline(always)]
+    pub(crate) fn eliminate_pose_blocks(&mut self, b: &PoseBlocks) {
         let tp = products::tr_mul(&b.pose, &b.pp_inv);
         products::sub_product(&mut self.pose_pose, &tp, &b.pose);
         products::sub_product(&mut self.pose_gradient, &tp, &b.gradient);
     }
 
     /// Eliminates one point: subtracts `H_xp H_pp⁻¹ H_py` and `H_xp H_pp⁻¹ g_p`.
+    #[inline(always)]
     pub fn eliminate(&mut self, b: &PointBlocks) {
         let tp = products::tr_mul(&b.pose, &b.pp_inv);
         let cp = products::tr_mul(&b.correction, &b.pp_inv);

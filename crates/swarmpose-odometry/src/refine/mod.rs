@@ -23,18 +23,20 @@ pub mod evidence;
 pub mod floor;
 pub mod model;
 pub mod noise;
+mod rounds;
 pub mod split;
 
 use nalgebra::{Isometry3, Matrix6, Vector3, Vector6};
 
-use evidence::{PointBlocks, Reduced};
-use model::{Linearized, Matrix3xK, Parts, StereoModel, StereoObservation};
+use evidence::{PoseBlocks, Reduced};
+use model::{Linearized, Parts, StereoModel, StereoObservation};
 
 use crate::nls::lm::{Damping, LeastSquares};
 use crate::nls::pose::Pose;
 use crate::nls::products;
 use crate::nls::robust::{huber_cost, huber_weight};
 use crate::nls::schur::{back_substitute, point_inverse};
+use swarmpose_vision::simd::dispatch;
 
 /// Settings of the refinement.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -155,6 +157,7 @@ impl Refined {
 }
 
 /// `T_BA` moved by the step `ξ = (ν, ω)` of the pose block: `P_B ← Exp(ω) P_B + ν`.
+#[inline(always)]
 fn moved(pose: &Pose, xi: &Vector6<f64>) -> Pose {
     pose.moved(
         &Vector3::new(xi[0], xi[1], xi[2]),
@@ -181,6 +184,7 @@ fn linearize(
 }
 
 /// Best point for a fixed pose: Gauss-Newton on its 6 residuals from `p`.
+#[inline(always)]
 fn fit_point(
     model: &StereoModel,
     pose: &Pose,
@@ -190,8 +194,10 @@ fn fit_point(
 ) -> Option<(Vector3<f64>, f64)> {
     for _ in 0..2 {
         let (la, lb) = linearize(model, pose, &p, a, b, Parts::Point)?;
-        let h = la.d_point.transpose() * la.d_point + lb.d_point.transpose() * lb.d_point;
-        let g = la.d_point.transpose() * la.residual + lb.d_point.transpose() * lb.residual;
+        // `aᵀ a + bᵀ b` as nalgebra sums it, without the transposed copies ([`products`]).
+        let (da, db) = (&la.d_point, &lb.d_point);
+        let h = products::tr_mul(da, da) + products::tr_mul(db, db);
+        let g = products::tr_mul(da, &la.residual) + products::tr_mul(db, &lb.residual);
         p -= h.try_inverse()? * g;
     }
     let (a2, b2) = model.residuals2(&pose.rot, &pose.trans, &p, a, b)?;
@@ -209,6 +215,7 @@ struct Problem<'a> {
 
 impl Problem<'_> {
     /// Robust cost `½ Σ ρ` of the active points at `pose` with `points`.
+    #[inline(always)]
     fn cost(&self, pose: &Pose, points: &[Vector3<f64>]) -> f64 {
         let k = self.config.huber_k;
         let mut total = 0.0;
@@ -238,7 +245,7 @@ impl Problem<'_> {
         pose: &Pose,
         points: &[Vector3<f64>],
         folds: Option<&[u8]>,
-        blocks: &mut Vec<PointBlocks>,
+        blocks: &mut Vec<PoseBlocks>,
         parts: Parts,
     ) -> Option<[Reduced; 2]> {
         let k = self.config.huber_k;
@@ -258,15 +265,9 @@ impl Problem<'_> {
             let wb = huber_weight(lb.residual.norm_squared(), k);
             // The nalgebra expressions `aᵀ b w + …`, bit for bit ([`products`]).
             let hpp = products::gram(&la.d_point, wa) + products::gram(&lb.d_point, wb);
-            let b = PointBlocks {
+            let b = PoseBlocks {
                 pp_inv: point_inverse(&hpp)?,
                 pose: products::cross(&lb.d_point, &lb.d_pose, wb),
-                correction: if all {
-                    products::cross(&la.d_point, &la.d_correction, wa)
-                        + products::cross(&lb.d_point, &lb.d_correction, wb)
-                } else {
-                    Matrix3xK::zeros()
-                },
                 gradient: products::cross(&la.d_point, &la.residual, wa)
                     + products::cross(&lb.d_point, &lb.residual, wb),
             };
@@ -276,11 +277,13 @@ impl Problem<'_> {
             if all {
                 r.add_direct_accumulated(wa, &la.d_pose, &la.d_correction, &la.residual);
                 r.add_direct_accumulated(wb, &lb.d_pose, &lb.d_correction, &lb.residual);
-                r.eliminate(&b);
+                let hpc = products::cross(&la.d_point, &la.d_correction, wa)
+                    + products::cross(&lb.d_point, &lb.d_correction, wb);
+                r.eliminate(&b.with_correction(hpc));
             } else {
                 r.add_direct_pose_accumulated(wa, &la.d_pose, &la.residual);
                 r.add_direct_pose_accumulated(wb, &lb.d_pose, &lb.residual);
-                r.eliminate_pose(&b);
+                r.eliminate_pose_blocks(&b);
             }
             blocks.push(b);
         }
@@ -288,12 +291,16 @@ impl Problem<'_> {
     }
 
     /// Levenberg-Marquardt from `pose` and `points`; returns the iterations done.
-    fn solve(&self, pose: &mut Pose, points: &mut [Vector3<f64>]) -> Result<usize, RefineError> {
+    #[inline(always)]
+    fn solve(&self, pose: &mut Pose, points: &mut Vec<Vector3<f64>>) -> Result<usize, RefineError> {
         let cost = self.cost(pose, points);
+        // As large as `points`: swapped with it, it leaves the next round room.
+        let mut trial = Vec::with_capacity(points.capacity());
+        trial.extend_from_slice(points);
         let mut lm = PairLm {
             problem: self,
             blocks: Vec::with_capacity(points.len()),
-            trial: points.to_vec(),
+            trial,
             pose,
             points,
             cost,
@@ -316,9 +323,9 @@ const PAIR_DAMPING: Damping = Damping {
 struct PairLm<'p, 'a> {
     problem: &'p Problem<'a>,
     pose: &'p mut Pose,
-    points: &'p mut [Vector3<f64>],
+    points: &'p mut Vec<Vector3<f64>>,
     /// Each point's blocks for back-substitution.
-    blocks: Vec<PointBlocks>,
+    blocks: Vec<PoseBlocks>,
     /// The points moved by the last step.
     trial: Vec<Vector3<f64>>,
     /// The robust cost at `pose`, `points`.
@@ -332,6 +339,7 @@ struct PairLm<'p, 'a> {
 impl LeastSquares for PairLm<'_, '_> {
     type Error = RefineError;
 
+    #[inline(always)]
     fn linearise(&mut self) -> Result<f64, RefineError> {
         let [r, _] = self
             .problem
@@ -347,6 +355,7 @@ impl LeastSquares for PairLm<'_, '_> {
         Ok(self.cost)
     }
 
+    #[inline(always)]
     fn solve_damped(&mut self, lambda: f64) -> bool {
         let (s, g) = &self.system;
         let mut damped = *s;
@@ -360,6 +369,7 @@ impl LeastSquares for PairLm<'_, '_> {
         true
     }
 
+    #[inline(always)]
     fn trial_cost(&mut self) -> f64 {
         let dxi = self.step.0;
         let next = moved(self.pose, &dxi);
@@ -376,14 +386,17 @@ impl LeastSquares for PairLm<'_, '_> {
         c
     }
 
+    #[inline(always)]
     fn converged(&self, current: f64, trial: f64) -> bool {
         (current - trial) < 1e-7 * current.max(1e-300) || self.step.0.norm() < 1e-10
     }
 
+    #[inline(always)]
     fn accept(&mut self) {
         if let Some((next, c)) = self.step.1.take() {
             *self.pose = next;
-            self.points.copy_from_slice(&self.trial);
+            // The buffers swapped, not copied: `trial` is written whole before it is read.
+            std::mem::swap(self.points, &mut self.trial);
             self.cost = c;
         }
     }
@@ -414,19 +427,38 @@ pub fn refine(
             current: current.len(),
         });
     }
+    // Compiled for the CPU's best instruction set: the same IEEE operations (issue 34).
+    dispatch(rounds::Refine {
+        model,
+        config,
+        matches: (reference, current, folds),
+        start,
+        min_inliers,
+    })
+}
+
+/// [`refine`] on slices of equal lengths, compiled into each instruction set's copy.
+#[inline(always)]
+fn refine_with(
+    model: &StereoModel,
+    config: &RefineConfig,
+    (reference, current, folds): (&[StereoObservation], &[StereoObservation], Option<&[u8]>),
+    start: &Isometry3<f64>,
+    min_inliers: usize,
+) -> Result<Refined, RefineError> {
     let mut pose = Pose::of(&start.inverse());
     // Points fitted to the starting pose, then gated.
-    let mut fitted: Vec<Option<(Vector3<f64>, f64)>> = reference
-        .iter()
-        .zip(current)
-        .map(|(a, b)| {
-            let p = model.anchor(a);
-            if p.z <= 0.0 || !p.iter().all(|v| v.is_finite()) {
-                return None;
-            }
+    // A loop, not an iterator's map: compiled inside the dispatched copy.
+    let mut fitted: Vec<Option<(Vector3<f64>, f64)>> = Vec::with_capacity(reference.len());
+    for (a, b) in reference.iter().zip(current) {
+        let p = model.anchor(a);
+        let finite = p.z > 0.0 && p.iter().all(|v| v.is_finite());
+        fitted.push(if finite {
             fit_point(model, &pose, p, a, b)
-        })
-        .collect();
+        } else {
+            None
+        });
+    }
     let mut problem = Problem {
         model,
         config,
@@ -440,90 +472,11 @@ pub fn refine(
     problem.result(pose, points, folds, iterations)
 }
 
-/// The gate of the first round: the configuration's, or the median χ² of the matches
-/// `fitted` at the starting pose when that is larger (the first round keeps the better
-/// half, in case the start is rough).
-fn first_gate(config: &RefineConfig, fitted: &[Option<(Vector3<f64>, f64)>]) -> f64 {
-    let mut chi2s: Vec<f64> = Vec::with_capacity(fitted.len());
-    chi2s.extend(fitted.iter().filter_map(|f| f.map(|(_, c)| c)));
-    let median = if chi2s.is_empty() {
-        0.0
-    } else {
-        let mid = chi2s.len() / 2;
-        *chi2s.select_nth_unstable_by(mid, f64::total_cmp).1
-    };
-    config.initial_gate_chi2.max(median)
-}
-
 impl Problem<'_> {
-    /// Rounds of gating the matches `fitted` (each one's point and χ², fitted to the
-    /// pose) and refining `pose` on those within the gate, until the gated set settles
-    /// or [`RefineConfig::rounds`] are done; every match is fitted again to each new
-    /// pose. Leaves the last round's matches in `self.active` and their points in
-    /// `points`; returns the Levenberg-Marquardt iterations.
-    fn gated_rounds(
-        &mut self,
-        pose: &mut Pose,
-        fitted: &mut [Option<(Vector3<f64>, f64)>],
-        points: &mut Vec<Vector3<f64>>,
-        needed: usize,
-    ) -> Result<usize, RefineError> {
-        let mut gate = first_gate(self.config, fitted);
-        let mut iterations = 0;
-        // Each round's buffers: the matches within the gate and their points.
-        let mut active: Vec<usize> = Vec::with_capacity(fitted.len());
-        self.active.reserve(fitted.len());
-        for round in 0..self.config.rounds.max(1) {
-            active.clear();
-            active.extend(
-                fitted
-                    .iter()
-                    .enumerate()
-                    .filter_map(|(i, f)| f.and_then(|(_, c2)| (c2 <= gate).then_some(i))),
-            );
-            if active.len() < needed {
-                return Err(RefineError::TooFewInliers {
-                    got: active.len(),
-                    needed,
-                });
-            }
-            let settled = round > 0 && active == self.active;
-            std::mem::swap(&mut self.active, &mut active);
-            if settled {
-                break;
-            }
-            points.clear();
-            points.extend(
-                self.active
-                    .iter()
-                    .filter_map(|&i| fitted[i].map(|(p, _)| p)),
-            );
-            iterations += self.solve(pose, points)?;
-            self.refit(pose, fitted);
-            gate = self.config.gate_chi2;
-        }
-        Ok(iterations)
-    }
-
-    /// Every match of `fitted` fitted again to `pose`, for the next gate.
-    fn refit(&self, pose: &Pose, fitted: &mut [Option<(Vector3<f64>, f64)>]) {
-        let (model, reference, current) = (self.model, self.reference, self.current);
-        for (i, f) in fitted.iter_mut().enumerate() {
-            let start = match f {
-                Some((p, _)) => *p,
-                None => model.anchor(&reference[i]),
-            };
-            *f = if start.z > 0.0 {
-                fit_point(model, pose, start, &reference[i], &current[i])
-            } else {
-                None
-            };
-        }
-    }
-
     /// The refined motion at `pose` with the active matches' `points`: its covariance
     /// from the normal equations (per fold of `folds`), scaled by the residuals' and the
     /// regions' variance factors.
+    #[inline(always)]
     fn result(
         self,
         pose: Pose,
@@ -559,11 +512,12 @@ impl Problem<'_> {
     /// The Huber-weighted `χ²` of the active matches at `pose` with `points` (and their
     /// elimination `blocks`), and each match's score on the pose with its point
     /// eliminated, at its position in B ([`noise::cluster_factor`]).
+    #[inline(always)]
     fn scores(
         &self,
         pose: &Pose,
         points: &[Vector3<f64>],
-        blocks: &[PointBlocks],
+        blocks: &[PoseBlocks],
     ) -> (f64, Vec<noise::Score>) {
         let k = self.config.huber_k;
         let (reference, current) = (self.reference, self.current);

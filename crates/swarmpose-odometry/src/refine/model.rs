@@ -107,10 +107,12 @@ pub struct Linearized {
 }
 
 impl StereoModel {
+    #[inline(always)]
     fn fb(&self) -> f64 {
         self.rig.fx * self.rig.baseline_m
     }
 
+    #[inline(always)]
     fn whiten(&self) -> Vector3<f64> {
         let (p, d) = (self.noise.position_px, self.noise.disparity_px);
         Vector3::new(1.0 / p, 1.0 / p, 1.0 / d)
@@ -120,6 +122,7 @@ impl StereoModel {
     /// applied: `x = (u − cx)/fx`, `y = (v − cy)/fy`, and `ρ` solving
     /// `fx b ρ − δ(x − b ρ, y) = d` (a few fixed-point steps from the uncorrected value).
     #[must_use]
+    #[inline(always)]
     pub fn anchor(&self, z: &StereoObservation) -> Vector3<f64> {
         let x = (z.u - self.rig.cx) / self.rig.fx;
         let y = (z.v - self.rig.cy) / self.rig.fy;
@@ -135,6 +138,7 @@ impl StereoModel {
     /// for the focal length (`fx + Δf`, `fy (1 + Δf / fx)`) `(x, y fy / fx, b ρ / h_z)`
     /// at the normalised point `(x, y)` of the left image and inverse depth over `h_z`
     /// `rho_z` (`ρ` in A, `ρ / h_z` in B).
+    #[inline(always)]
     fn calibration_columns(&self, x: f64, y: f64, xr: f64, rho_z: f64) -> Matrix3xK {
         let mut m = Matrix3xK::zeros();
         for (k, b) in DisparityCorrection::basis(xr, y).iter().enumerate() {
@@ -149,6 +153,7 @@ impl StereoModel {
     /// Squared norms of the whitened residuals of `p` in A and in B (no Jacobians), or
     /// `None` when the point is not in front of camera B.
     #[must_use]
+    #[inline(always)]
     pub fn residuals2(
         &self,
         rot: &Matrix3<f64>,
@@ -165,6 +170,7 @@ impl StereoModel {
 
     /// Squared norm of the whitened residual of `p` in A.
     #[must_use]
+    #[inline(always)]
     pub fn residual2_in_reference(&self, p: &Vector3<f64>, a: &StereoObservation) -> f64 {
         let r = &self.rig;
         let rho = p.z;
@@ -179,6 +185,7 @@ impl StereoModel {
     /// Squared norm of the whitened residual of `p` in B for the pose `(rot, trans)` of A
     /// in B, or `None` when the point is not in front of camera B.
     #[must_use]
+    #[inline(always)]
     pub fn residual2_in_current(
         &self,
         rot: &Matrix3<f64>,
@@ -208,6 +215,7 @@ impl StereoModel {
 
     /// The measurement in frame A of the point `p`: whitened residual and Jacobians.
     #[must_use]
+    #[inline(always)]
     pub fn in_reference(&self, p: &Vector3<f64>, z: &StereoObservation) -> Linearized {
         self.in_reference_parts(p, z, Parts::All)
     }
@@ -251,6 +259,7 @@ impl StereoModel {
     /// The measurement in frame B of the point `p` for the pose `(rot, trans)` of A in B
     /// (`P_B = rot P_A + trans`), or `None` when the point is not in front of camera B.
     #[must_use]
+    #[inline(always)]
     pub fn in_current(
         &self,
         rot: &Matrix3<f64>,

@@ -71,6 +71,7 @@ impl Tracks {
 /// one Gauss-Newton step on its own measurements (more changed no result in the
 /// ablations of RESULTS.md, and cost as much as a Levenberg-Marquardt iteration each), in
 /// a deterministic order, into `out`. Leaves `rel` at the relative poses of `poses`.
+#[inline(always)]
 pub(super) fn tracks_of(
     model: &StereoModel,
     k: f64,

@@ -34,10 +34,12 @@ use crate::nls::schur::back_substitute;
 use crate::refine::evidence::{Matrix6xK, MatrixK, VectorK};
 use crate::refine::model::{Matrix3x6, StereoModel};
 use crate::refine::noise::{Score, cluster_factor, variance_factor};
+use swarmpose_vision::simd::{Kernel, dispatch};
 use system::build;
 
 /// Robust cost `Σ ρ` of every track at the relative poses `rel` of `n` keyframes, or
 /// infinity when a point leaves a view.
+#[inline(always)]
 fn cost(
     model: &StereoModel,
     k: f64,
@@ -170,10 +172,51 @@ impl Workspace {
 /// the `prior` of the keyframes marginalised before when there is one (ignored when one
 /// of its keyframes is not in `frames`). `None` when there is nothing to refine or the
 /// system is singular (poses unchanged).
+/// Compiled for the CPU's best instruction set ([`dispatch`]): the same IEEE operations in
+/// the same order, fewer instructions (issue 34).
 pub(crate) fn refine_window(
     model: &StereoModel,
     calibration_covariance: &MatrixK,
     config: &WindowConfig,
+    frames: &mut [Keyframe],
+    prior: Option<&Prior>,
+    ws: &mut Workspace,
+) -> Option<WindowReport> {
+    dispatch(RefineWindow {
+        model,
+        calibration_covariance,
+        config,
+        frames,
+        prior,
+        ws,
+    })
+}
+
+/// A call of [`refine_window`] for [`dispatch`].
+struct RefineWindow<'a> {
+    model: &'a StereoModel,
+    calibration_covariance: &'a MatrixK,
+    config: &'a WindowConfig,
+    frames: &'a mut [Keyframe],
+    prior: Option<&'a Prior>,
+    ws: &'a mut Workspace,
+}
+
+impl Kernel for RefineWindow<'_> {
+    type Output = Option<WindowReport>;
+
+    #[inline(always)]
+    fn run(self) -> Option<WindowReport> {
+        let c = (self.calibration_covariance, self.config);
+        refine_window_with(self.model, c, self.frames, self.prior, self.ws)
+    }
+}
+
+/// [`refine_window`]'s body, compiled into each instruction set's copy.
+#[inline(always)]
+fn refine_window_with(
+    model: &StereoModel,
+    (calibration_covariance, config): (&MatrixK, &WindowConfig),
     frames: &mut [Keyframe],
     prior: Option<&Prior>,
     ws: &mut Workspace,
@@ -253,6 +296,7 @@ struct WindowLm<'w> {
 
 impl WindowLm<'_> {
     /// The prior's part of the cost at `poses`.
+    #[inline(always)]
     fn prior_energy(&self, poses: &[Pose]) -> f64 {
         self.prior
             .as_ref()
@@ -265,6 +309,7 @@ impl LeastSquares for WindowLm<'_> {
     /// its cost is not finite.
     type Error = ();
 
+    #[inline(always)]
     fn linearise(&mut self) -> Result<f64, ()> {
         self.iterations += 1;
         let Self { ws, model, k, .. } = self;
@@ -296,10 +341,12 @@ impl LeastSquares for WindowLm<'_> {
         Ok(current)
     }
 
+    #[inline(always)]
     fn solve_damped(&mut self, lambda: f64) -> bool {
         self.ws.solve_damped(lambda)
     }
 
+    #[inline(always)]
     fn trial_cost(&mut self) -> f64 {
         self.ws.move_trial();
         let ws = &*self.ws;
@@ -312,10 +359,12 @@ impl LeastSquares for WindowLm<'_> {
         ) + self.prior_energy(&ws.trial)
     }
 
+    #[inline(always)]
     fn converged(&self, current: f64, trial: f64) -> bool {
         current - trial < 1e-6 * current
     }
 
+    #[inline(always)]
     fn accept(&mut self) {
         let ws = &mut *self.ws;
         std::mem::swap(&mut ws.poses, &mut ws.trial);
@@ -326,6 +375,7 @@ impl LeastSquares for WindowLm<'_> {
 impl Workspace {
     /// The step `dx` of the reduced system damped by `lambda` (`S + λ diag(S)`, and a
     /// tiny constant on the diagonal); false when that is not positive definite.
+    #[inline(always)]
     fn solve_damped(&mut self, lambda: f64) -> bool {
         let Self { sc, damped, dx, .. } = self;
         assign(damped, &sc.s);
@@ -346,6 +396,7 @@ impl Workspace {
 
     /// The state moved by the step `dx` into `trial` (every pose but the oldest),
     /// `trial_points` (each point back-substituted) and `trial_rel`.
+    #[inline(always)]
     fn move_trial(&mut self) {
         let Self {
             sc,
@@ -389,6 +440,7 @@ impl Workspace {
 /// the solution moves with the calibration terms `c` as `∂ξ/∂c = −S⁻¹ S_ξc`, so their
 /// covariance `Σ_c` adds `G Σ_c Gᵀ` with `G` the newest pose's rows of `S⁻¹ S_ξc`.
 /// `None` when `S` is not positive definite. `factor` and `columns` are buffers.
+#[inline(always)]
 fn newest_covariance(
     sc: &Scratch,
     (observations, tracks): (usize, &Tracks),
@@ -417,9 +469,11 @@ fn newest_covariance(
     let block: Matrix6<f64> = columns.fixed_view::<6, 6>(n - 6, 0).into_owned();
     let block = (block + block.transpose()) * 0.5;
     let classic = sc.chi2 / dof;
-    let cluster = block
-        .try_inverse()
-        .and_then(|info| cluster_factor(&mut track_scores(sc, tracks, columns), &info));
+    // A match, not a closure: the scores are compiled inside the dispatched copy.
+    let cluster = match block.try_inverse() {
+        Some(info) => cluster_factor(&mut track_scores(sc, tracks, columns), &info),
+        None => None,
+    };
     let mut cov = block * variance_factor(classic, cluster);
     let mut g = Matrix6xK::zeros();
     for (v, sxc) in pose_calibration.iter().enumerate() {
@@ -434,25 +488,25 @@ fn newest_covariance(
 /// columns of `S⁻¹`), `r_t` the track's score over every free pose with its point
 /// eliminated, all its measurements in the window together: at the track's position in
 /// its anchor keyframe.
+// A loop, not an iterator's map: compiled inside the dispatched copy.
+#[inline(always)]
 fn track_scores(sc: &Scratch, tracks: &Tracks, columns: &DMatrix<f64>) -> Vec<Score> {
-    tracks
-        .iter()
-        .zip(&sc.elim)
-        .map(|((_, obs), e)| {
-            let mut g = Vector6::zeros();
-            for i in e.start..e.end {
-                let (v, hpx) = &sc.hpx[i];
-                let r = sc.hgx[i] - hpx.transpose() * (e.hpp_inv * e.gp);
-                g += columns.fixed_view::<6, 6>(6 * v, 0).transpose() * r;
-            }
-            let z = obs[0].1;
-            Score {
-                u: z.u,
-                v: z.v,
-                r: g,
-            }
-        })
-        .collect()
+    let mut scores = Vec::with_capacity(tracks.len());
+    for ((_, obs), e) in tracks.iter().zip(&sc.elim) {
+        let mut g = Vector6::zeros();
+        for i in e.start..e.end {
+            let (v, hpx) = &sc.hpx[i];
+            let r = sc.hgx[i] - hpx.transpose() * (e.hpp_inv * e.gp);
+            g += columns.fixed_view::<6, 6>(6 * v, 0).transpose() * r;
+        }
+        let z = obs[0].1;
+        scores.push(Score {
+            u: z.u,
+            v: z.v,
+            r: g,
+        });
+    }
+    scores
 }
 
 #[cfg(test)]

@@ -3,6 +3,7 @@
 //! free poses ([`build`]).
 
 use nalgebra::{DMatrix, DVector, Matrix3, Matrix6, SMatrix, Vector3, Vector6};
+use swarmpose_vision::simd::{Kernel, dispatch};
 
 use super::{Eliminated, Scratch};
 use crate::nls::pose::Pose;
@@ -16,6 +17,7 @@ use crate::window::tracks::Tracks;
 
 /// Adds `block` to the `H_pξ` of variable `v` among `hpx[start..]`, and `score` to its
 /// entry of `hgx` (kept beside `hpx`).
+#[inline(always)]
 fn add_hpx(
     (hpx, hgx): (&mut Vec<(usize, Matrix3x6)>, &mut Vec<Vector6<f64>>),
     start: usize,
@@ -73,8 +75,56 @@ impl Scratch {
 
 /// The reduced system at `poses` and `points`, over the poses after the first `fixed`
 /// (held fixed: 1 in the refinement, 0 to marginalise the first), into `sc.s` and `sc.g`;
-/// `None` if a point left a view or its block is singular.
+/// `None` if a point left a view or its block is singular. Compiled for the CPU's best
+/// instruction set ([`dispatch`]): the same IEEE operations, fewer instructions (issue 34).
 pub(super) fn build(
+    model: &StereoModel,
+    k: f64,
+    (poses, fixed): (&[Pose], usize),
+    tracks: &Tracks,
+    points: &[Vector3<f64>],
+    sc: &mut Scratch,
+) -> Option<()> {
+    dispatch(Build {
+        model,
+        k,
+        poses: (poses, fixed),
+        tracks,
+        points,
+        sc,
+    })
+}
+
+/// A call of [`build`] for [`dispatch`].
+struct Build<'a> {
+    model: &'a StereoModel,
+    k: f64,
+    poses: (&'a [Pose], usize),
+    tracks: &'a Tracks,
+    points: &'a [Vector3<f64>],
+    sc: &'a mut Scratch,
+}
+
+impl Kernel for Build<'_> {
+    type Output = Option<()>;
+
+    #[inline(always)]
+    fn run(self) -> Option<()> {
+        let Self {
+            model,
+            k,
+            poses,
+            tracks,
+            points,
+            sc,
+        } = self;
+        build_with(model, k, poses, tracks, points, sc)
+    }
+}
+
+/// [`build`]'s body, compiled into each instruction set's copy.
+#[inline(always)]
+fn build_with(
     model: &StereoModel,
     k: f64,
     (poses, fixed): (&[Pose], usize),
@@ -108,6 +158,7 @@ struct PointSums {
 /// point `p` to the system of `m` pose variables (`n` keyframes, the first `fixed` held
 /// fixed): their cost, the pose blocks, and the track's `H_pξ` blocks (into `sc.hpx`);
 /// returns the point's own blocks, or `None` if the point left a view.
+#[inline(always)]
 fn add_track(
     model: &StereoModel,
     k: f64,
@@ -136,20 +187,21 @@ fn add_track(
         add_product(&mut point.hpp, &dpw, &j.d_point);
         add_product(&mut point.gp, &dpw, &j.residual);
         add_product(&mut point.hpc, &dpw, &j.d_correction);
-        let Some((dj, da)) = j.poses else {
+        // By reference: the two 3x6 blocks are not copied out (issue 34).
+        let Some((dj, da)) = &j.poses else {
             continue;
         };
         let pair = [(var(*slot), dj), (var(anchor), da)];
-        for (v1, b1) in &pair {
-            let Some(v1) = *v1 else { continue };
+        for &(v1, b1) in &pair {
+            let Some(v1) = v1 else { continue };
             let b1w = b1.transpose() * w;
             let score = b1w * j.residual;
             let hpx = (&mut sc.hpx, &mut sc.hgx);
             add_hpx(hpx, point.start, v1, (&(dpw * b1), &score));
             sc.gradient[v1] += score;
             add_product(&mut sc.pose_calibration[v1], &b1w, &j.d_correction);
-            for (v2, b2) in &pair {
-                let Some(v2) = *v2 else { continue };
+            for &(v2, b2) in &pair {
+                let Some(v2) = v2 else { continue };
                 add_product(&mut sc.blocks[v1 * m + v2], &b1w, b2);
             }
         }
@@ -160,6 +212,7 @@ fn add_track(
 /// Eliminates the track's `point` (its Schur complement subtracted from the system of
 /// `m` pose variables) and keeps its blocks for back-substitution; `None` when its
 /// block is singular.
+#[inline(always)]
 fn eliminate_point(point: PointSums, m: usize, sc: &mut Scratch) -> Option<()> {
     let PointSums {
         hpp,

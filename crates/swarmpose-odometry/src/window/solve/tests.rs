@@ -129,3 +129,106 @@ fn the_point_part_is_the_linearisations_bit_for_bit() {
     }
     assert!(some > 5_000 && none > 100, "{some} {none}");
 }
+
+/// The window's refinement as dispatched (compiled for the CPU's best instruction set,
+/// AVX2 where there is one) gives its baseline compilation's poses, report and buffers bit
+/// for bit (`{:?}` prints every bit of a number but a NaN's sign and payload, which Rust
+/// leaves unspecified), on seeded windows of 2 to 6 keyframes whose measurements are noisy
+/// projections, now and then NaN or a zero of either sign; marginalising builds the same.
+#[test]
+fn the_dispatched_window_is_the_baseline_bit_for_bit() {
+    use crate::window::{Keyframe, WindowConfig};
+    use nalgebra::{Isometry3, Point3};
+    use swarmpose_vision::frontend::DisparityCorrection;
+    let model = crate::refine::model::test_model(DisparityCorrection::from_coefficients([
+        0.7, 1.9, -0.4, 0.3, 0.8,
+    ]));
+    let mut rng = ChaCha8Rng::seed_from_u64(35);
+    let config = WindowConfig {
+        max_iterations: 4,
+        ..WindowConfig::default()
+    };
+    let calibration = MatrixK::identity() * 0.01;
+    let mut refined = 0;
+    for trial in 0..40 {
+        let n = rng.random_range(2..7);
+        let points: Vec<Point3<f64>> = (0..80)
+            .map(|_| {
+                let z = rng.random_range(4.0..40.0);
+                Point3::new(
+                    rng.random_range(-0.8..0.8) * z,
+                    rng.random_range(-0.25..0.25) * z,
+                    z,
+                )
+            })
+            .collect();
+        let mut frames: Vec<Keyframe> = (0..n)
+            .map(|k| {
+                let truth = Isometry3::new(
+                    Vector3::new(0.0, 0.0, -0.8 * k as f64),
+                    Vector3::new(0.0, 0.01 * k as f64, 0.0),
+                );
+                let observations = points
+                    .iter()
+                    .enumerate()
+                    .filter_map(|(t, p)| {
+                        let q = truth * p;
+                        let mut z = StereoObservation {
+                            u: model.rig.fx * q.x / q.z
+                                + model.rig.cx
+                                + rng.random_range(-0.5..0.5),
+                            v: model.rig.fy * q.y / q.z
+                                + model.rig.cy
+                                + rng.random_range(-0.5..0.5),
+                            d: model.rig.fx * model.rig.baseline_m / q.z,
+                        };
+                        match rng.random_range(0..60) {
+                            0 => z.d = f64::NAN,
+                            1 => z.u = 0.0,
+                            2 => z.v = -0.0,
+                            _ => {}
+                        }
+                        (q.z > 1.0 && rng.random_range(0..6) > 0).then_some((t as u32, z))
+                    })
+                    .collect();
+                // The starting poses off the truth.
+                let start = Isometry3::new(
+                    Vector3::from_fn(|_, _| rng.random_range(-0.05..0.05)),
+                    Vector3::from_fn(|_, _| rng.random_range(-0.003..0.003)),
+                ) * truth;
+                Keyframe {
+                    index: k,
+                    pose_cw: start,
+                    observations,
+                    keyframe: true,
+                }
+            })
+            .collect();
+        let mut base = frames.clone();
+        let (mut ws, mut ws_base) = (Workspace::default(), Workspace::default());
+        let got = refine_window(&model, &calibration, &config, &mut frames, None, &mut ws);
+        let want = swarmpose_vision::simd::baseline(|| {
+            refine_window(&model, &calibration, &config, &mut base, None, &mut ws_base)
+        });
+        let poses = |f: &[Keyframe]| f.iter().map(|k| k.pose_cw).collect::<Vec<_>>();
+        assert_eq!(
+            format!("{got:?} {:?} {ws:?}", poses(&frames)),
+            format!("{want:?} {:?} {ws_base:?}", poses(&base)),
+            "trial {trial}"
+        );
+        refined += usize::from(got.is_some());
+        // The marginalisation's system, points at their anchors: built the same.
+        let poses: Vec<Pose> = frames.iter().map(|f| Pose::of(&f.pose_cw)).collect();
+        let (mut sc, mut sc_base) = (Scratch::default(), Scratch::default());
+        let got = linearised_system(&model, 2.5, &poses, &ws.tracks, &mut sc);
+        let want = swarmpose_vision::simd::baseline(|| {
+            linearised_system(&model, 2.5, &poses, &ws.tracks, &mut sc_base)
+        });
+        assert_eq!(
+            format!("{got:?} {sc:?}"),
+            format!("{want:?} {sc_base:?}"),
+            "{trial}"
+        );
+    }
+    assert!(refined >= 20, "{refined} of 40 refined");
+}
