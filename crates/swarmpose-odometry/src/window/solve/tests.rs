@@ -138,7 +138,6 @@ fn the_point_part_is_the_linearisations_bit_for_bit() {
 #[test]
 fn the_dispatched_window_is_the_baseline_bit_for_bit() {
     use crate::window::{Keyframe, WindowConfig};
-    use nalgebra::{Isometry3, Point3};
     use swarmpose_vision::frontend::DisparityCorrection;
     let model = crate::refine::model::test_model(DisparityCorrection::from_coefficients([
         0.7, 1.9, -0.4, 0.3, 0.8,
@@ -151,59 +150,7 @@ fn the_dispatched_window_is_the_baseline_bit_for_bit() {
     let calibration = MatrixK::identity() * 0.01;
     let mut refined = 0;
     for trial in 0..40 {
-        let n = rng.random_range(2..7);
-        let points: Vec<Point3<f64>> = (0..80)
-            .map(|_| {
-                let z = rng.random_range(4.0..40.0);
-                Point3::new(
-                    rng.random_range(-0.8..0.8) * z,
-                    rng.random_range(-0.25..0.25) * z,
-                    z,
-                )
-            })
-            .collect();
-        let mut frames: Vec<Keyframe> = (0..n)
-            .map(|k| {
-                let truth = Isometry3::new(
-                    Vector3::new(0.0, 0.0, -0.8 * k as f64),
-                    Vector3::new(0.0, 0.01 * k as f64, 0.0),
-                );
-                let observations = points
-                    .iter()
-                    .enumerate()
-                    .filter_map(|(t, p)| {
-                        let q = truth * p;
-                        let mut z = StereoObservation {
-                            u: model.rig.fx * q.x / q.z
-                                + model.rig.cx
-                                + rng.random_range(-0.5..0.5),
-                            v: model.rig.fy * q.y / q.z
-                                + model.rig.cy
-                                + rng.random_range(-0.5..0.5),
-                            d: model.rig.fx * model.rig.baseline_m / q.z,
-                        };
-                        match rng.random_range(0..60) {
-                            0 => z.d = f64::NAN,
-                            1 => z.u = 0.0,
-                            2 => z.v = -0.0,
-                            _ => {}
-                        }
-                        (q.z > 1.0 && rng.random_range(0..6) > 0).then_some((t as u32, z))
-                    })
-                    .collect();
-                // The starting poses off the truth.
-                let start = Isometry3::new(
-                    Vector3::from_fn(|_, _| rng.random_range(-0.05..0.05)),
-                    Vector3::from_fn(|_, _| rng.random_range(-0.003..0.003)),
-                ) * truth;
-                Keyframe {
-                    index: k,
-                    pose_cw: start,
-                    observations,
-                    keyframe: true,
-                }
-            })
-            .collect();
+        let mut frames = random_window(&model, &mut rng);
         let mut base = frames.clone();
         let (mut ws, mut ws_base) = (Workspace::default(), Workspace::default());
         let got = refine_window(&model, &calibration, &config, &mut frames, None, &mut ws);
@@ -231,4 +178,63 @@ fn the_dispatched_window_is_the_baseline_bit_for_bit() {
         );
     }
     assert!(refined >= 20, "{refined} of 40 refined");
+}
+
+/// A seeded window of 2 to 6 keyframes for the dispatch test: noisy projections of 80
+/// points, now and then a NaN or a zero of either sign, from poses off the truth.
+fn random_window(
+    model: &crate::refine::model::StereoModel,
+    rng: &mut ChaCha8Rng,
+) -> Vec<crate::window::Keyframe> {
+    use crate::window::Keyframe;
+    use nalgebra::{Isometry3, Point3};
+    let n = rng.random_range(2..7);
+    let points: Vec<Point3<f64>> = (0..80)
+        .map(|_| {
+            let z = rng.random_range(4.0..40.0);
+            Point3::new(
+                rng.random_range(-0.8..0.8) * z,
+                rng.random_range(-0.25..0.25) * z,
+                z,
+            )
+        })
+        .collect();
+    (0..n)
+        .map(|k| {
+            let truth = Isometry3::new(
+                Vector3::new(0.0, 0.0, -0.8 * k as f64),
+                Vector3::new(0.0, 0.01 * k as f64, 0.0),
+            );
+            let observations = points
+                .iter()
+                .enumerate()
+                .filter_map(|(t, p)| {
+                    let q = truth * p;
+                    let mut z = StereoObservation {
+                        u: model.rig.fx * q.x / q.z + model.rig.cx + rng.random_range(-0.5..0.5),
+                        v: model.rig.fy * q.y / q.z + model.rig.cy + rng.random_range(-0.5..0.5),
+                        d: model.rig.fx * model.rig.baseline_m / q.z,
+                    };
+                    match rng.random_range(0..60) {
+                        0 => z.d = f64::NAN,
+                        1 => z.u = 0.0,
+                        2 => z.v = -0.0,
+                        _ => {}
+                    }
+                    (q.z > 1.0 && rng.random_range(0..6) > 0).then_some((t as u32, z))
+                })
+                .collect();
+            // The starting poses off the truth.
+            let start = Isometry3::new(
+                Vector3::from_fn(|_, _| rng.random_range(-0.05..0.05)),
+                Vector3::from_fn(|_, _| rng.random_range(-0.003..0.003)),
+            ) * truth;
+            Keyframe {
+                index: k,
+                pose_cw: start,
+                observations,
+                keyframe: true,
+            }
+        })
+        .collect()
 }
