@@ -43,10 +43,9 @@ pub(super) const SECOND: [u16; 256] = [
 /// darker than the second, else 0. Compiled for each `B` with the offsets as constants.
 #[inline(always)]
 fn tests<const B: usize>(d: &[u8; 1024], darker: &mut [u8; 256]) {
-    let p: [u8; 32] = std::array::from_fn(|i| d[usize::from(FIRST[B * 32 + i]) & 1023]);
-    let q: [u8; 32] = std::array::from_fn(|i| d[usize::from(SECOND[B * 32 + i]) & 1023]);
-    for (i, t) in darker[B * 32..][..32].iter_mut().enumerate() {
-        *t = u8::from(p[i] < q[i]);
+    for (j, t) in darker[B * 32..][..32].iter_mut().enumerate() {
+        let (p, q) = (FIRST[B * 32 + j], SECOND[B * 32 + j]);
+        *t = u8::from(d[usize::from(p) & 1023] < d[usize::from(q) & 1023]);
     }
 }
 
