@@ -69,15 +69,23 @@ fn has_run9_both(bright: u32, dark: u32) -> (bool, bool) {
 /// (`p < lo`) for one run, that is for the brightest or the darkest.
 #[inline(always)]
 fn runs4(p: [u8; 8]) -> (u8, u8) {
+    (runs4_min(p), runs4_max(p))
+}
+
+/// The brightest run of 4 of [`runs4`].
+#[inline(always)]
+fn runs4_min(p: [u8; 8]) -> u8 {
     let at = |i: usize| p[i % 8];
-    let pair_min: [u8; 8] = std::array::from_fn(|i| at(i).min(at(i + 1)));
-    let pair_max: [u8; 8] = std::array::from_fn(|i| at(i).max(at(i + 1)));
-    let (mut brightest, mut darkest) = (0u8, u8::MAX);
-    for i in 0..8 {
-        brightest = brightest.max(pair_min[i].min(pair_min[(i + 2) % 8]));
-        darkest = darkest.min(pair_max[i].max(pair_max[(i + 2) % 8]));
-    }
-    (brightest, darkest)
+    let pair: [u8; 8] = std::array::from_fn(|i| at(i).min(at(i + 1)));
+    (0..8).fold(0, |b, i| b.max(pair[i].min(pair[(i + 2) % 8])))
+}
+
+/// The darkest run of 4 of [`runs4`].
+#[inline(always)]
+fn runs4_max(p: [u8; 8]) -> u8 {
+    let at = |i: usize| p[i % 8];
+    let pair: [u8; 8] = std::array::from_fn(|i| at(i).max(at(i + 1)));
+    (0..8).fold(u8::MAX, |d, i| d.min(pair[i].max(pair[(i + 2) % 8])))
 }
 
 /// Pixels of a row tested at once by the quick rejection of [`fast9`].
@@ -201,11 +209,25 @@ fn fast9_in<'a>(
             let (q1, q3, q5, q7) = (chunk(p1), chunk(p3), chunk(p5), chunk(p7));
             let (q9, q11, q13, q15) = (chunk(p9), chunk(p11), chunk(p13), chunk(p15));
             let c = chunk(mid);
-            let mut out = [0u8; CHUNK];
+            // Bright, then dark (fewer values live at once).
+            let (mut brightest, mut darkest) = ([0u8; CHUNK], [0u8; CHUNK]);
             for i in 0..CHUNK {
                 let even = [q0[i], q2[i], q4[i], q6[i], q8[i], q10[i], q12[i], q14[i]];
                 let odd = [q1[i], q3[i], q5[i], q7[i], q9[i], q11[i], q13[i], q15[i]];
-                out[i] = quick_pass(c[i], threshold, even, odd);
+                brightest[i] = runs4_min(even).min(runs4_min(odd));
+            }
+            for i in 0..CHUNK {
+                let even = [q0[i], q2[i], q4[i], q6[i], q8[i], q10[i], q12[i], q14[i]];
+                let odd = [q1[i], q3[i], q5[i], q7[i], q9[i], q11[i], q13[i], q15[i]];
+                darkest[i] = runs4_max(even).max(runs4_max(odd));
+            }
+            let mut out = [0u8; CHUNK];
+            for i in 0..CHUNK {
+                let (hi8, lo8) = (
+                    c[i].saturating_add(threshold),
+                    c[i].saturating_sub(threshold),
+                );
+                out[i] = u8::from((brightest[i] > hi8) | (darkest[i] < lo8));
             }
             pass[k0..][..CHUNK].copy_from_slice(&out);
         }
