@@ -79,27 +79,29 @@ pub fn bucket_indices_into(
         starts,
         order,
     } = scratch;
-    // The keypoints grouped by cell (a counting sort: each cell's indices ascending):
-    // `order[starts[c]..starts[c + 1]]` are cell `c`'s.
+    // The keypoints grouped by cell, each cell's indices ascending: a counting sort, or
+    // a sort when the cells outnumber the keypoints (no buffer the size of a fine grid).
     cells.clear();
     cells.extend(keypoints.iter().map(cell_of));
-    starts.clear();
-    starts.resize(cols * rows + 1, 0);
-    for &c in cells.iter() {
-        starts[c + 1] += 1;
-    }
-    for c in 0..cols * rows {
-        starts[c + 1] += starts[c];
-    }
     order.clear();
-    order.resize(keypoints.len(), 0);
-    {
-        // The next free slot of each cell, then the cell's end.
-        let next = &mut starts[..cols * rows];
-        for (i, &c) in cells.iter().enumerate() {
-            order[next[c]] = i;
-            next[c] += 1;
+    let n_cells = cols * rows;
+    if n_cells <= 2 * keypoints.len() + 64 {
+        starts.clear();
+        starts.resize(n_cells + 1, 0);
+        for &c in cells.iter() {
+            starts[c + 1] += 1;
         }
+        for c in 0..n_cells {
+            starts[c + 1] += starts[c];
+        }
+        order.resize(keypoints.len(), 0);
+        for (i, &c) in cells.iter().enumerate() {
+            order[starts[c]] = i;
+            starts[c] += 1;
+        }
+    } else {
+        order.extend(0..keypoints.len());
+        order.sort_unstable_by_key(|&i| (cells[i], i));
     }
     // Each cell's `per_cell` first by response, descending (ties by index): a total
     // order, so the set selected is that of a full sort. The kept indices are sorted at
@@ -111,15 +113,20 @@ pub fn bucket_indices_into(
             .then(a.cmp(&b))
     };
     kept.clear();
-    kept.reserve(keypoints.len().min(cols * rows * config.per_cell));
+    kept.reserve(keypoints.len().min(n_cells.saturating_mul(config.per_cell)));
     let mut start = 0;
-    for &end in starts[..cols * rows].iter() {
-        let run = &mut order[start..end];
-        if run.len() > config.per_cell && config.per_cell > 0 {
+    while let Some(&first) = order.get(start) {
+        let cell = cells[first];
+        let len = order[start..]
+            .iter()
+            .position(|&i| cells[i] != cell)
+            .unwrap_or(order.len() - start);
+        let run = &mut order[start..start + len];
+        if len > config.per_cell && config.per_cell > 0 {
             run.select_nth_unstable_by(config.per_cell - 1, stronger);
         }
-        kept.extend_from_slice(&run[..run.len().min(config.per_cell)]);
-        start = end;
+        kept.extend_from_slice(&run[..len.min(config.per_cell)]);
+        start += len;
     }
     kept.sort_unstable();
 }
@@ -197,7 +204,9 @@ mod tests {
             (3000, (200, 120), (48, 48), 20),
             (3000, (200, 120), (48, 48), 1),
             (3000, (200, 120), (30, 20), 3),
+            // More cells than keypoints: grouped by a sort.
             (3000, (200, 120), (0, 0), 2),
+            (3000, (200, 120), (1, 2), 1),
             (3000, (50, 40), (10, 10), 0),
             (10, (200, 120), (48, 48), 5),
             (3000, (200, 120), (300, 300), 10_000),
