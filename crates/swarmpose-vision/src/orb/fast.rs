@@ -88,6 +88,18 @@ fn runs4_max(p: [u8; 8]) -> u8 {
     (0..8).fold(u8::MAX, |d, i| d.min(pair[i].max(pair[(i + 2) % 8])))
 }
 
+/// 1 when 2 consecutive of the compass points (circle points 0, 4, 8 and 12) are both
+/// brighter than `c + threshold` or both darker than `c - threshold`, else 0: a pixel
+/// without is rejected by [`quick_pass`] too (4 consecutive even points hold 2
+/// consecutive compass points).
+#[inline(always)]
+fn compass_pass(c: u8, threshold: u8, [n, e, s, w]: [u8; 4]) -> u8 {
+    let (hi8, lo8) = (c.saturating_add(threshold), c.saturating_sub(threshold));
+    let bright = n.min(e).max(e.min(s)).max(s.min(w)).max(w.min(n));
+    let dark = n.max(e).min(e.max(s)).min(s.max(w)).min(w.max(n));
+    u8::from(bright > hi8) | u8::from(dark < lo8)
+}
+
 /// Pixels of a row tested at once by the quick rejection of [`fast9`].
 const CHUNK: usize = 32;
 
@@ -214,14 +226,7 @@ fn fast9_in<'a>(
             // pixel passing (a third of KITTI's chunks).
             let mut any = 0u8;
             for i in 0..CHUNK {
-                let (hi8, lo8) = (
-                    c[i].saturating_add(threshold),
-                    c[i].saturating_sub(threshold),
-                );
-                let (n, e, s, w) = (q0[i], q4[i], q8[i], q12[i]);
-                let bright = n.min(e).max(e.min(s)).max(s.min(w)).max(w.min(n));
-                let dark = n.max(e).min(e.max(s)).min(s.max(w)).min(w.max(n));
-                any |= u8::from(bright > hi8) | u8::from(dark < lo8);
+                any |= compass_pass(c[i], threshold, [q0[i], q4[i], q8[i], q12[i]]);
             }
             if any == 0 {
                 pass[k0..][..CHUNK].fill(0);

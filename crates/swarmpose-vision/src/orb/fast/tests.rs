@@ -135,6 +135,37 @@ fn harris_is_the_sums_in_floats() {
     assert!(signs.iter().all(|&n| n > 100), "{signs:?}");
 }
 
+/// [`compass_pass`] rejects no pixel that [`quick_pass`] passes, and rejects some, on
+/// seeded random circles (also of a few levels, many ties) at thresholds 0 to 255.
+#[test]
+fn compass_rejects_only_what_quick_pass_rejects() {
+    let noise = crate::test_noise::noise_bytes(17 * 20_000, 9);
+    let (mut rejected, mut passed) = ([0usize; 2], 0);
+    for (k, p) in noise.chunks_exact(17).enumerate() {
+        let p: [u8; 17] = std::array::from_fn(|i| {
+            if k % 2 == 0 {
+                p[i]
+            } else {
+                [0, 100, 101, 255][usize::from(p[i] % 4)]
+            }
+        });
+        let even: [u8; 8] = std::array::from_fn(|i| p[1 + 2 * i]);
+        let odd: [u8; 8] = std::array::from_fn(|i| p[2 + 2 * i]);
+        let compass = [even[0], even[2], even[4], even[6]];
+        for t in [0u8, 1, 12, 50, 100, 255] {
+            let quick = quick_pass(p[0], t, even, odd);
+            let coarse = compass_pass(p[0], t, compass);
+            assert!(quick <= coarse, "{p:?} {t}");
+            rejected[usize::from(quick)] += usize::from(coarse == 0);
+            passed += usize::from(quick);
+        }
+    }
+    assert!(
+        rejected[0] > 1000 && rejected[1] == 0 && passed > 1000,
+        "{rejected:?} {passed}"
+    );
+}
+
 #[test]
 fn run9() {
     assert!(has_run9(0b1_1111_1111));
