@@ -4,6 +4,8 @@
 use super::pack_bits;
 use crate::features::{BinaryDescriptor, GrayView};
 
+mod upright;
+
 /// Radius of the disc holding every test point, pixels. A rotated point stays within
 /// `PATTERN_RADIUS + 1` of the keypoint.
 pub const PATTERN_RADIUS: f64 = 13.0;
@@ -198,8 +200,13 @@ impl RotatedPattern {
         let d = &square.0;
         // The 256 comparisons (one byte each, 0 or 1), then packed eight to a byte.
         let mut darker = [0u8; 256];
-        for ((t, &p), &q) in darker.iter_mut().zip(first).zip(second) {
-            *t = u8::from(d[usize::from(p) & 1023] < d[usize::from(q) & 1023]);
+        if step == 0 {
+            // The same offsets as constants (the default, upright descriptor).
+            upright::compare(d, &mut darker);
+        } else {
+            for ((t, &p), &q) in darker.iter_mut().zip(first).zip(second) {
+                *t = u8::from(d[usize::from(p) & 1023] < d[usize::from(q) & 1023]);
+            }
         }
         for (byte, eight) in out.iter_mut().zip(darker.chunks_exact(8)) {
             *byte = pack_bits(eight);
@@ -364,6 +371,14 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// The constant offsets of the upright pattern are the rotated pattern's first step.
+    #[test]
+    fn upright_is_the_first_step() {
+        let pattern = RotatedPattern::new();
+        assert_eq!(pattern.first[0], upright::FIRST);
+        assert_eq!(pattern.second[0], upright::SECOND);
     }
 
     #[test]

@@ -40,7 +40,7 @@ pub struct Corner {
 
 /// True when `mask` (16 bits, circular) has a run of at least 9 set bits: runs of 2, 4
 /// and 8 by doubling, then the ninth bit (four shifts instead of eight).
-#[inline(always)]
+#[cfg(test)]
 fn has_run9(mask: u32) -> bool {
     let m = mask | (mask << 16);
     let r2 = m & (m >> 1);
@@ -49,29 +49,68 @@ fn has_run9(mask: u32) -> bool {
     r8 & (m >> 8) != 0
 }
 
-/// True when `side` holds for 4 circularly consecutive points of 8.
+/// [`has_run9`] of `bright` and of `dark` (16 bits each) at once: both masks doubled in
+/// the halves of one 64-bit word, and the runs kept only where they start in the first 16
+/// bits of a half (they end by bit 23, inside the half).
 #[inline(always)]
-fn run4(p: [u8; 8], side: impl Fn(u8) -> bool) -> bool {
-    let [m0, m1, m2, m3, m4, m5, m6, m7] = [
-        side(p[0]),
-        side(p[1]),
-        side(p[2]),
-        side(p[3]),
-        side(p[4]),
-        side(p[5]),
-        side(p[6]),
-        side(p[7]),
-    ];
-    let (m01, m23, m45, m67) = (m0 & m1, m2 & m3, m4 & m5, m6 & m7);
-    let (m12, m34, m56, m70) = (m1 & m2, m3 & m4, m5 & m6, m7 & m0);
-    (m01 & m23)
-        | (m12 & m34)
-        | (m23 & m45)
-        | (m34 & m56)
-        | (m45 & m67)
-        | (m56 & m70)
-        | (m67 & m01)
-        | (m70 & m12)
+fn has_run9_both(bright: u32, dark: u32) -> (bool, bool) {
+    let (b, d) = (u64::from(bright & 0xffff), u64::from(dark & 0xffff));
+    let m = b | (b << 16) | (d << 32) | (d << 48);
+    let r2 = m & (m >> 1);
+    let r4 = r2 & (r2 >> 2);
+    let r8 = r4 & (r4 >> 4);
+    let r9 = r8 & (m >> 8) & 0x0000_ffff_0000_ffff;
+    (r9 & 0xffff != 0, r9 >> 32 != 0)
+}
+
+/// The brightest and the darkest run of 4 circularly consecutive points of 8: the largest
+/// minimum and the smallest maximum of the 8 runs (pairs, then pairs of pairs). `side(p)`
+/// holds for 4 consecutive points exactly when `min > hi` (`p > hi`) or `max < lo`
+/// (`p < lo`) for one run, that is for the brightest or the darkest.
+#[inline(always)]
+fn runs4(p: [u8; 8]) -> (u8, u8) {
+    (runs4_min(p), runs4_max(p))
+}
+
+/// The brightest run of 4 of [`runs4`].
+#[inline(always)]
+fn runs4_min(p: [u8; 8]) -> u8 {
+    let at = |i: usize| p[i % 8];
+    let pair: [u8; 8] = std::array::from_fn(|i| at(i).min(at(i + 1)));
+    (0..8).fold(0, |b, i| b.max(pair[i].min(pair[(i + 2) % 8])))
+}
+
+/// The darkest run of 4 of [`runs4`].
+#[inline(always)]
+fn runs4_max(p: [u8; 8]) -> u8 {
+    let at = |i: usize| p[i % 8];
+    let pair: [u8; 8] = std::array::from_fn(|i| at(i).max(at(i + 1)));
+    (0..8).fold(u8::MAX, |d, i| d.min(pair[i].max(pair[(i + 2) % 8])))
+}
+
+/// 1 when 2 consecutive of the compass points (circle points 0, 4, 8 and 12) are both
+/// brighter than `c + threshold` or both darker than `c - threshold`, else 0: a pixel
+/// without is rejected by [`quick_pass`] too (4 consecutive even points hold 2
+/// consecutive compass points).
+#[inline(always)]
+fn compass_pass(c: u8, threshold: u8, [n, e, s, w]: [u8; 4]) -> u8 {
+    let (hi8, lo8) = (c.saturating_add(threshold), c.saturating_sub(threshold));
+    let bright = n.min(e).max(e.min(s)).max(s.min(w)).max(w.min(n));
+    let dark = n.max(e).min(e.max(s)).min(s.max(w)).min(w.max(n));
+    u8::from(bright > hi8) | u8::from(dark < lo8)
+}
+
+/// Pixels of a row tested at once by the quick rejection of [`fast9`].
+const CHUNK: usize = 32;
+
+/// The quick rejection of [`fast9`] at a pixel of intensity `c`: 1 when a run of 4
+/// consecutive even circle points (clockwise from the top) and one of 4 odd ones are all
+/// brighter than `c + threshold`, or all darker than `c - threshold` (saturated); else 0.
+#[inline(always)]
+fn quick_pass(c: u8, threshold: u8, even: [u8; 8], odd: [u8; 8]) -> u8 {
+    let (hi8, lo8) = (c.saturating_add(threshold), c.saturating_sub(threshold));
+    let ((be, de), (bo, d_o)) = (runs4(even), runs4(odd));
+    u8::from((be.min(bo) > hi8) | (de.max(d_o) < lo8))
 }
 
 /// Buffers of [`fast9`], reused between calls: the score of every pixel, the corners
@@ -120,8 +159,8 @@ impl simd::Kernel for Fast9<'_> {
 
 /// [`fast9`], inlined into each instruction set's compilation.
 #[inline(always)]
-fn fast9_in(
-    img: GrayView<'_>,
+fn fast9_in<'a>(
+    img: GrayView<'a>,
     threshold: u8,
     border: usize,
     scratch: &mut FastScratch,
@@ -168,15 +207,59 @@ fn fast9_in(
         let (p9, p11, p13, p15) = (row(3, -1), row(1, -3), row(-1, -3), row(-3, -1));
         let mid = row(0, 0);
         let pass = &mut pass[..n];
-        for k in 0..n {
-            let c = mid[k];
-            let hi8 = c.saturating_add(threshold);
-            let lo8 = c.saturating_sub(threshold);
-            let even = [p0[k], p2[k], p4[k], p6[k], p8[k], p10[k], p12[k], p14[k]];
-            let odd = [p1[k], p3[k], p5[k], p7[k], p9[k], p11[k], p13[k], p15[k]];
-            let bright = run4(even, |p| p > hi8) & run4(odd, |p| p > hi8);
-            let dark = run4(even, |p| p < lo8) & run4(odd, |p| p < lo8);
-            pass[k] = u8::from(bright | dark);
+        // Chunks of 32 pixels (arrays of one length: no remainder loop, no aliasing check),
+        // the last one overlapping the one before it when the row is no multiple of 32
+        // (its flags written twice, the same); a row narrower than 32 pixel by pixel.
+        let whole = n / CHUNK * CHUNK;
+        let last = (n > whole && n >= CHUNK).then(|| n - CHUNK);
+        for k0 in (0..whole).step_by(CHUNK).chain(last) {
+            let chunk = |p: &'a [u8]| -> &'a [u8; CHUNK] {
+                p[k0..][..CHUNK].try_into().unwrap_or(&[0; CHUNK])
+            };
+            let (q0, q2, q4, q6) = (chunk(p0), chunk(p2), chunk(p4), chunk(p6));
+            let (q8, q10, q12, q14) = (chunk(p8), chunk(p10), chunk(p12), chunk(p14));
+            let (q1, q3, q5, q7) = (chunk(p1), chunk(p3), chunk(p5), chunk(p7));
+            let (q9, q11, q13, q15) = (chunk(p9), chunk(p11), chunk(p13), chunk(p15));
+            let c = chunk(mid);
+            // First the 4 points of the compass (0, 4, 8, 12): 4 consecutive even points
+            // hold 2 consecutive of them, so a chunk where no 2 are on one side has no
+            // pixel passing (a third of KITTI's chunks).
+            let mut any = 0u8;
+            for i in 0..CHUNK {
+                any |= compass_pass(c[i], threshold, [q0[i], q4[i], q8[i], q12[i]]);
+            }
+            if any == 0 {
+                pass[k0..][..CHUNK].fill(0);
+                continue;
+            }
+            // Bright, then dark (fewer values live at once).
+            let (mut brightest, mut darkest) = ([0u8; CHUNK], [0u8; CHUNK]);
+            for i in 0..CHUNK {
+                let even = [q0[i], q2[i], q4[i], q6[i], q8[i], q10[i], q12[i], q14[i]];
+                let odd = [q1[i], q3[i], q5[i], q7[i], q9[i], q11[i], q13[i], q15[i]];
+                brightest[i] = runs4_min(even).min(runs4_min(odd));
+            }
+            for i in 0..CHUNK {
+                let even = [q0[i], q2[i], q4[i], q6[i], q8[i], q10[i], q12[i], q14[i]];
+                let odd = [q1[i], q3[i], q5[i], q7[i], q9[i], q11[i], q13[i], q15[i]];
+                darkest[i] = runs4_max(even).max(runs4_max(odd));
+            }
+            let mut out = [0u8; CHUNK];
+            for i in 0..CHUNK {
+                let (hi8, lo8) = (
+                    c[i].saturating_add(threshold),
+                    c[i].saturating_sub(threshold),
+                );
+                out[i] = u8::from((brightest[i] > hi8) | (darkest[i] < lo8));
+            }
+            pass[k0..][..CHUNK].copy_from_slice(&out);
+        }
+        if n < CHUNK {
+            for k in 0..n {
+                let even = [p0[k], p2[k], p4[k], p6[k], p8[k], p10[k], p12[k], p14[k]];
+                let odd = [p1[k], p3[k], p5[k], p7[k], p9[k], p11[k], p13[k], p15[k]];
+                pass[k] = quick_pass(mid[k], threshold, even, odd);
+            }
         }
         // The pixels that passed, eight flags at a time (most of a row fails): each flag
         // is 0 or 1, one bit of its byte, cleared in turn lowest first (raster order).
@@ -232,7 +315,7 @@ fn fast9_in(
                     u32::from(pack_bits(&flags[..8])) | u32::from(pack_bits(&flags[8..])) << 8
                 };
                 let (bright, dark) = (mask(&above), mask(&below));
-                let (is_bright, is_dark) = (has_run9(bright), has_run9(dark));
+                let (is_bright, is_dark) = has_run9_both(bright, dark);
                 let score = match (is_bright, is_dark) {
                     (true, true) => sb.max(sd),
                     (true, false) => sb,
@@ -269,27 +352,32 @@ fn fast9_in(
 /// Harris corner response `det(M) - 0.04 trace(M)^2` of the structure tensor summed over
 /// a 7x7 window at `(x, y)`, with central-difference gradients (intensity units / 255).
 /// The caller keeps the window and its gradients inside the image (4 pixels).
+///
+/// The sums are of integers: each product of two gradients is at most 255², and 49 of them
+/// at most 3 186 225, below 2²⁴, so that summing them in `f32` (as this function did until
+/// issue 34) is exact in any order and gives the integer sum (never `-0`, starting from
+/// `+0`): summed as integers, converted once.
 #[must_use]
 #[inline(always)]
 pub fn harris(img: GrayView<'_>, x: usize, y: usize) -> f32 {
     let w = img.width;
     let d = img.data;
-    let (mut sxx, mut syy, mut sxy) = (0f32, 0f32, 0f32);
+    let (mut sxx, mut syy, mut sxy) = (0i32, 0i32, 0i32);
     for yy in y - 3..=y + 3 {
         // The window's row with a pixel either side, and the rows above and below.
         let here = &d[yy * w + x - 4..][..9];
         let above = &d[(yy - 1) * w + x - 3..][..7];
         let below = &d[(yy + 1) * w + x - 3..][..7];
         for k in 0..7 {
-            let gx = f32::from(here[k + 2]) - f32::from(here[k]);
-            let gy = f32::from(below[k]) - f32::from(above[k]);
+            let gx = i32::from(here[k + 2]) - i32::from(here[k]);
+            let gy = i32::from(below[k]) - i32::from(above[k]);
             sxx += gx * gx;
             syy += gy * gy;
             sxy += gx * gy;
         }
     }
     let scale = 1.0 / (255.0 * 255.0 * 49.0);
-    let (sxx, syy, sxy) = (sxx * scale, syy * scale, sxy * scale);
+    let (sxx, syy, sxy) = (sxx as f32 * scale, syy as f32 * scale, sxy as f32 * scale);
     sxx * syy - sxy * sxy - 0.04 * (sxx + syy) * (sxx + syy)
 }
 
@@ -333,163 +421,4 @@ pub fn centroid_angle(img: GrayView<'_>, x: usize, y: usize, u_max: &[usize]) ->
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// [`has_run9`] against its definition (9 shifted copies), on every 16-bit mask.
-    #[test]
-    fn run9_on_every_mask() {
-        let by_definition = |mask: u32| {
-            let m = mask | (mask << 16);
-            (0..9).fold(m, |r, k| r & (m >> k)) != 0
-        };
-        let runs = (0..1u32 << 16).filter(|&m| has_run9(m)).count();
-        assert!(runs > 1000, "{runs}");
-        for mask in 0..1u32 << 16 {
-            assert_eq!(has_run9(mask), by_definition(mask), "{mask:016b}");
-        }
-    }
-
-    #[test]
-    fn run9() {
-        assert!(has_run9(0b1_1111_1111));
-        assert!(!has_run9(0b1111_1111));
-        // Wrapping run: bits 12..16 and 0..4.
-        assert!(has_run9(0xf00f | 0x0800));
-    }
-
-    /// FAST-9 by its definition at every pixel (no quick rejection), then the same
-    /// non-maximum suppression.
-    fn fast9_by_definition(img: GrayView<'_>, t: u8, border: usize) -> Vec<Corner> {
-        let (w, h) = (img.width, img.height);
-        let mut scores = vec![0u16; w * h];
-        for y in border..h - border {
-            for x in border..w - border {
-                let c = img.data[y * w + x];
-                let (hi, lo) = (c.saturating_add(t), c.saturating_sub(t));
-                let ring = CIRCLE.map(|(dx, dy)| {
-                    img.data[(y as isize + dy) as usize * w + (x as isize + dx) as usize]
-                });
-                let (mut b, mut d, mut sb, mut sd) = (0u32, 0u32, 0u32, 0u32);
-                for (k, &p) in ring.iter().enumerate() {
-                    b |= u32::from(p > hi) << k;
-                    d |= u32::from(p < lo) << k;
-                    sb += u32::from(p.saturating_sub(hi));
-                    sd += u32::from(lo.saturating_sub(p));
-                }
-                let s = match (has_run9(b), has_run9(d)) {
-                    (true, true) => sb.max(sd),
-                    (true, false) => sb,
-                    (false, true) => sd,
-                    (false, false) => continue,
-                };
-                scores[y * w + x] = s.clamp(1, u32::from(u16::MAX)) as u16;
-            }
-        }
-        let mut out = Vec::new();
-        for y in border..h - border {
-            for x in border..w - border {
-                let (i, s) = (y * w + x, scores[y * w + x]);
-                let before = [i - w - 1, i - w, i - w + 1, i - 1];
-                let after = [i + 1, i + w - 1, i + w, i + w + 1];
-                if s > 0
-                    && before.iter().all(|&j| scores[j] < s)
-                    && after.iter().all(|&j| scores[j] <= s)
-                {
-                    out.push(Corner { x, y, score: s });
-                }
-            }
-        }
-        out
-    }
-
-    #[test]
-    fn quick_rejection_drops_no_corner() {
-        let (w, h) = (97, 61);
-        let mut data = crate::test_noise::noise_bytes(w * h, 11);
-        // Smooth half of it, so that there are both noise and blobs.
-        for i in (w..w * h / 2).rev() {
-            data[i] = (u16::from(data[i]) + u16::from(data[i - w])).div_ceil(2) as u8;
-        }
-        let img = GrayView {
-            width: w,
-            height: h,
-            data: &data,
-        };
-        for t in [1, 10, 20, 60, 250] {
-            let (mut s, mut out) = (FastScratch::default(), Vec::new());
-            fast9(img, t, 3, &mut s, &mut out);
-            assert!(t > 60 || out.len() > 20, "{} corners at {t}", out.len());
-            assert_eq!(out, fast9_by_definition(img, t, 3), "threshold {t}");
-        }
-    }
-
-    /// One scratch reused over images of other sizes, thresholds and borders, and one
-    /// left by an interrupted call (scores not zero), give the corners by definition; a
-    /// finished call leaves the scores all zero.
-    #[test]
-    fn reused_scratch_gives_the_corners_by_definition() {
-        let mut s = FastScratch::default();
-        let mut out = Vec::new();
-        for (i, (w, h, t, border)) in [
-            (97, 61, 10, 3),
-            (61, 97, 20, 5),
-            (50, 40, 5, 3),
-            (97, 61, 1, 8),
-        ]
-        .into_iter()
-        .enumerate()
-        {
-            let data = crate::test_noise::noise_bytes(w * h, 20 + i as u32);
-            let img = GrayView {
-                width: w,
-                height: h,
-                data: &data,
-            };
-            fast9(img, t, border, &mut s, &mut out);
-            assert!(out.len() > 20, "{}", out.len());
-            assert_eq!(out, fast9_by_definition(img, t, border), "image {i}");
-            assert!(
-                s.scores_zero && s.scores.iter().all(|&v| v == 0),
-                "image {i}"
-            );
-        }
-        // As a panic would leave it.
-        s.scores.iter_mut().for_each(|v| *v = 900);
-        s.scores_zero = false;
-        let data = crate::test_noise::noise_bytes(97 * 61, 30);
-        let img = GrayView {
-            width: 97,
-            height: 61,
-            data: &data,
-        };
-        fast9(img, 10, 3, &mut s, &mut out);
-        assert_eq!(out, fast9_by_definition(img, 10, 3));
-    }
-
-    #[test]
-    fn finds_a_square_corner() {
-        let (w, h) = (40, 40);
-        let mut data = vec![20u8; w * h];
-        for y in 20..h {
-            for x in 20..w {
-                data[y * w + x] = 200;
-            }
-        }
-        let img = GrayView {
-            width: w,
-            height: h,
-            data: &data,
-        };
-        let (mut s, mut out) = (FastScratch::default(), Vec::new());
-        fast9(img, 20, 3, &mut s, &mut out);
-        assert!(!out.is_empty());
-        assert!(
-            out.iter()
-                .all(|c| c.x.abs_diff(20) <= 1 && c.y.abs_diff(20) <= 1)
-        );
-        // The bright quadrant is down-right: the centroid points there.
-        let a = centroid_angle(img, 20, 20, &disc_half_widths(8));
-        assert!((a - std::f32::consts::FRAC_PI_4).abs() < 0.2, "{a}");
-    }
-}
+mod tests;
