@@ -228,6 +228,68 @@ pub fn row_offset(window: PairWindow<'_>, d: f32) -> Option<f32> {
     align_window(window, d, 10, false).map(|(_, dy)| dy)
 }
 
+/// [`align_window`]'s sums `[Σ gx², Σ gx gy, Σ gy², Σ gx e, Σ gy e]` (the first, second
+/// and fourth only when `disparity_free`) over the `n × n` left window `lw` (row-major)
+/// against the `m × m` right one `rw` (`m = n + 2`, a ring around for the gradients).
+#[inline(always)]
+fn window_sums(lw: &[f32], rw: &[f32], n: usize, disparity_free: bool) -> [f32; 5] {
+    let m = n + 2;
+    // Pixel by pixel in rows, as `rw[k]`, `rw[k ± 1]`, `rw[k ± m]` with `k = (j + 1) m
+    // + i + 1`: row `j` of the left window against the right one's rows `j`, `j + 1`
+    // and `j + 2` (above, at and below the samples), zipped slices rather than indices
+    // (no bounds check per pixel).
+    let (mut a, mut b, mut c, mut ex, mut ey) = (0f32, 0f32, 0f32, 0f32, 0f32);
+    for (j, l) in lw.chunks_exact(n).take(n).enumerate() {
+        let above = &rw[j * m + 1..][..n];
+        let at = &rw[(j + 1) * m..][..m];
+        let below = &rw[(j + 2) * m + 1..][..n];
+        for (((&l, w), &up), &down) in l.iter().zip(at.windows(3)).zip(above).zip(below) {
+            let e = l - w[1];
+            let gy = -0.5 * (down - up);
+            c += gy * gy;
+            ey += gy * e;
+            if disparity_free {
+                let gx = 0.5 * (w[2] - w[0]);
+                a += gx * gx;
+                b += gx * gy;
+                ex += gx * e;
+            }
+        }
+    }
+    [a, b, c, ex, ey]
+}
+
+/// [`window_sums`] for a window side `N` known to the compiler: each row's residuals and
+/// gradients first (the same operations, lane by lane), then the sums pixel by pixel in
+/// the same order, unrolled.
+#[inline(always)]
+fn window_sums_fixed<const N: usize>(lw: &[f32], rw: &[f32], disparity_free: bool) -> [f32; 5] {
+    let m = N + 2;
+    let (mut a, mut b, mut c, mut ex, mut ey) = (0f32, 0f32, 0f32, 0f32, 0f32);
+    for j in 0..N {
+        let l = &lw[j * N..][..N];
+        let above = &rw[j * m + 1..][..N];
+        let at = &rw[(j + 1) * m..][..N + 2];
+        let below = &rw[(j + 2) * m + 1..][..N];
+        let (mut e, mut gx, mut gy) = ([0f32; N], [0f32; N], [0f32; N]);
+        for k in 0..N {
+            e[k] = l[k] - at[k + 1];
+            gy[k] = -0.5 * (below[k] - above[k]);
+            gx[k] = 0.5 * (at[k + 2] - at[k]);
+        }
+        for k in 0..N {
+            c += gy[k] * gy[k];
+            ey += gy[k] * e[k];
+            if disparity_free {
+                a += gx[k] * gx[k];
+                b += gx[k] * gy[k];
+                ex += gx[k] * e[k];
+            }
+        }
+    }
+    [a, b, c, ex, ey]
+}
+
 /// Gauss-Newton on `Σ (L(x, y) - R(x - d, y + dy))²` over the `(2 r + 1)²` window at left
 /// `(xl, y)`, from `(d0, 0)`: `dy` alone, or `d` too when `disparity_free`. Returns
 /// `(d, dy)`; `None` near the borders, on texture that does not fix the unknowns, when
@@ -276,29 +338,13 @@ fn align_window(
             m,
             &mut rw,
         )?;
-        // The derivatives of e = L - R(x - d, y + dy): gx by d, gy by dy.
-        // Pixel by pixel in rows, as `rw[k]`, `rw[k ± 1]`, `rw[k ± m]` with `k = (j + 1) m
-        // + i + 1`: row `j` of the left window against the right one's rows `j`, `j + 1`
-        // and `j + 2` (above, at and below the samples), zipped slices rather than indices
-        // (no bounds check per pixel).
-        let (mut a, mut b, mut c, mut ex, mut ey) = (0f32, 0f32, 0f32, 0f32, 0f32);
-        for (j, l) in lw.chunks_exact(n).take(n).enumerate() {
-            let above = &rw[j * m + 1..][..n];
-            let at = &rw[(j + 1) * m..][..m];
-            let below = &rw[(j + 2) * m + 1..][..n];
-            for (((&l, w), &up), &down) in l.iter().zip(at.windows(3)).zip(above).zip(below) {
-                let e = l - w[1];
-                let gy = -0.5 * (down - up);
-                c += gy * gy;
-                ey += gy * e;
-                if disparity_free {
-                    let gx = 0.5 * (w[2] - w[0]);
-                    a += gx * gx;
-                    b += gx * gy;
-                    ex += gx * e;
-                }
-            }
-        }
+        // The derivatives of e = L - R(x - d, y + dy): gx by d, gy by dy; the side of
+        // the default radius (3) with its length known to the compiler.
+        let [a, b, c, ex, ey] = if n == 7 {
+            window_sums_fixed::<7>(&lw, &rw, disparity_free)
+        } else {
+            window_sums(&lw, &rw, n, disparity_free)
+        };
         // Steps -(JᵀJ)⁻¹ Jᵀ e, when the texture fixes them (a NaN fails too).
         let (sd, sy) = if disparity_free {
             let det = a * c - b * b;
