@@ -49,6 +49,24 @@ fn ssd(window: PairWindow<'_>, xr: usize) -> u32 {
     s
 }
 
+/// [`ssd`] for a window side `N` known to the compiler (`N = 2 r + 1`): rows of a fixed
+/// length, whose squared differences (integers, exact in any order) the compiler sums in
+/// vector registers. The caller keeps both windows inside.
+#[inline(always)]
+fn ssd_fixed<const N: usize>(window: PairWindow<'_>, xr: usize) -> u32 {
+    let (left, right, xl, y, r) = (window.left, window.right, window.xl, window.y, window.r);
+    let mut s = 0u32;
+    for yy in y - r..=y + r {
+        let lrow = &left.data[yy * left.width + xl - r..][..N];
+        let rrow = &right.data[yy * right.width + xr - r..][..N];
+        for k in 0..N {
+            let d = i32::from(lrow[k]) - i32::from(rrow[k]);
+            s += (d * d) as u32;
+        }
+    }
+    s
+}
+
 /// Refines the disparity of left pixel `(xl, y)` (integers) near `d0` pixels: the SSD of
 /// a `(2 r + 1)²` window is evaluated for integer disparities `d0 - search ..= d0 +
 /// search`, and a parabola through the minimum and its neighbours gives the sub-pixel
@@ -76,7 +94,12 @@ pub fn refine_disparity(window: PairWindow<'_>, d0: i64, search: i64) -> Option<
         return None;
     }
     for (k, d) in (lo..=hi).enumerate() {
-        let c = ssd(window, (xl as i64 - d) as usize);
+        let xr = (xl as i64 - d) as usize;
+        let c = if r == 3 {
+            ssd_fixed::<7>(window, xr)
+        } else {
+            ssd(window, xr)
+        };
         costs[k] = c;
         if c < best.0 && d > lo && d < hi {
             best = (c, d);

@@ -1,7 +1,7 @@
 //! [`super::align_window`] against its definition with indices (before its sums ran over
-//! zipped rows): bit for bit.
+//! zipped rows): bit for bit; [`super::ssd_fixed`] against [`super::ssd`].
 
-use super::{PairWindow, align_window};
+use super::{PairWindow, align_window, ssd, ssd_fixed};
 use crate::features::GrayView;
 use crate::image::sample_patch;
 use crate::test_noise::Lcg;
@@ -190,4 +190,45 @@ fn align_window_is_the_same_dispatched() {
     assert_eq!(got, base);
     let found = got.iter().filter(|p| p.is_some()).count();
     assert!(found > 500, "{found} alignments");
+}
+
+/// [`ssd_fixed`] for the 7 x 7 window gives [`ssd`]'s sums on noise images, all over the
+/// images up to their borders, including identical windows (sum 0) and the largest
+/// differences (black against white).
+#[test]
+fn fixed_ssd_is_ssd() {
+    let (w, h) = (60usize, 20usize);
+    let left = crate::test_noise::noise_bytes(w * h, 363);
+    let mut right = crate::test_noise::noise_bytes(w * h, 364);
+    for (i, v) in right.iter_mut().enumerate() {
+        match (i % w) / 15 {
+            0 => *v = left[i],
+            1 => *v = if left[i] < 128 { 255 } else { 0 },
+            _ => {}
+        }
+    }
+    let view = |data| GrayView {
+        width: w,
+        height: h,
+        data,
+    };
+    let (mut zero, mut compared) = (0, 0);
+    for y in 3..h - 3 {
+        for xl in 3..w - 3 {
+            let window = PairWindow {
+                left: view(&left),
+                right: view(&right),
+                xl,
+                y,
+                r: 3,
+            };
+            for xr in 3..w - 3 {
+                let s = ssd(window, xr);
+                assert_eq!(ssd_fixed::<7>(window, xr), s, "({xl}, {y}) at {xr}");
+                zero += usize::from(s == 0);
+                compared += 1;
+            }
+        }
+    }
+    assert!(zero > 0 && compared > 30_000, "{zero} zero of {compared}");
 }
