@@ -282,31 +282,49 @@ fn window_sums(lw: &[f32], rw: &[f32], n: usize, disparity_free: bool) -> [f32; 
     [a, b, c, ex, ey]
 }
 
-/// [`window_sums`] for a window side `N` known to the compiler: each row's residuals and
-/// gradients first (the same operations, lane by lane), then the sums pixel by pixel in
-/// the same order, unrolled.
+/// [`window_sums`] for a window side `N` known to the compiler, with the left window `lws`
+/// laid out with the right one's stride `m = N + 2` (pixel `(i, j)` at `j m + i`): the
+/// products at every pixel first, in one loop over the rows and the two columns between
+/// them (the same operations on each, in vector registers; the columns between are not
+/// summed), then the sums pixel by pixel in the same order, unrolled. `LEN = N (N + 2) −
+/// 2` pixels from the first to the last of the window; `products` is scratch space
+/// (`gx²`, `gx gy`, `gy²`, `gx e`, `gy e` at each, all written here).
 #[inline(always)]
-fn window_sums_fixed<const N: usize>(lw: &[f32], rw: &[f32], disparity_free: bool) -> [f32; 5] {
+fn window_sums_fixed<const N: usize, const LEN: usize>(
+    lws: &[f32],
+    rw: &[f32],
+    products: &mut [[f32; LEN]; 5],
+    disparity_free: bool,
+) -> [f32; 5] {
+    const { assert!(LEN == N * (N + 2) - 2) };
     let m = N + 2;
+    // Pixel `(i, j)` at `k = j m + i`: `rw[k + m + 1]` and its neighbours.
+    let (l, above, at, below) = (
+        &lws[..LEN],
+        &rw[1..][..LEN],
+        &rw[m..][..LEN + 2],
+        &rw[2 * m + 1..][..LEN],
+    );
+    let [pxx, pxy, pyy, pxe, pye] = products;
+    for k in 0..LEN {
+        let e = l[k] - at[k + 1];
+        let gy = -0.5 * (below[k] - above[k]);
+        let gx = 0.5 * (at[k + 2] - at[k]);
+        pxx[k] = gx * gx;
+        pxy[k] = gx * gy;
+        pyy[k] = gy * gy;
+        pxe[k] = gx * e;
+        pye[k] = gy * e;
+    }
     let (mut a, mut b, mut c, mut ex, mut ey) = (0f32, 0f32, 0f32, 0f32, 0f32);
     for j in 0..N {
-        let l = &lw[j * N..][..N];
-        let above = &rw[j * m + 1..][..N];
-        let at = &rw[(j + 1) * m..][..N + 2];
-        let below = &rw[(j + 2) * m + 1..][..N];
-        let (mut e, mut gx, mut gy) = ([0f32; N], [0f32; N], [0f32; N]);
-        for k in 0..N {
-            e[k] = l[k] - at[k + 1];
-            gy[k] = -0.5 * (below[k] - above[k]);
-            gx[k] = 0.5 * (at[k + 2] - at[k]);
-        }
-        for k in 0..N {
-            c += gy[k] * gy[k];
-            ey += gy[k] * e[k];
+        for k in j * m..j * m + N {
+            c += pyy[k];
+            ey += pye[k];
             if disparity_free {
-                a += gx[k] * gx[k];
-                b += gx[k] * gy[k];
-                ex += gx[k] * e[k];
+                a += pxx[k];
+                b += pxy[k];
+                ex += pxe[k];
             }
         }
     }
@@ -351,7 +369,13 @@ fn align_window(
             *o = f32::from(v);
         }
     }
+    // The same with the right window's stride (for `window_sums_fixed`).
+    let mut lws = [0f32; MAX_SIDE * MAX_SIDE];
+    for (out, row) in lws.chunks_exact_mut(m).zip(lw.chunks_exact(n).take(n)) {
+        out[..n].copy_from_slice(row);
+    }
     let mut rw = [0f32; MAX_SIDE * MAX_SIDE];
+    let mut products = [[0f32; 7 * 9 - 2]; 5];
     let (mut d, mut dy) = (d0, 0f32);
     for _ in 0..iterations {
         sample_patch(
@@ -364,7 +388,7 @@ fn align_window(
         // The derivatives of e = L - R(x - d, y + dy): gx by d, gy by dy; the side of
         // the default radius (3) with its length known to the compiler.
         let [a, b, c, ex, ey] = if n == 7 {
-            window_sums_fixed::<7>(&lw, &rw, disparity_free)
+            window_sums_fixed::<7, { 7 * 9 - 2 }>(&lws, &rw, &mut products, disparity_free)
         } else {
             window_sums(&lw, &rw, n, disparity_free)
         };
