@@ -49,22 +49,32 @@ fn ssd(window: PairWindow<'_>, xr: usize) -> u32 {
     s
 }
 
-/// [`ssd`] for a window side `N` known to the compiler (`N = 2 r + 1`): rows of a fixed
-/// length, whose squared differences (integers, exact in any order) the compiler sums in
-/// vector registers. The caller keeps both windows inside.
+/// Lanes of [`ssd_fixed`]'s rows.
+const SSD_LANES: usize = 8;
+
+/// [`ssd`] for a window side `N ≤ SSD_LANES` known to the compiler (`N = 2 r + 1`): rows
+/// read as [`SSD_LANES`] pixels (those past the window's row count zero), whose squared
+/// differences (integers, exact in any order) the compiler sums in vector registers;
+/// [`ssd`] where the last row has no pixels past it. The caller keeps both windows inside.
 #[inline(always)]
 fn ssd_fixed<const N: usize>(window: PairWindow<'_>, xr: usize) -> u32 {
+    const { assert!(N <= SSD_LANES) };
     let (left, right, xl, y, r) = (window.left, window.right, window.xl, window.y, window.r);
-    let mut s = 0u32;
+    if (y + r) * left.width + xl - r + SSD_LANES > left.data.len()
+        || (y + r) * right.width + xr - r + SSD_LANES > right.data.len()
+    {
+        return ssd(window, xr);
+    }
+    let mut sums = [0u32; SSD_LANES];
     for yy in y - r..=y + r {
-        let lrow = &left.data[yy * left.width + xl - r..][..N];
-        let rrow = &right.data[yy * right.width + xr - r..][..N];
-        for k in 0..N {
+        let lrow = &left.data[yy * left.width + xl - r..][..SSD_LANES];
+        let rrow = &right.data[yy * right.width + xr - r..][..SSD_LANES];
+        for k in 0..SSD_LANES {
             let d = i32::from(lrow[k]) - i32::from(rrow[k]);
-            s += (d * d) as u32;
+            sums[k] += if k < N { (d * d) as u32 } else { 0 };
         }
     }
-    s
+    sums.iter().sum()
 }
 
 /// Refines the disparity of left pixel `(xl, y)` (integers) near `d0` pixels: the SSD of
