@@ -242,17 +242,58 @@ pub fn sample_patch(img: GrayView<'_>, x0: f32, y0: f32, n: usize, out: &mut [f3
     );
     let w = img.width;
     for j in 0..n {
-        let top = &img.data[(yi + j) * w + xi..(yi + j) * w + xi + n + 1];
-        let bot = &img.data[(yi + j + 1) * w + xi..(yi + j + 1) * w + xi + n + 1];
-        let row = &mut out[j * n..(j + 1) * n];
-        for (i, o) in row.iter_mut().enumerate() {
-            *o = w00 * f32::from(top[i])
-                + w10 * f32::from(top[i + 1])
-                + w01 * f32::from(bot[i])
-                + w11 * f32::from(bot[i + 1]);
-        }
+        let top = &img.data[(yi + j) * w + xi..][..n + 1];
+        let bot = &img.data[(yi + j + 1) * w + xi..][..n + 1];
+        let row = &mut out[j * n..][..n];
+        patch_row(top, bot, [w00, w10, w01, w11], row);
     }
     Some(())
+}
+
+/// Lanes of [`patch_row`]'s blocks: the samples of a row computed together.
+const PATCH_LANES: usize = 8;
+
+/// One row of [`sample_patch`]: `row[i]` from the pixels `i`, `i + 1` of the rows `top`
+/// and `bot` (`row.len() + 1` pixels each) with the weights `[w00, w10, w01, w11]`. Rows
+/// of at least [`PATCH_LANES`] samples go by blocks of that many, of fixed size (the
+/// compiler keeps each in vector registers, every lane doing the scalar operations in the
+/// same order), the last block overlapping the previous one when the row is not a
+/// multiple (its samples are written twice, with the same values).
+#[inline(always)]
+fn patch_row(top: &[u8], bot: &[u8], weights: [f32; 4], row: &mut [f32]) {
+    let n = row.len();
+    if n < PATCH_LANES {
+        for (i, o) in row.iter_mut().enumerate() {
+            *o = bilinear_weighted(top, bot, weights, i);
+        }
+        return;
+    }
+    let mut start = 0;
+    while start + PATCH_LANES < n {
+        patch_block(&top[start..], &bot[start..], weights, &mut row[start..]);
+        start += PATCH_LANES;
+    }
+    let last = n - PATCH_LANES;
+    patch_block(&top[last..], &bot[last..], weights, &mut row[last..]);
+}
+
+/// [`PATCH_LANES`] samples of [`patch_row`] from the start of `top`, `bot` and `row`.
+#[inline(always)]
+fn patch_block(top: &[u8], bot: &[u8], weights: [f32; 4], row: &mut [f32]) {
+    let (t, b) = (&top[..=PATCH_LANES], &bot[..=PATCH_LANES]);
+    for (i, o) in row[..PATCH_LANES].iter_mut().enumerate() {
+        *o = bilinear_weighted(t, b, weights, i);
+    }
+}
+
+/// The sample of [`sample_patch`] between pixels `i`, `i + 1` of the rows `t` and `b`, with
+/// the weights `[w00, w10, w01, w11]`.
+#[inline(always)]
+fn bilinear_weighted(t: &[u8], b: &[u8], [w00, w10, w01, w11]: [f32; 4], i: usize) -> f32 {
+    w00 * f32::from(t[i])
+        + w10 * f32::from(t[i + 1])
+        + w01 * f32::from(b[i])
+        + w11 * f32::from(b[i + 1])
 }
 
 /// Halves `img`: each pixel of the result is the mean (rounded) of a 2x2 block, so the

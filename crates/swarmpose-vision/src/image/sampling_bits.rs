@@ -63,6 +63,10 @@ fn patch_by_definition(
     Some(())
 }
 
+/// Sides of the patches compared: below, at and above the blocks of
+/// [`super::PATCH_LANES`] samples, multiples and not (the last block overlapping).
+const PATCH_SIDES: [usize; 8] = [1, 5, 7, 8, 9, 11, 16, 17];
+
 /// Random positions over a noise image and just outside it, whole pixels, the last row
 /// and column, negative, NaN and infinite or huge coordinates: the same samples, bit for
 /// bit, and the same refusals (huge coordinates outside any image are refused, not
@@ -94,8 +98,8 @@ fn samples_are_their_definitions_bit_for_bit() {
             "({x}, {y})"
         );
         inside += usize::from(got.is_some());
-        for n in [1usize, 5, 9] {
-            let (mut a, mut b) = ([0f32; 81], [0f32; 81]);
+        for n in PATCH_SIDES {
+            let (mut a, mut b) = ([0f32; 17 * 17], [0f32; 17 * 17]);
             let got = sample_patch(img, x, y, n, &mut a);
             assert_eq!(
                 got,
@@ -107,7 +111,7 @@ fn samples_are_their_definitions_bit_for_bit() {
         }
     }
     assert!(
-        inside > 10_000 && patches > 20_000,
+        inside > 10_000 && patches > 25_000,
         "{inside} samples, {patches} patches"
     );
     for (x, y) in [
@@ -134,4 +138,52 @@ fn samples_are_their_definitions_bit_for_bit() {
             "({x}, {y})"
         );
     }
+}
+
+/// [`sample_patch`] inlined into a dispatched kernel.
+struct Patches<'a>(GrayView<'a>, &'a [(f32, f32)]);
+
+impl crate::simd::Kernel for Patches<'_> {
+    type Output = Vec<Option<Vec<u32>>>;
+
+    #[inline(always)]
+    fn run(self) -> Self::Output {
+        let mut out = Vec::new();
+        for &(x, y) in self.1 {
+            for n in PATCH_SIDES {
+                let mut p = [0f32; 17 * 17];
+                let got = sample_patch(self.0, x, y, n, &mut p);
+                out.push(got.map(|()| p[..n * n].iter().map(|v| v.to_bits()).collect()));
+            }
+        }
+        out
+    }
+}
+
+/// The dispatched compilation of [`sample_patch`] (vector blocks) gives its baseline's
+/// samples, bit for bit, at random sub-pixel and whole-pixel positions up to the edges.
+#[test]
+fn patches_are_the_same_dispatched() {
+    let (w, h) = (41usize, 29usize);
+    let data = noise_bytes(w * h, 36);
+    let img = GrayView {
+        width: w,
+        height: h,
+        data: &data,
+    };
+    let mut g = Lcg(36);
+    let positions: Vec<(f32, f32)> = (0..3_000)
+        .map(|k| {
+            let mut c = |span: usize| match k % 3 {
+                0 => (g.next_u32() % span as u32) as f32,
+                _ => (g.next_u32() >> 8) as f32 / (1u32 << 24) as f32 * span as f32,
+            };
+            (c(w - 7), c(h - 7))
+        })
+        .collect();
+    let run = || crate::simd::dispatch(Patches(img, &positions));
+    let (got, base) = (run(), crate::simd::baseline(run));
+    assert_eq!(got, base);
+    let sampled = got.iter().filter(|p| p.is_some()).count();
+    assert!(sampled > 10_000, "{sampled} patches");
 }

@@ -123,10 +123,12 @@ pub struct StereoMatch {
     pub row_offset_px: f32,
 }
 
-/// Indices of `kps` sorted by row, with the rows, for range queries.
+/// Indices of `kps` sorted by row, with the rows and the columns in that order, for range
+/// queries.
 struct RowIndex {
     order: Vec<usize>,
     rows: Vec<f32>,
+    columns: Vec<f32>,
 }
 
 impl RowIndex {
@@ -135,29 +137,34 @@ impl RowIndex {
         // Ties by index: the order of a stable sort, without its buffer.
         order.sort_unstable_by(|&a, &b| kps[a].y.total_cmp(&kps[b].y).then(a.cmp(&b)));
         let rows = order.iter().map(|&i| kps[i].y).collect();
-        Self { order, rows }
+        let columns = order.iter().map(|&i| kps[i].x).collect();
+        Self {
+            order,
+            rows,
+            columns,
+        }
     }
 
-    /// Indices with a row in `[y - tol, y + tol]`.
-    fn around(&self, y: f32, tol: f32) -> &[usize] {
+    /// Indices with a row in `[y - tol, y + tol]`, and their columns.
+    fn around(&self, y: f32, tol: f32) -> (&[usize], &[f32]) {
         let a = self.rows.partition_point(|&r| r < y - tol);
         let b = self.rows.partition_point(|&r| r <= y + tol);
-        &self.order[a..b]
+        (&self.order[a..b], &self.columns[a..b])
     }
 }
 
-/// Best candidate of `query` among `cands` (indices into `kps`/`descs`) allowed by
-/// `ok(query keypoint, candidate keypoint)`: `(index, best, second best)` distances.
+/// Best candidate of `query` among `cands` (indices into `descs`, with their columns)
+/// allowed by `ok(candidate column)`: `(index, best, second best)` distances.
 #[inline(always)]
 fn best_two<D: Descriptor>(
     q: &D,
-    cands: &[usize],
+    (cands, columns): (&[usize], &[f32]),
     descs: &[D],
-    mut ok: impl FnMut(usize) -> bool,
+    mut ok: impl FnMut(f32) -> bool,
 ) -> Option<(usize, f32, f32)> {
     let mut best = (usize::MAX, f32::INFINITY, f32::INFINITY);
-    for &c in cands {
-        if !ok(c) {
+    for (&c, &x) in cands.iter().zip(columns) {
+        if !ok(x) {
             continue;
         }
         let d = q.distance(&descs[c]);
@@ -227,8 +234,8 @@ fn match_stereo_in<D: Descriptor>(
     let mut out = Vec::with_capacity(left.len());
     for (li, lk) in left.keypoints.iter().enumerate() {
         let cands = right_rows.around(lk.y, tol);
-        let Some((ri, d1, d2)) = best_two(&left.descriptors[li], cands, &right.descriptors, |c| {
-            let d = lk.x - right.keypoints[c].x;
+        let Some((ri, d1, d2)) = best_two(&left.descriptors[li], cands, &right.descriptors, |x| {
+            let d = lk.x - x;
             d >= dmin - 0.5 && d <= dmax
         }) else {
             continue;
@@ -242,8 +249,8 @@ fn match_stereo_in<D: Descriptor>(
                 &right.descriptors[ri],
                 lr.around(rk.y, tol),
                 &left.descriptors,
-                |c| {
-                    let d = left.keypoints[c].x - rk.x;
+                |x| {
+                    let d = x - rk.x;
                     d >= dmin - 0.5 && d <= dmax
                 },
             );
@@ -327,6 +334,79 @@ fn match_stereo_in<D: Descriptor>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::features::BinaryDescriptor;
+    use crate::test_noise::Lcg;
+
+    /// [`best_two`] as it was, over indices into the keypoints (their columns read there).
+    fn best_two_by_index(
+        q: &BinaryDescriptor,
+        cands: &[usize],
+        kps: &[Keypoint],
+        descs: &[BinaryDescriptor],
+        ok: impl Fn(f32) -> bool,
+    ) -> Option<(usize, f32, f32)> {
+        let mut best = (usize::MAX, f32::INFINITY, f32::INFINITY);
+        for &c in cands {
+            if !ok(kps[c].x) {
+                continue;
+            }
+            let d = q.distance(&descs[c]);
+            if d < best.1 {
+                best = (c, d, best.1);
+            } else if d < best.2 {
+                best.2 = d;
+            }
+        }
+        (best.0 != usize::MAX).then_some(best)
+    }
+
+    /// The row index's candidates with their columns give what the candidates with the
+    /// keypoints' columns gave: the same best, distances and ties, on random keypoints
+    /// (repeated rows and columns, few descriptor bits so that distances tie).
+    #[test]
+    fn best_two_with_columns_is_the_index_search() {
+        let mut g = Lcg(36);
+        let mut unit = move || (g.next_u32() >> 8) as f32 / (1u32 << 24) as f32;
+        let kps: Vec<Keypoint> = (0..600)
+            .map(|_| Keypoint {
+                x: (unit() * 200.0 * 4.0).round() / 4.0,
+                y: (unit() * 60.0 * 2.0).round() / 2.0,
+                scale: 1.0,
+                angle: 0.0,
+                response: 1.0,
+                octave: 0,
+            })
+            .collect();
+        let descs: Vec<BinaryDescriptor> = (0..kps.len())
+            .map(|_| BinaryDescriptor(std::array::from_fn(|_| u8::from(unit() < 0.1))))
+            .collect();
+        let index = RowIndex::new(&kps);
+        let mut found = 0;
+        for (q, k) in kps.iter().zip(&descs).take(300) {
+            for tol in [0.0f32, 0.5, 1.0, 3.0] {
+                let (cands, columns) = index.around(q.y, tol);
+                assert_eq!(cands.len(), columns.len());
+                let ok = |x: f32| {
+                    let d = q.x - x;
+                    (0.5..=60.0).contains(&d)
+                };
+                let got = best_two(k, (cands, columns), &descs, ok);
+                assert_eq!(
+                    got.map(|(i, a, b)| (i, a.to_bits(), b.to_bits())),
+                    best_two_by_index(k, cands, &kps, &descs, ok).map(|(i, a, b)| (
+                        i,
+                        a.to_bits(),
+                        b.to_bits()
+                    )),
+                    "({}, {}), tol {tol}",
+                    q.x,
+                    q.y
+                );
+                found += usize::from(got.is_some());
+            }
+        }
+        assert!(found > 300, "{found}");
+    }
 
     #[test]
     fn triangulation_formula() {

@@ -3,6 +3,7 @@
 
 use crate::features::GrayView;
 use crate::image::sample_patch;
+use sums::{window_sums, window_sums_fixed};
 
 /// The `(2 r + 1)²` window centred on left pixel `(xl, y)` of a rectified pair, with the
 /// right image it is matched in (same rows, shifted left by the disparity).
@@ -49,6 +50,34 @@ fn ssd(window: PairWindow<'_>, xr: usize) -> u32 {
     s
 }
 
+/// Lanes of [`ssd_fixed`]'s rows.
+const SSD_LANES: usize = 8;
+
+/// [`ssd`] for a window side `N ≤ SSD_LANES` known to the compiler (`N = 2 r + 1`): rows
+/// read as [`SSD_LANES`] pixels (those past the window's row count zero), whose squared
+/// differences (integers, exact in any order) the compiler sums in vector registers;
+/// [`ssd`] where the last row has no pixels past it. The caller keeps both windows inside.
+#[inline(always)]
+fn ssd_fixed<const N: usize>(window: PairWindow<'_>, xr: usize) -> u32 {
+    const { assert!(N <= SSD_LANES) };
+    let (left, right, xl, y, r) = (window.left, window.right, window.xl, window.y, window.r);
+    if (y + r) * left.width + xl - r + SSD_LANES > left.data.len()
+        || (y + r) * right.width + xr - r + SSD_LANES > right.data.len()
+    {
+        return ssd(window, xr);
+    }
+    let mut sums = [0u32; SSD_LANES];
+    for yy in y - r..=y + r {
+        let lrow = &left.data[yy * left.width + xl - r..][..SSD_LANES];
+        let rrow = &right.data[yy * right.width + xr - r..][..SSD_LANES];
+        for k in 0..SSD_LANES {
+            let d = i32::from(lrow[k]) - i32::from(rrow[k]);
+            sums[k] += if k < N { (d * d) as u32 } else { 0 };
+        }
+    }
+    sums.iter().sum()
+}
+
 /// Refines the disparity of left pixel `(xl, y)` (integers) near `d0` pixels: the SSD of
 /// a `(2 r + 1)²` window is evaluated for integer disparities `d0 - search ..= d0 +
 /// search`, and a parabola through the minimum and its neighbours gives the sub-pixel
@@ -76,7 +105,12 @@ pub fn refine_disparity(window: PairWindow<'_>, d0: i64, search: i64) -> Option<
         return None;
     }
     for (k, d) in (lo..=hi).enumerate() {
-        let c = ssd(window, (xl as i64 - d) as usize);
+        let xr = (xl as i64 - d) as usize;
+        let c = if r == 3 {
+            ssd_fixed::<7>(window, xr)
+        } else {
+            ssd(window, xr)
+        };
         costs[k] = c;
         if c < best.0 && d > lo && d < hi {
             best = (c, d);
@@ -266,7 +300,13 @@ fn align_window(
             *o = f32::from(v);
         }
     }
+    // The same with the right window's stride (for `window_sums_fixed`).
+    let mut lws = [0f32; MAX_SIDE * MAX_SIDE];
+    for (out, row) in lws.chunks_exact_mut(m).zip(lw.chunks_exact(n).take(n)) {
+        out[..n].copy_from_slice(row);
+    }
     let mut rw = [0f32; MAX_SIDE * MAX_SIDE];
+    let mut products = [[0f32; 7 * 9 - 2]; 5];
     let (mut d, mut dy) = (d0, 0f32);
     for _ in 0..iterations {
         sample_patch(
@@ -276,29 +316,13 @@ fn align_window(
             m,
             &mut rw,
         )?;
-        // The derivatives of e = L - R(x - d, y + dy): gx by d, gy by dy.
-        // Pixel by pixel in rows, as `rw[k]`, `rw[k ± 1]`, `rw[k ± m]` with `k = (j + 1) m
-        // + i + 1`: row `j` of the left window against the right one's rows `j`, `j + 1`
-        // and `j + 2` (above, at and below the samples), zipped slices rather than indices
-        // (no bounds check per pixel).
-        let (mut a, mut b, mut c, mut ex, mut ey) = (0f32, 0f32, 0f32, 0f32, 0f32);
-        for (j, l) in lw.chunks_exact(n).take(n).enumerate() {
-            let above = &rw[j * m + 1..][..n];
-            let at = &rw[(j + 1) * m..][..m];
-            let below = &rw[(j + 2) * m + 1..][..n];
-            for (((&l, w), &up), &down) in l.iter().zip(at.windows(3)).zip(above).zip(below) {
-                let e = l - w[1];
-                let gy = -0.5 * (down - up);
-                c += gy * gy;
-                ey += gy * e;
-                if disparity_free {
-                    let gx = 0.5 * (w[2] - w[0]);
-                    a += gx * gx;
-                    b += gx * gy;
-                    ex += gx * e;
-                }
-            }
-        }
+        // The derivatives of e = L - R(x - d, y + dy): gx by d, gy by dy; the side of
+        // the default radius (3) with its length known to the compiler.
+        let [a, b, c, ex, ey] = if n == 7 {
+            window_sums_fixed::<7, { 7 * 9 - 2 }>(&lws, &rw, &mut products, disparity_free)
+        } else {
+            window_sums(&lw, &rw, n, disparity_free)
+        };
         // Steps -(JᵀJ)⁻¹ Jᵀ e, when the texture fixes them (a NaN fails too).
         let (sd, sy) = if disparity_free {
             let det = a * c - b * b;
@@ -325,6 +349,7 @@ fn align_window(
     Some((d, dy))
 }
 
+mod sums;
 #[cfg(test)]
 mod window_bits;
 

@@ -1,7 +1,7 @@
 //! [`super::align_window`] against its definition with indices (before its sums ran over
-//! zipped rows): bit for bit.
+//! zipped rows): bit for bit; [`super::ssd_fixed`] against [`super::ssd`].
 
-use super::{PairWindow, align_window};
+use super::{PairWindow, align_window, ssd, ssd_fixed};
 use crate::features::GrayView;
 use crate::image::sample_patch;
 use crate::test_noise::Lcg;
@@ -134,4 +134,101 @@ fn align_window_is_its_definition_bit_for_bit() {
         }
     }
     assert!(found > 2_000, "{found}");
+}
+
+/// [`align_window`] inlined into a dispatched kernel, over windows and starting disparities.
+struct Windows<'a>(GrayView<'a>, GrayView<'a>, &'a [(usize, usize, usize, f32)]);
+
+impl crate::simd::Kernel for Windows<'_> {
+    type Output = Vec<Option<(u32, u32)>>;
+
+    #[inline(always)]
+    fn run(self) -> Self::Output {
+        let mut out = Vec::new();
+        for &(xl, y, r, d0) in self.2 {
+            let window = PairWindow {
+                left: self.0,
+                right: self.1,
+                xl,
+                y,
+                r,
+            };
+            for free in [true, false] {
+                let got = align_window(window, d0, 8, free);
+                out.push(got.map(|(d, dy)| (d.to_bits(), dy.to_bits())));
+            }
+        }
+        out
+    }
+}
+
+/// The dispatched compilation of [`align_window`] (vector blocks of products) gives its
+/// baseline's `(d, dy)`, bit for bit, on noise images with random windows and disparities.
+#[test]
+fn align_window_is_the_same_dispatched() {
+    let (w, h) = (80usize, 36usize);
+    let (left, right) = (
+        crate::test_noise::noise_bytes(w * h, 361),
+        crate::test_noise::noise_bytes(w * h, 362),
+    );
+    let view = |data| GrayView {
+        width: w,
+        height: h,
+        data,
+    };
+    let mut g = Lcg(36);
+    let windows: Vec<(usize, usize, usize, f32)> = (0..4_000)
+        .map(|_| {
+            let r = 1 + g.next_u32() as usize % 5;
+            let (xl, y) = (g.next_u32() as usize % w, g.next_u32() as usize % h);
+            let d0 = (g.next_u32() >> 8) as f32 / (1u32 << 24) as f32 * 20.0;
+            (xl, y, r, d0)
+        })
+        .collect();
+    let run = || crate::simd::dispatch(Windows(view(&left), view(&right), &windows));
+    let (got, base) = (run(), crate::simd::baseline(run));
+    assert_eq!(got, base);
+    let found = got.iter().filter(|p| p.is_some()).count();
+    assert!(found > 500, "{found} alignments");
+}
+
+/// [`ssd_fixed`] for the 7 x 7 window gives [`ssd`]'s sums on noise images, all over the
+/// images up to their borders, including identical windows (sum 0) and the largest
+/// differences (black against white).
+#[test]
+fn fixed_ssd_is_ssd() {
+    let (w, h) = (60usize, 20usize);
+    let left = crate::test_noise::noise_bytes(w * h, 363);
+    let mut right = crate::test_noise::noise_bytes(w * h, 364);
+    for (i, v) in right.iter_mut().enumerate() {
+        match (i % w) / 15 {
+            0 => *v = left[i],
+            1 => *v = if left[i] < 128 { 255 } else { 0 },
+            _ => {}
+        }
+    }
+    let view = |data| GrayView {
+        width: w,
+        height: h,
+        data,
+    };
+    let (mut zero, mut compared) = (0, 0);
+    for y in 3..h - 3 {
+        for xl in 3..w - 3 {
+            let window = PairWindow {
+                left: view(&left),
+                right: view(&right),
+                xl,
+                y,
+                r: 3,
+            };
+            for xr in 3..w - 3 {
+                let s = ssd(window, xr);
+                assert_eq!(ssd_fixed::<7>(window, xr), s, "({xl}, {y}) at {xr}");
+                zero += usize::from(s == 0);
+                compared += 1;
+            }
+        }
+    }
+    assert!(zero > 0 && compared > 30_000, "{zero} zero of {compared}");
 }
