@@ -15,7 +15,7 @@
 //! the centre by it.
 
 use crate::features::GrayView;
-use crate::image::{sample_bilinear, sample_bilinear_inside, sample_patch};
+use crate::image::{sample_bilinear, sample_patch};
 use nalgebra::{Matrix3, SMatrix, SVector};
 
 /// Half the side of the aligned patch, pixels (a 9x9 patch, as the frame-to-frame
@@ -251,33 +251,32 @@ impl PatchTemplate {
             .get_or_insert_with(|| AffineSteps::of(&self.gx, &self.gy, &self.contrast));
         let h_inv = h_inv.as_ref()?;
         // Below these a sample has its four neighbours ([`sample_bilinear`]'s check); exact
-        // in f32 up to 2^24 pixels (larger images take the checked path).
-        let limited = (2..=1 << 24).contains(&image.width) && (2..=1 << 24).contains(&image.height);
+        // in f32, and in [`sample_inside`]'s whole parts, up to 2^22 pixels (larger images
+        // take the checked path).
+        let limited = (2..=1 << 22).contains(&image.width) && (2..=1 << 22).contains(&image.height);
         let (u_max, v_max) = (
             image.width.saturating_sub(1) as f32,
             image.height.saturating_sub(1) as f32,
         );
         let mut m = Matrix3::<f32>::new(1.0, 0.0, start.0, 0.0, 1.0, start.1, 0.0, 0.0, 1.0);
         let mut patch = [0f32; N * N];
-        let mut at = [(0f32, 0f32); N * N];
+        let (mut us, mut vs) = ([0f32; N * N], [0f32; N * N]);
         for _ in 0..limits.iterations {
             // The positions, and whether all are inside (`&`, not `&&`: a NaN fails too):
             // then [`sample_bilinear`] would give `Some` of each, which the samples are
             // without its checks; otherwise it is called, and the first position outside
             // ends the alignment.
             let mut inside = limited;
-            for (p, &(x, y)) in at.iter_mut().zip(&COORDS) {
+            for ((pu, pv), &(x, y)) in us.iter_mut().zip(&mut vs).zip(&COORDS) {
                 let u = m[(0, 0)] * x + m[(0, 1)] * y + m[(0, 2)];
                 let v = m[(1, 0)] * x + m[(1, 1)] * y + m[(1, 2)];
                 inside &= (u >= 0.0) & (v >= 0.0) & (u < u_max) & (v < v_max);
-                *p = (u, v);
+                (*pu, *pv) = (u, v);
             }
             if inside {
-                for (sample, &(u, v)) in patch.iter_mut().zip(&at) {
-                    *sample = sample_bilinear_inside(image, u, v);
-                }
+                sample_inside(image, (&us, &vs), &mut patch);
             } else {
-                for (sample, &(u, v)) in patch.iter_mut().zip(&at) {
+                for ((sample, &u), &v) in patch.iter_mut().zip(&us).zip(&vs) {
                     *sample = sample_bilinear(image, u, v)?;
                 }
             }
@@ -319,6 +318,69 @@ impl PatchTemplate {
             }
         }
         None
+    }
+}
+
+/// 2^23: added to a non-negative `f32` below 2^22, it leaves the nearest integer in the
+/// sum's low mantissa bits.
+const TWO_23: f32 = 8_388_608.0;
+
+/// The whole part of `u`, `0 <= u < 2^22`, as `u as i32` and as `f32` (the same integer),
+/// without the saturating conversion: the nearest integer (from `u + 2^23`), less one when
+/// above `u`.
+#[inline(always)]
+fn whole_part(u: f32) -> (i32, f32) {
+    let s = u + TWO_23;
+    let (near, r) = ((s.to_bits() & 0x007f_ffff) as i32, s - TWO_23);
+    let above = r > u;
+    (near - i32::from(above), if above { r - 1.0 } else { r })
+}
+
+/// [`sample_bilinear_inside`] at each of the positions `(us, vs)` (pixels, all inside it, in
+/// an image at most 2^22 pixels wide and high) into `out`: the same values, each from the
+/// same operations, in three loops of which the first and last are vectorised: the
+/// positions' whole parts ([`whole_part`]) and fractions, the four neighbours of each, the
+/// weighted sums.
+#[inline(always)]
+fn sample_inside(
+    image: GrayView<'_>,
+    (us, vs): (&[f32; N * N], &[f32; N * N]),
+    out: &mut [f32; N * N],
+) {
+    let (mut cx, mut cy) = ([0i32; N * N], [0i32; N * N]);
+    let (mut fx, mut fy) = ([0f32; N * N], [0f32; N * N]);
+    for (((&u, cx), fx), (&v, (cy, fy))) in us
+        .iter()
+        .zip(&mut cx)
+        .zip(&mut fx)
+        .zip(vs.iter().zip(cy.iter_mut().zip(&mut fy)))
+    {
+        let ((tx, wx), (ty, wy)) = (whole_part(u), whole_part(v));
+        (*cx, *cy) = (tx, ty);
+        (*fx, *fy) = (u - wx, v - wy);
+    }
+    let (w, d) = (image.width, image.data);
+    // The four neighbours of each sample: top left, top right, bottom left, bottom right.
+    let mut near = [[0u8; N * N]; 4];
+    let [n00, n01, n10, n11] = &mut near;
+    let corners = n00
+        .iter_mut()
+        .zip(n01.iter_mut())
+        .zip(n10.iter_mut().zip(n11));
+    for (((n00, n01), (n10, n11)), (&tx, &ty)) in corners.zip(cx.iter().zip(&cy)) {
+        // Inside: 0 <= tx, ty (whole parts of non-negative positions).
+        let i = ty as usize * w + tx as usize;
+        let (top, bot) = (&d[i..i + 2], &d[i + w..i + w + 2]);
+        (*n00, *n01, *n10, *n11) = (top[0], top[1], bot[0], bot[1]);
+    }
+    let [n00, n01, n10, n11] = &near;
+    let corners = n00.iter().zip(n01).zip(n10.iter().zip(n11));
+    for ((o, ((&p00, &p01), (&p10, &p11))), (&fx, &fy)) in
+        out.iter_mut().zip(corners).zip(fx.iter().zip(&fy))
+    {
+        let top = f32::from(p00) * (1.0 - fx) + f32::from(p01) * fx;
+        let bot = f32::from(p10) * (1.0 - fx) + f32::from(p11) * fx;
+        *o = top * (1.0 - fy) + bot * fy;
     }
 }
 
