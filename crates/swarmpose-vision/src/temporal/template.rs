@@ -360,26 +360,23 @@ fn sample_inside(
         (*fx, *fy) = (u - wx, v - wy);
     }
     let (w, d) = (image.width, image.data);
-    // The four neighbours of each sample: top left, top right, bottom left, bottom right.
-    let mut near = [[0u8; N * N]; 4];
-    let [n00, n01, n10, n11] = &mut near;
-    let corners = n00
-        .iter_mut()
-        .zip(n01.iter_mut())
-        .zip(n10.iter_mut().zip(n11));
-    for (((n00, n01), (n10, n11)), (&tx, &ty)) in corners.zip(cx.iter().zip(&cy)) {
+    // The four neighbours of each sample, as two pairs of bytes (little-endian: the left
+    // one low): the top and the bottom ones.
+    let (mut tops, mut bots) = ([0u16; N * N], [0u16; N * N]);
+    let pair = |p: &[u8]| u16::from(p[0]) | (u16::from(p[1]) << 8);
+    for ((top, bot), (&tx, &ty)) in tops.iter_mut().zip(&mut bots).zip(cx.iter().zip(&cy)) {
         // Inside: 0 <= tx, ty (whole parts of non-negative positions).
         let i = ty as usize * w + tx as usize;
-        let (top, bot) = (&d[i..i + 2], &d[i + w..i + w + 2]);
-        (*n00, *n01, *n10, *n11) = (top[0], top[1], bot[0], bot[1]);
+        (*top, *bot) = (pair(&d[i..i + 2]), pair(&d[i + w..i + w + 2]));
     }
-    let [n00, n01, n10, n11] = &near;
-    let corners = n00.iter().zip(n01).zip(n10.iter().zip(n11));
-    for ((o, ((&p00, &p01), (&p10, &p11))), (&fx, &fy)) in
-        out.iter_mut().zip(corners).zip(fx.iter().zip(&fy))
+    let byte = |p: u16, high: bool| f32::from((if high { p >> 8 } else { p & 0xff }) as u8);
+    for ((o, (&tp, &bp)), (&fx, &fy)) in out
+        .iter_mut()
+        .zip(tops.iter().zip(&bots))
+        .zip(fx.iter().zip(&fy))
     {
-        let top = f32::from(p00) * (1.0 - fx) + f32::from(p01) * fx;
-        let bot = f32::from(p10) * (1.0 - fx) + f32::from(p11) * fx;
+        let top = byte(tp, false) * (1.0 - fx) + byte(tp, true) * fx;
+        let bot = byte(bp, false) * (1.0 - fx) + byte(bp, true) * fx;
         *o = top * (1.0 - fy) + bot * fy;
     }
 }
