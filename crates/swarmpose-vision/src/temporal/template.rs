@@ -16,6 +16,7 @@
 
 use crate::features::GrayView;
 use crate::image::{sample_bilinear, sample_patch};
+use inside::sample_inside;
 use nalgebra::{Matrix3, SMatrix, SVector};
 
 /// Half the side of the aligned patch, pixels (a 9x9 patch, as the frame-to-frame
@@ -250,6 +251,41 @@ impl PatchTemplate {
             .affine
             .get_or_insert_with(|| AffineSteps::of(&self.gx, &self.gy, &self.contrast));
         let h_inv = h_inv.as_ref()?;
+        crate::simd::dispatch(AlignAffine {
+            sd,
+            h_inv,
+            values: &self.values,
+            image,
+            start,
+            limits,
+        })
+    }
+}
+
+/// The iterations of [`PatchTemplate::align_affine`] for [`crate::simd::dispatch`]: the
+/// template's steps and values, the image, the start and the limits.
+struct AlignAffine<'a> {
+    sd: &'a [SVector<f32, 6>; N * N],
+    h_inv: &'a SMatrix<f32, 6, 6>,
+    values: &'a [f32; N * N],
+    image: GrayView<'a>,
+    start: (f32, f32),
+    limits: AlignLimits,
+}
+
+impl crate::simd::Kernel for AlignAffine<'_> {
+    type Output = Option<(f32, f32)>;
+
+    #[inline(always)]
+    fn run(self) -> Option<(f32, f32)> {
+        let AlignAffine {
+            sd,
+            h_inv,
+            values,
+            image,
+            start,
+            limits,
+        } = self;
         // Below these a sample has its four neighbours ([`sample_bilinear`]'s check); exact
         // in f32, and in [`sample_inside`]'s whole parts, up to 2^22 pixels (larger images
         // take the checked path).
@@ -282,7 +318,7 @@ impl PatchTemplate {
             }
             let mut b = SVector::<f32, 6>::zeros();
             for (k, i) in patch.iter().enumerate() {
-                b += sd[k] * (i - self.values[k]);
+                b += sd[k] * (i - values[k]);
             }
             let dp = h_inv * b;
             let w = Matrix3::<f32>::new(
@@ -314,70 +350,10 @@ impl PatchTemplate {
                 let Some(min_ncc) = limits.min_ncc else {
                     return Some((px, py));
                 };
-                return (ncc(&patch, &self.values) >= min_ncc).then_some((px, py));
+                return (ncc(&patch, values) >= min_ncc).then_some((px, py));
             }
         }
         None
-    }
-}
-
-/// 2^23: added to a non-negative `f32` below 2^22, it leaves the nearest integer in the
-/// sum's low mantissa bits.
-const TWO_23: f32 = 8_388_608.0;
-
-/// The whole part of `u`, `0 <= u < 2^22`, as `u as i32` and as `f32` (the same integer),
-/// without the saturating conversion: the nearest integer (from `u + 2^23`), less one when
-/// above `u`.
-#[inline(always)]
-fn whole_part(u: f32) -> (i32, f32) {
-    let s = u + TWO_23;
-    let (near, r) = ((s.to_bits() & 0x007f_ffff) as i32, s - TWO_23);
-    let above = r > u;
-    (near - i32::from(above), if above { r - 1.0 } else { r })
-}
-
-/// [`sample_bilinear_inside`] at each of the positions `(us, vs)` (pixels, all inside it, in
-/// an image at most 2^22 pixels wide and high) into `out`: the same values, each from the
-/// same operations, in three loops of which the first and last are vectorised: the
-/// positions' whole parts ([`whole_part`]) and fractions, the four neighbours of each, the
-/// weighted sums.
-#[inline(always)]
-fn sample_inside(
-    image: GrayView<'_>,
-    (us, vs): (&[f32; N * N], &[f32; N * N]),
-    out: &mut [f32; N * N],
-) {
-    let (mut cx, mut cy) = ([0i32; N * N], [0i32; N * N]);
-    let (mut fx, mut fy) = ([0f32; N * N], [0f32; N * N]);
-    for (((&u, cx), fx), (&v, (cy, fy))) in us
-        .iter()
-        .zip(&mut cx)
-        .zip(&mut fx)
-        .zip(vs.iter().zip(cy.iter_mut().zip(&mut fy)))
-    {
-        let ((tx, wx), (ty, wy)) = (whole_part(u), whole_part(v));
-        (*cx, *cy) = (tx, ty);
-        (*fx, *fy) = (u - wx, v - wy);
-    }
-    let (w, d) = (image.width, image.data);
-    // The four neighbours of each sample, as two pairs of bytes (little-endian: the left
-    // one low): the top and the bottom ones.
-    let (mut tops, mut bots) = ([0u16; N * N], [0u16; N * N]);
-    let pair = |p: &[u8]| u16::from(p[0]) | (u16::from(p[1]) << 8);
-    for ((top, bot), (&tx, &ty)) in tops.iter_mut().zip(&mut bots).zip(cx.iter().zip(&cy)) {
-        // Inside: 0 <= tx, ty (whole parts of non-negative positions).
-        let i = ty as usize * w + tx as usize;
-        (*top, *bot) = (pair(&d[i..i + 2]), pair(&d[i + w..i + w + 2]));
-    }
-    let byte = |p: u16, high: bool| f32::from((if high { p >> 8 } else { p & 0xff }) as u8);
-    for ((o, (&tp, &bp)), (&fx, &fy)) in out
-        .iter_mut()
-        .zip(tops.iter().zip(&bots))
-        .zip(fx.iter().zip(&fy))
-    {
-        let top = byte(tp, false) * (1.0 - fx) + byte(tp, true) * fx;
-        let bot = byte(bp, false) * (1.0 - fx) + byte(bp, true) * fx;
-        *o = top * (1.0 - fy) + bot * fy;
     }
 }
 
@@ -431,6 +407,8 @@ fn ncc(a: &[f32; N * N], b: &[f32; N * N]) -> f32 {
         ab / (aa * bb).sqrt()
     }
 }
+
+mod inside;
 
 #[cfg(test)]
 mod affine_bits;

@@ -2,8 +2,9 @@
 //! each sample's offset by its formula and each sample checked (before the steps were kept
 //! in the template, the offsets tabulated and a patch inside sampled without checks).
 
+use super::inside::{sample_inside, whole_part};
 use super::tests::{H, W, image, limits, view, warped};
-use super::{AlignLimits, N, PatchTemplate, R, ncc, project_out, sample_inside, whole_part};
+use super::{AlignLimits, N, PatchTemplate, R, ncc, project_out};
 use crate::features::GrayView;
 use crate::image::{sample_bilinear, sample_bilinear_inside};
 use nalgebra::{Matrix3, SMatrix, SVector};
@@ -77,9 +78,10 @@ fn align_affine_by_definition(
 }
 
 /// The kept steps give the alignment of the definition bit for bit, on the first call
-/// (which computes them) and on later ones (which reuse them): templates all over a
-/// textured image, aligned in shifted, warped, re-exposed and noisy images from
-/// starts around the truth, with and without the cross-correlation check.
+/// (which computes them) and on later ones (which reuse them), in both compilations
+/// ([`crate::simd`]): templates all over a textured image, aligned in shifted, warped,
+/// re-exposed and noisy images from starts around the truth, with and without the
+/// cross-correlation check.
 #[test]
 fn kept_affine_steps_give_the_definition_bit_for_bit() {
     let mut rng = crate::test_noise::Lcg(34);
@@ -117,6 +119,14 @@ fn kept_affine_steps_give_the_definition_bit_for_bit() {
                     ] {
                         let want = align_affine_by_definition(&t, view(img), start, lim);
                         let got = t.align_affine(view(img), start, lim);
+                        let mut copy = t.clone();
+                        let base =
+                            crate::simd::baseline(|| copy.align_affine(view(img), start, lim));
+                        assert_eq!(
+                            got.map(|(x, y)| (x.to_bits(), y.to_bits())),
+                            base.map(|(x, y)| (x.to_bits(), y.to_bits())),
+                            "dispatched and baseline: template at {at:?}, start {start:?}"
+                        );
                         assert_eq!(
                             got.map(|(x, y)| (x.to_bits(), y.to_bits())),
                             want.map(|(x, y)| (x.to_bits(), y.to_bits())),
