@@ -133,6 +133,12 @@ impl PatchTemplate {
     /// of its structure tensor below one grey level squared per pixel).
     #[must_use]
     pub fn sample(image: GrayView<'_>, at: (f32, f32)) -> Option<Self> {
+        crate::simd::dispatch(Sample(image, at))
+    }
+
+    /// [`PatchTemplate::sample`], inlined into each instruction set's compilation.
+    #[inline(always)]
+    fn sample_in(image: GrayView<'_>, at: (f32, f32)) -> Option<Self> {
         let mut big = [0f32; SIDE * SIDE];
         sample_patch(image, at.0 - R - 1.0, at.1 - R - 1.0, SIDE, &mut big)?;
         let mut t = Self {
@@ -202,6 +208,17 @@ impl PatchTemplate {
         start: (f32, f32),
         limits: AlignLimits,
     ) -> Option<(f32, f32)> {
+        crate::simd::dispatch(Align(self, image, start, limits))
+    }
+
+    /// [`PatchTemplate::align`], inlined into each instruction set's compilation.
+    #[inline(always)]
+    fn align_in(
+        &self,
+        image: GrayView<'_>,
+        start: (f32, f32),
+        limits: AlignLimits,
+    ) -> Option<(f32, f32)> {
         let (hxx, hxy, hyy) = self.ptensor;
         let det = hxx * hyy - hxy * hxy;
         let mut patch = [0f32; N * N];
@@ -259,6 +276,30 @@ impl PatchTemplate {
             start,
             limits,
         })
+    }
+}
+
+/// A call of [`PatchTemplate::sample`] for [`crate::simd::dispatch`].
+struct Sample<'a>(GrayView<'a>, (f32, f32));
+
+impl crate::simd::Kernel for Sample<'_> {
+    type Output = Option<PatchTemplate>;
+
+    #[inline(always)]
+    fn run(self) -> Option<PatchTemplate> {
+        PatchTemplate::sample_in(self.0, self.1)
+    }
+}
+
+/// A call of [`PatchTemplate::align`] for [`crate::simd::dispatch`].
+struct Align<'a>(&'a PatchTemplate, GrayView<'a>, (f32, f32), AlignLimits);
+
+impl crate::simd::Kernel for Align<'_> {
+    type Output = Option<(f32, f32)>;
+
+    #[inline(always)]
+    fn run(self) -> Option<(f32, f32)> {
+        self.0.align_in(self.1, self.2, self.3)
     }
 }
 
@@ -376,6 +417,7 @@ fn unit_contrast(values: &[f32; N * N]) -> Option<[f32; N * N]> {
 /// constant patch and along `contrast` (the template's [`unit_contrast`]): the
 /// Gauss-Newton steps they give ignore any change `g T + b` of the image's exposure
 /// (Baker and Matthews' "project out" alignment with a linear appearance model).
+#[inline(always)]
 fn project_out<const P: usize>(images: &mut [SVector<f32, P>; N * N], contrast: &[f32; N * N]) {
     let n = (N * N) as f32;
     let mean = images.iter().sum::<SVector<f32, P>>() / n;

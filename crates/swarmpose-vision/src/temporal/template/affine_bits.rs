@@ -219,3 +219,49 @@ fn sampled_inside_is_sample_bilinear_inside() {
         );
     }
 }
+
+/// The translation alignment and the sampling of templates give the same bits in both
+/// compilations ([`crate::simd`]): templates all over a textured image (printed, which
+/// tells signed zeros apart), aligned in shifted, re-exposed and noisy images from starts
+/// around the truth.
+#[test]
+fn sample_and_align_are_their_baseline() {
+    let mut rng = crate::test_noise::Lcg(39);
+    let source = image((0.0, 0.0));
+    let shifted = image((-0.62, 0.37));
+    let noisy: Vec<u8> = shifted
+        .iter()
+        .map(|&v| v.saturating_add((rng.next_u32() >> 29) as u8))
+        .collect();
+    let (mut sampled, mut found) = (0, 0);
+    for cy in (3..H - 3).step_by(4) {
+        for cx in (3..W - 3).step_by(4) {
+            let at = (cx as f32 + 0.5, cy as f32 - 0.25);
+            let t = PatchTemplate::sample(view(&source), at);
+            let base = crate::simd::baseline(|| PatchTemplate::sample(view(&source), at));
+            assert_eq!(format!("{t:?}"), format!("{base:?}"), "template at {at:?}");
+            let Some(t) = t else {
+                continue;
+            };
+            sampled += 1;
+            for img in [&source, &shifted, &noisy] {
+                let start = (
+                    at.0 + (rng.next_u32() >> 24) as f32 / 64.0 - 2.0,
+                    at.1 + (rng.next_u32() >> 24) as f32 / 64.0 - 2.0,
+                );
+                let got = t.align(view(img), start, limits(10, 2.5));
+                let base = crate::simd::baseline(|| t.align(view(img), start, limits(10, 2.5)));
+                assert_eq!(
+                    got.map(|(x, y)| (x.to_bits(), y.to_bits())),
+                    base.map(|(x, y)| (x.to_bits(), y.to_bits())),
+                    "template at {at:?}, start {start:?}"
+                );
+                found += usize::from(got.is_some());
+            }
+        }
+    }
+    assert!(
+        sampled > 50 && found > 50,
+        "{sampled} templates, {found} found"
+    );
+}
