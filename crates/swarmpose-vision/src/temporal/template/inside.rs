@@ -45,15 +45,18 @@ pub(super) fn sample_inside(
         (*cx, *cy) = (tx, ty);
         (*fx, *fy) = (u - wx, v - wy);
     }
-    let (w, d) = (image.width, image.data);
+    // The width is at most 2^22 (the caller's condition; `min` tells the compiler, so that
+    // one bounds check per sample covers its four neighbours).
+    let (w, d) = (image.width.min(1 << 22), image.data);
     // The four neighbours of each sample, as two pairs of bytes (little-endian: the left
     // one low): the top and the bottom ones.
     let (mut tops, mut bots) = ([0u16; N * N], [0u16; N * N]);
-    let pair = |p: &[u8]| u16::from(p[0]) | (u16::from(p[1]) << 8);
+    let pair = |a: u8, b: u8| u16::from(a) | (u16::from(b) << 8);
     for ((top, bot), (&tx, &ty)) in tops.iter_mut().zip(&mut bots).zip(cx.iter().zip(&cy)) {
         // Inside: 0 <= tx, ty (whole parts of non-negative positions).
         let i = ty as usize * w + tx as usize;
-        (*top, *bot) = (pair(&d[i..i + 2]), pair(&d[i + w..i + w + 2]));
+        let q = &d[i..i + w + 2];
+        (*top, *bot) = (pair(q[0], q[1]), pair(q[w], q[w + 1]));
     }
     let byte = |p: u16, high: bool| f32::from((if high { p >> 8 } else { p & 0xff }) as u8);
     for ((o, (&tp, &bp)), (&fx, &fy)) in out
