@@ -234,8 +234,10 @@ impl<D> SortedB<D> {
                     let items = ys.iter().zip(lo).zip(hi).zip(ds);
                     let bests = bi.iter_mut().zip(b1.iter_mut()).zip(b2.iter_mut());
                     for ((((&yb, &lo), &hi), &d), ((bi, b1), b2)) in items.zip(bests) {
-                        let d = if sees(yb, lo, hi) { d } else { f32::INFINITY };
-                        offer_parts((bi, b1, b2), i, d);
+                        // The others' offers would change nothing.
+                        if sees(yb, lo, hi) & (d < *b2) {
+                            offer_parts((bi, b1, b2), i, d);
+                        }
                     }
                 }
             };
