@@ -117,51 +117,165 @@ impl<D: Descriptor> crate::simd::Kernel for NearestBoth<'_, D> {
     }
 }
 
-/// An item of a during [`nearest_both_in`]: its keypoint, descriptor, index and position
-/// in column order, and the window.
-struct A<'a, D> {
-    ka: &'a Keypoint,
-    da: &'a D,
-    i: usize,
-    pos: usize,
-    window: Option<f32>,
+/// Candidates whose offers are checked at once: when none of a run of this many would
+/// change a best match (the usual case, once the best matches have settled), the run
+/// offers nothing, without a branch per candidate.
+const RUN: usize = 8;
+
+/// The items of b in column order, as columns: their indices, rows, the range of a's
+/// sorted positions each sees, and descriptors; and their best matches so far (index, best
+/// and second best distance).
+struct SortedB<D> {
+    j: Vec<usize>,
+    y: Vec<f32>,
+    lo: Vec<usize>,
+    hi: Vec<usize>,
+    d: Vec<D>,
+    best_i: Vec<usize>,
+    best_1: Vec<f32>,
+    best_2: Vec<f32>,
 }
 
-impl<D: Descriptor> A<'_, D> {
-    /// Offers the distance to each of `items` (items of b in column order, with the range
-    /// of a's positions each sees) to the item's best match (`bests`, the same length)
-    /// and, when `A_SEES` (the items are in a's window), to a's (`best`). An item beyond
-    /// the window's rows offers nothing.
-    #[inline(always)]
-    fn scan<const A_SEES: bool>(
-        &self,
-        items: &[(usize, f32, (usize, usize), &D)],
-        bests: &mut [Best],
-        best: &mut Best,
-    ) {
-        let A {
-            ka,
-            da,
-            i,
-            pos,
-            window,
-        } = *self;
-        for (&(j, yb, (ra, rb), db), best_j) in items.iter().zip(bests) {
-            // Not beyond the window (a NaN row is not beyond it, as before).
-            let rows = window.is_none_or(|w| (ka.y - yb).abs().partial_cmp(&w) != Some(Greater));
-            let b_sees = rows && pos >= ra && pos < rb;
-            // Without branches on the window (they are unpredictable): a distance out
-            // of the window is infinite, which changes no best.
-            let d = da.distance(db);
-            if A_SEES {
-                offer(best, j, if rows { d } else { f32::INFINITY });
+/// `(index, distance)` offered to a best-two search kept in three places: [`offer`].
+#[inline(always)]
+fn offer_parts(best: (&mut usize, &mut f32, &mut f32), j: usize, d: f32) {
+    let mut b = (*best.0, *best.1, *best.2);
+    offer(&mut b, j, d);
+    (*best.0, *best.1, *best.2) = b;
+}
+
+/// Whether a candidate's row is within the window `w` of `y` (a NaN row is, and every
+/// row is without a window: `w` infinite).
+#[inline(always)]
+fn rows_within(y: f32, yb: f32, w: f32) -> bool {
+    (y - yb).abs().partial_cmp(&w) != Some(Greater)
+}
+
+/// Offers the candidates `js` (rows `ys`, distances `ds`, the same length) in order to a's
+/// best match `best`; a candidate beyond the window's rows (`w`) offers nothing. A run of
+/// candidates none of which is below the second best distance at its start is skipped: its
+/// offers would change nothing (the second best only decreases).
+#[inline(always)]
+fn offer_to_a(best: &mut Best, (y, w): (f32, f32), js: &[usize], ys: &[f32], ds: &[f32]) {
+    let one = |best: &mut Best, j: usize, yb: f32, d: f32| {
+        offer(
+            best,
+            j,
+            if rows_within(y, yb, w) {
+                d
+            } else {
+                f32::INFINITY
+            },
+        );
+    };
+    let (jr, yr, dr) = (
+        js.chunks_exact(RUN),
+        ys.chunks_exact(RUN),
+        ds.chunks_exact(RUN),
+    );
+    let rest = (jr.remainder(), yr.remainder(), dr.remainder());
+    for ((jc, yc), dc) in jr.zip(yr).zip(dr) {
+        let limit = best.2;
+        let any = yc.iter().zip(dc).fold(false, |any, (&yb, &d)| {
+            any | (rows_within(y, yb, w) & (d < limit))
+        });
+        if any {
+            for ((&j, &yb), &d) in jc.iter().zip(yc).zip(dc) {
+                one(best, j, yb, d);
             }
-            offer(best_j, i, if b_sees { d } else { f32::INFINITY });
         }
+    }
+    for ((&j, &yb), &d) in rest.0.iter().zip(rest.1).zip(rest.2) {
+        one(best, j, yb, d);
     }
 }
 
-/// [`nearest_both`], inlined into each instruction set's compilation.
+impl<D> SortedB<D> {
+    /// Offers item `i` of a (row `y`, sorted position `pos`; window `w`) at distances `ds`
+    /// to the items of b from `start` on (as many as `ds` holds), each seeing it within its
+    /// own window only. A run of items none of which sees it below its own second best
+    /// distance is skipped (their offers would change nothing).
+    #[inline(always)]
+    fn offer_to_b(&mut self, (i, pos, y, w): (usize, usize, f32, f32), start: usize, ds: &[f32]) {
+        let end = start + ds.len();
+        let (Some(ys), Some(lo), Some(hi)) = (
+            self.y.get(start..end),
+            self.lo.get(start..end),
+            self.hi.get(start..end),
+        ) else {
+            return;
+        };
+        let (Some(bi), Some(b1), Some(b2)) = (
+            self.best_i.get_mut(start..end),
+            self.best_1.get_mut(start..end),
+            self.best_2.get_mut(start..end),
+        ) else {
+            return;
+        };
+        let sees = |yb: f32, lo: usize, hi: usize| rows_within(y, yb, w) & (pos >= lo) & (pos < hi);
+        // The items of one run (slices of one length): their offers, when one of them
+        // could change a best match (`check`), or always.
+        let run =
+            |ys: &[f32],
+             lo: &[usize],
+             hi: &[usize],
+             ds: &[f32],
+             (bi, b1, b2): (&mut [usize], &mut [f32], &mut [f32]),
+             check: bool| {
+                let any =
+                    !check
+                        || ys.iter().zip(lo).zip(hi).zip(ds).zip(&*b2).fold(
+                            false,
+                            |any, ((((&yb, &lo), &hi), &d), &b2)| {
+                                any | (sees(yb, lo, hi) & (d < b2))
+                            },
+                        );
+                if any {
+                    let items = ys.iter().zip(lo).zip(hi).zip(ds);
+                    let bests = bi.iter_mut().zip(b1.iter_mut()).zip(b2.iter_mut());
+                    for ((((&yb, &lo), &hi), &d), ((bi, b1), b2)) in items.zip(bests) {
+                        // The others' offers would change nothing.
+                        if sees(yb, lo, hi) & (d < *b2) {
+                            offer_parts((bi, b1, b2), i, d);
+                        }
+                    }
+                }
+            };
+        let full = ds.len() / RUN * RUN;
+        let (ys, ys_rest) = ys.split_at(full);
+        let (lo, lo_rest) = lo.split_at(full);
+        let (hi, hi_rest) = hi.split_at(full);
+        let (ds, ds_rest) = ds.split_at(full);
+        let (bi, bi_rest) = bi.split_at_mut(full);
+        let (b1, b1_rest) = b1.split_at_mut(full);
+        let (b2, b2_rest) = b2.split_at_mut(full);
+        let items = ys
+            .chunks_exact(RUN)
+            .zip(lo.chunks_exact(RUN))
+            .zip(hi.chunks_exact(RUN))
+            .zip(ds.chunks_exact(RUN));
+        let bests = bi
+            .chunks_exact_mut(RUN)
+            .zip(b1.chunks_exact_mut(RUN))
+            .zip(b2.chunks_exact_mut(RUN));
+        for ((((ys, lo), hi), ds), ((bi, b1), b2)) in items.zip(bests) {
+            run(ys, lo, hi, ds, (bi, b1, b2), true);
+        }
+        run(
+            ys_rest,
+            lo_rest,
+            hi_rest,
+            ds_rest,
+            (bi_rest, b1_rest, b2_rest),
+            false,
+        );
+    }
+}
+
+/// [`nearest_both`], inlined into each instruction set's compilation. For each item of a
+/// (in column order) the distances to the items of b its scan covers are computed at once
+/// ([`Descriptor::distances`]), then offered to a's best match (the items in a's window)
+/// and to each item's (those whose window holds a), in the scan's order.
 #[inline(always)]
 fn nearest_both_in<D: Descriptor>(
     NearestBoth(a_kps, a, b_kps, b, window): NearestBoth<'_, D>,
@@ -169,27 +283,33 @@ fn nearest_both_in<D: Descriptor>(
     let (order_a, xs_a) = by_column(a_kps);
     let (order_b, xs_b) = by_column(b_kps);
     // The range of a's sorted positions that each item of b sees.
-    let a_range: Vec<(usize, usize)> = match window {
-        Some(w) => b_kps
-            .iter()
-            .map(|kb| {
-                (
-                    xs_a.partition_point(|&x| x < kb.x - w),
-                    xs_a.partition_point(|&x| x <= kb.x + w),
-                )
-            })
-            .collect(),
-        None => vec![(0, xs_a.len()); b_kps.len()],
+    let a_range = |kb: &Keypoint| match window {
+        Some(w) => (
+            xs_a.partition_point(|&x| x < kb.x - w),
+            xs_a.partition_point(|&x| x <= kb.x + w),
+        ),
+        None => (0, xs_a.len()),
     };
-    // Items of b in column order, contiguous, with the range of a's sorted positions each
-    // sees; their best matches in the same order (`best_b_sorted[k]` is item `k`'s).
-    let b_sorted: Vec<(usize, f32, (usize, usize), &D)> = order_b
-        .iter()
-        .map(|&j| (j, b_kps[j].y, a_range[j], &b[j]))
-        .collect();
-    let none = (usize::MAX, f32::INFINITY, f32::INFINITY);
-    let mut best_a = vec![none; a.len()];
-    let mut best_b_sorted = vec![none; b_sorted.len()];
+    let n_b = order_b.len().min(b.len());
+    let mut sb = SortedB {
+        j: order_b.clone(),
+        y: order_b.iter().map(|&j| b_kps[j].y).collect(),
+        lo: Vec::with_capacity(n_b),
+        hi: Vec::with_capacity(n_b),
+        d: order_b.iter().map(|&j| b[j].clone()).collect(),
+        best_i: vec![usize::MAX; n_b],
+        best_1: vec![f32::INFINITY; n_b],
+        best_2: vec![f32::INFINITY; n_b],
+    };
+    for &j in &order_b {
+        let (lo, hi) = a_range(&b_kps[j]);
+        sb.lo.push(lo);
+        sb.hi.push(hi);
+    }
+    // Without a window every row is within it.
+    let w_rows = window.unwrap_or(f32::INFINITY);
+    let mut best_a = vec![(usize::MAX, f32::INFINITY, f32::INFINITY); a.len()];
+    let mut dist = vec![0f32; n_b];
     for (pos, &i) in order_a.iter().enumerate() {
         let (ka, da) = (&a_kps[i], &a[i]);
         let (lo, hi, scan) = match window {
@@ -206,45 +326,34 @@ fn nearest_both_in<D: Descriptor>(
                 );
                 (lo, hi, scan)
             }
-            None => (0, b_sorted.len(), (0, b_sorted.len())),
+            None => (0, n_b, (0, n_b)),
         };
-        let best = &mut best_a[i];
-        // The scan in three parts, in column order: a sees the middle one's items only
-        // (`lo..hi`, empty when the window is), the scan's extra items either side only
-        // see a (when their own window holds it).
+        // a sees the items `lo..hi` of the scan (none when the window is empty); the scan's
+        // extra items either side only see a (when their own window holds it).
         let mid_lo = lo.clamp(scan.0, scan.1.max(scan.0));
         let mid_hi = hi.clamp(mid_lo, scan.1.max(mid_lo));
-        let one = A {
-            ka,
-            da,
-            i,
-            pos,
-            window,
+        let (Some(descs), Some(ds)) = (
+            sb.d.get(scan.0..scan.1),
+            dist.get_mut(..scan.1.saturating_sub(scan.0)),
+        ) else {
+            continue;
         };
-        for (range, a_sees) in [
-            (scan.0..mid_lo, false),
-            (mid_lo..mid_hi, true),
-            (mid_hi..scan.1, false),
-        ] {
-            // The items and their best matches, as slices of one length (no bounds check
-            // per item); none when the range is empty.
-            let (Some(items), Some(bests)) =
-                (b_sorted.get(range.clone()), best_b_sorted.get_mut(range))
-            else {
-                continue;
-            };
-            if a_sees {
-                one.scan::<true>(items, bests, best);
-            } else {
-                one.scan::<false>(items, bests, best);
-            }
+        da.distances(descs, ds);
+        let ds = &*ds;
+        if let (Some(js), Some(ys), Some(dm)) = (
+            sb.j.get(mid_lo..mid_hi),
+            sb.y.get(mid_lo..mid_hi),
+            ds.get(mid_lo - scan.0..mid_hi - scan.0),
+        ) {
+            offer_to_a(&mut best_a[i], (ka.y, w_rows), js, ys, dm);
         }
+        sb.offer_to_b((i, pos, ka.y, w_rows), scan.0, ds);
     }
     let found = |m: Best| (m.0 != usize::MAX).then_some(m);
     // Back from column order to b's order.
     let mut found_b = vec![None; b.len()];
-    for (&(j, ..), &m) in b_sorted.iter().zip(&best_b_sorted) {
-        found_b[j] = found(m);
+    for (k, &j) in sb.j.iter().enumerate().take(n_b) {
+        found_b[j] = found((sb.best_i[k], sb.best_1[k], sb.best_2[k]));
     }
     (best_a.into_iter().map(found).collect(), found_b)
 }
@@ -285,6 +394,9 @@ pub fn circular_check(left: &[(usize, usize)], right: &[(usize, usize)]) -> Vec<
         .filter(|m| r.binary_search(m).is_ok())
         .collect()
 }
+
+#[cfg(test)]
+mod scan_bits;
 
 #[cfg(test)]
 mod tests {

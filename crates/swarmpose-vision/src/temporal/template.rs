@@ -15,7 +15,8 @@
 //! the centre by it.
 
 use crate::features::GrayView;
-use crate::image::{sample_bilinear, sample_bilinear_inside, sample_patch};
+use crate::image::{sample_bilinear, sample_patch};
+use inside::sample_inside;
 use nalgebra::{Matrix3, SMatrix, SVector};
 
 /// Half the side of the aligned patch, pixels (a 9x9 patch, as the frame-to-frame
@@ -132,6 +133,12 @@ impl PatchTemplate {
     /// of its structure tensor below one grey level squared per pixel).
     #[must_use]
     pub fn sample(image: GrayView<'_>, at: (f32, f32)) -> Option<Self> {
+        crate::simd::dispatch(Sample(image, at))
+    }
+
+    /// [`PatchTemplate::sample`], inlined into each instruction set's compilation.
+    #[inline(always)]
+    fn sample_in(image: GrayView<'_>, at: (f32, f32)) -> Option<Self> {
         let mut big = [0f32; SIDE * SIDE];
         sample_patch(image, at.0 - R - 1.0, at.1 - R - 1.0, SIDE, &mut big)?;
         let mut t = Self {
@@ -201,6 +208,17 @@ impl PatchTemplate {
         start: (f32, f32),
         limits: AlignLimits,
     ) -> Option<(f32, f32)> {
+        crate::simd::dispatch(Align(self, image, start, limits))
+    }
+
+    /// [`PatchTemplate::align`], inlined into each instruction set's compilation.
+    #[inline(always)]
+    fn align_in(
+        &self,
+        image: GrayView<'_>,
+        start: (f32, f32),
+        limits: AlignLimits,
+    ) -> Option<(f32, f32)> {
         let (hxx, hxy, hyy) = self.ptensor;
         let det = hxx * hyy - hxy * hxy;
         let mut patch = [0f32; N * N];
@@ -250,40 +268,98 @@ impl PatchTemplate {
             .affine
             .get_or_insert_with(|| AffineSteps::of(&self.gx, &self.gy, &self.contrast));
         let h_inv = h_inv.as_ref()?;
+        crate::simd::dispatch(AlignAffine {
+            sd,
+            h_inv,
+            values: &self.values,
+            image,
+            start,
+            limits,
+        })
+    }
+}
+
+/// A call of [`PatchTemplate::sample`] for [`crate::simd::dispatch`].
+struct Sample<'a>(GrayView<'a>, (f32, f32));
+
+impl crate::simd::Kernel for Sample<'_> {
+    type Output = Option<PatchTemplate>;
+
+    #[inline(always)]
+    fn run(self) -> Option<PatchTemplate> {
+        PatchTemplate::sample_in(self.0, self.1)
+    }
+}
+
+/// A call of [`PatchTemplate::align`] for [`crate::simd::dispatch`].
+struct Align<'a>(&'a PatchTemplate, GrayView<'a>, (f32, f32), AlignLimits);
+
+impl crate::simd::Kernel for Align<'_> {
+    type Output = Option<(f32, f32)>;
+
+    #[inline(always)]
+    fn run(self) -> Option<(f32, f32)> {
+        self.0.align_in(self.1, self.2, self.3)
+    }
+}
+
+/// The iterations of [`PatchTemplate::align_affine`] for [`crate::simd::dispatch`]: the
+/// template's steps and values, the image, the start and the limits.
+struct AlignAffine<'a> {
+    sd: &'a [SVector<f32, 6>; N * N],
+    h_inv: &'a SMatrix<f32, 6, 6>,
+    values: &'a [f32; N * N],
+    image: GrayView<'a>,
+    start: (f32, f32),
+    limits: AlignLimits,
+}
+
+impl crate::simd::Kernel for AlignAffine<'_> {
+    type Output = Option<(f32, f32)>;
+
+    #[inline(always)]
+    fn run(self) -> Option<(f32, f32)> {
+        let AlignAffine {
+            sd,
+            h_inv,
+            values,
+            image,
+            start,
+            limits,
+        } = self;
         // Below these a sample has its four neighbours ([`sample_bilinear`]'s check); exact
-        // in f32 up to 2^24 pixels (larger images take the checked path).
-        let limited = (2..=1 << 24).contains(&image.width) && (2..=1 << 24).contains(&image.height);
+        // in f32, and in [`sample_inside`]'s whole parts, up to 2^22 pixels (larger images
+        // take the checked path).
+        let limited = (2..=1 << 22).contains(&image.width) && (2..=1 << 22).contains(&image.height);
         let (u_max, v_max) = (
             image.width.saturating_sub(1) as f32,
             image.height.saturating_sub(1) as f32,
         );
         let mut m = Matrix3::<f32>::new(1.0, 0.0, start.0, 0.0, 1.0, start.1, 0.0, 0.0, 1.0);
         let mut patch = [0f32; N * N];
-        let mut at = [(0f32, 0f32); N * N];
+        let (mut us, mut vs) = ([0f32; N * N], [0f32; N * N]);
         for _ in 0..limits.iterations {
             // The positions, and whether all are inside (`&`, not `&&`: a NaN fails too):
             // then [`sample_bilinear`] would give `Some` of each, which the samples are
             // without its checks; otherwise it is called, and the first position outside
             // ends the alignment.
             let mut inside = limited;
-            for (p, &(x, y)) in at.iter_mut().zip(&COORDS) {
+            for ((pu, pv), &(x, y)) in us.iter_mut().zip(&mut vs).zip(&COORDS) {
                 let u = m[(0, 0)] * x + m[(0, 1)] * y + m[(0, 2)];
                 let v = m[(1, 0)] * x + m[(1, 1)] * y + m[(1, 2)];
                 inside &= (u >= 0.0) & (v >= 0.0) & (u < u_max) & (v < v_max);
-                *p = (u, v);
+                (*pu, *pv) = (u, v);
             }
             if inside {
-                for (sample, &(u, v)) in patch.iter_mut().zip(&at) {
-                    *sample = sample_bilinear_inside(image, u, v);
-                }
+                sample_inside(image, (&us, &vs), &mut patch);
             } else {
-                for (sample, &(u, v)) in patch.iter_mut().zip(&at) {
+                for ((sample, &u), &v) in patch.iter_mut().zip(&us).zip(&vs) {
                     *sample = sample_bilinear(image, u, v)?;
                 }
             }
             let mut b = SVector::<f32, 6>::zeros();
             for (k, i) in patch.iter().enumerate() {
-                b += sd[k] * (i - self.values[k]);
+                b += sd[k] * (i - values[k]);
             }
             let dp = h_inv * b;
             let w = Matrix3::<f32>::new(
@@ -315,7 +391,7 @@ impl PatchTemplate {
                 let Some(min_ncc) = limits.min_ncc else {
                     return Some((px, py));
                 };
-                return (ncc(&patch, &self.values) >= min_ncc).then_some((px, py));
+                return (ncc(&patch, values) >= min_ncc).then_some((px, py));
             }
         }
         None
@@ -341,6 +417,7 @@ fn unit_contrast(values: &[f32; N * N]) -> Option<[f32; N * N]> {
 /// constant patch and along `contrast` (the template's [`unit_contrast`]): the
 /// Gauss-Newton steps they give ignore any change `g T + b` of the image's exposure
 /// (Baker and Matthews' "project out" alignment with a linear appearance model).
+#[inline(always)]
 fn project_out<const P: usize>(images: &mut [SVector<f32, P>; N * N], contrast: &[f32; N * N]) {
     let n = (N * N) as f32;
     let mean = images.iter().sum::<SVector<f32, P>>() / n;
@@ -372,6 +449,8 @@ fn ncc(a: &[f32; N * N], b: &[f32; N * N]) -> f32 {
         ab / (aa * bb).sqrt()
     }
 }
+
+mod inside;
 
 #[cfg(test)]
 mod affine_bits;
