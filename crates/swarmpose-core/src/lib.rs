@@ -40,6 +40,7 @@ pub mod estimators;
 pub mod geometry;
 pub mod pso;
 pub mod rng;
+pub mod settings;
 pub mod simd;
 pub mod synthetic;
 

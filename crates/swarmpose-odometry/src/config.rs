@@ -2,6 +2,9 @@
 //! serves every sequence: nothing here is chosen for one data set.
 
 use swarmpose_core::EstimatorConfig;
+use swarmpose_core::settings::{
+    InvalidSetting, at_least_zero, count_at_least, positive, positive_or_infinite,
+};
 use swarmpose_vision::frontend::{
     Detector, DisparityCorrection, OrbFrontendConfig, SurfFrontendConfig,
 };
@@ -192,8 +195,10 @@ impl OdometryConfig {
         self
     }
 
-    /// Checks the settings that have a range of their own (the working-size band and the
-    /// camera are checked with the camera).
+    /// Checks the range of every setting (the working-size band and the camera are
+    /// checked with the camera; the estimator's settings by the estimator): a value
+    /// outside its range, such as a negative tolerance or noise sigma, is an error naming
+    /// the setting by its path in a run configuration (`orb.stereo.row_tolerance_px`).
     ///
     /// # Errors
     /// [`crate::OdometryError::Config`] naming the setting.
@@ -218,21 +223,34 @@ impl OdometryConfig {
                 ),
             });
         }
-        for (name, t) in [("orb", &self.orb.temporal), ("surf", &self.surf.temporal)] {
-            let radius_ok = t.guided_radius_px.is_none_or(|r| r.is_finite() && r > 0.0);
-            let ratio_ok = t.guided_min_ratio.is_finite() && t.guided_min_ratio >= 0.0;
-            if !(radius_ok && ratio_ok) {
-                return Err(crate::OdometryError::Config {
-                    message: format!(
-                        "{name}.temporal: guided_radius_px {} (finite, above 0) and \
-                         guided_min_ratio {} (finite, at least 0)",
-                        t.guided_radius_px
-                            .map_or("none".to_owned(), |r| format!("{r} px")),
-                        t.guided_min_ratio
-                    ),
-                });
-            }
-        }
+        let named = |e: InvalidSetting| crate::OdometryError::Config {
+            message: e.to_string(),
+        };
+        self.orb.check("orb").map_err(named)?;
+        self.surf.check("surf").map_err(named)?;
+        self.check_engine_ranges().map_err(named)
+    }
+
+    /// The ranges of the engine's own settings (the refinements, the self-calibration,
+    /// the prediction), named by their path in a run configuration.
+    fn check_engine_ranges(&self) -> Result<(), InvalidSetting> {
+        let r = &self.refinement;
+        positive("refinement.huber_k", r.huber_k)?;
+        positive("refinement.gate_chi2", r.gate_chi2)?;
+        positive("refinement.initial_gate_chi2", r.initial_gate_chi2)?;
+        positive(
+            "refinement.align_max_move_px",
+            f64::from(r.align_max_move_px),
+        )?;
+        let c = &self.selfcal;
+        at_least_zero("selfcal.margin", c.margin)?;
+        count_at_least("selfcal.stripes", c.stripes, 2)?;
+        positive("selfcal.max_sigma_px", c.max_sigma_px)?;
+        positive("selfcal.max_focal_sigma", c.max_focal_sigma)?;
+        positive_or_infinite("selfcal.memory_s", c.memory_s)?;
+        at_least_zero("selfcal.min_off_plane_sigmas", c.min_off_plane_sigmas)?;
+        positive("window.huber_k", self.window.huber_k)?;
+        at_least_zero("max_prediction_s", self.max_prediction_s)?;
         Ok(())
     }
 }

@@ -501,4 +501,28 @@ fn a_run_s_configuration_reruns_it_byte_for_byte() {
         &out,
         &["bad.json: configuration: invalid type", "expected usize"],
     );
+    // A value of the right type outside its range: named, before the first frame.
+    let range = tmp.0.join("range.json");
+    std::fs::write(
+        &range,
+        r#"{"odometry": {"orb": {"stereo": {"row_tolerance_px": -1.0}}}}"#,
+    )
+    .expect("range");
+    let out = swarmpose(
+        &[
+            "odometry",
+            "--out",
+            s(&tmp.0.join("range")),
+            "--config",
+            s(&range),
+        ],
+        None,
+    );
+    check_error(
+        &out,
+        &[
+            "range.json: configuration: orb.stereo.row_tolerance_px is -1: it must be a \
+           finite number, 0 or more",
+        ],
+    );
 }

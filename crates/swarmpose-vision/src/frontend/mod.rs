@@ -5,6 +5,7 @@
 //! ([`StereoFrame`]). Per pair of frames: match the left features of the triangulated
 //! points ([`Frontend::match_frames`]), optionally confirmed by the right images.
 
+mod check;
 mod correction;
 mod detector;
 mod guided;

@@ -145,10 +145,11 @@ impl RowIndex {
         }
     }
 
-    /// Indices with a row in `[y - tol, y + tol]`, and their columns.
+    /// Indices with a row in `[y - tol, y + tol]`, and their columns (none when the
+    /// interval is empty: a negative or NaN `tol`).
     fn around(&self, y: f32, tol: f32) -> (&[usize], &[f32]) {
         let a = self.rows.partition_point(|&r| r < y - tol);
-        let b = self.rows.partition_point(|&r| r <= y + tol);
+        let b = self.rows.partition_point(|&r| r <= y + tol).max(a);
         (&self.order[a..b], &self.columns[a..b])
     }
 }
@@ -406,6 +407,26 @@ mod tests {
             }
         }
         assert!(found > 300, "{found}");
+    }
+
+    #[test]
+    fn a_negative_or_nan_row_tolerance_finds_no_candidate() {
+        let kps: Vec<Keypoint> = (0..50)
+            .map(|i| Keypoint {
+                x: i as f32,
+                y: (i % 7) as f32,
+                scale: 3.0,
+                angle: 0.0,
+                response: 1.0,
+                octave: 0,
+            })
+            .collect();
+        let index = RowIndex::new(&kps);
+        assert_eq!(index.around(3.0, 0.0).0.len(), 7);
+        for tol in [-1.0f32, -0.25, f32::NAN] {
+            let (cands, columns) = index.around(3.0, tol);
+            assert!(cands.is_empty() && columns.is_empty(), "tol {tol}");
+        }
     }
 
     #[test]
