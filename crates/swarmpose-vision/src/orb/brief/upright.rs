@@ -42,7 +42,7 @@ pub(super) const SECOND: [u16; 256] = [
 /// Tests `32 B .. 32 B + 32`: `darker[k]` is 1 when the first point of test `k` is
 /// darker than the second, else 0. Compiled for each `B` with the offsets as constants.
 #[inline(always)]
-fn tests<const B: usize>(d: &[u8; 1024], darker: &mut [u8; 256]) {
+fn compare_block<const B: usize>(d: &[u8; 1024], darker: &mut [u8; 256]) {
     for (j, t) in darker[B * 32..][..32].iter_mut().enumerate() {
         let (p, q) = (FIRST[B * 32 + j], SECOND[B * 32 + j]);
         *t = u8::from(d[usize::from(p) & 1023] < d[usize::from(q) & 1023]);
@@ -52,12 +52,12 @@ fn tests<const B: usize>(d: &[u8; 1024], darker: &mut [u8; 256]) {
 /// The 256 tests of the upright pattern on the square `d`, one byte each (0 or 1).
 #[inline(always)]
 pub(super) fn compare(d: &[u8; 1024], darker: &mut [u8; 256]) {
-    tests::<0>(d, darker);
-    tests::<1>(d, darker);
-    tests::<2>(d, darker);
-    tests::<3>(d, darker);
-    tests::<4>(d, darker);
-    tests::<5>(d, darker);
-    tests::<6>(d, darker);
-    tests::<7>(d, darker);
+    compare_block::<0>(d, darker);
+    compare_block::<1>(d, darker);
+    compare_block::<2>(d, darker);
+    compare_block::<3>(d, darker);
+    compare_block::<4>(d, darker);
+    compare_block::<5>(d, darker);
+    compare_block::<6>(d, darker);
+    compare_block::<7>(d, darker);
 }
