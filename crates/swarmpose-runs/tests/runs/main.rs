@@ -16,6 +16,7 @@ mod moving_object;
 mod online_steps;
 mod rectification;
 mod rgbd;
+mod settings;
 mod streaming;
 mod synthetic;
 mod two_threads;
