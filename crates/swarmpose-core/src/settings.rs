@@ -15,14 +15,14 @@ pub struct InvalidSetting {
     /// Its value, as given.
     pub value: String,
     /// The range it must be in, in words.
-    pub rule: &'static str,
+    pub rule: String,
 }
 
-fn invalid(name: &str, value: impl std::fmt::Display, rule: &'static str) -> InvalidSetting {
+fn invalid(name: &str, value: impl std::fmt::Display, rule: &str) -> InvalidSetting {
     InvalidSetting {
         name: name.to_owned(),
         value: value.to_string(),
-        rule,
+        rule: rule.to_owned(),
     }
 }
 
@@ -92,17 +92,10 @@ pub fn ratio(name: &str, value: f64) -> Result<(), InvalidSetting> {
 /// [`InvalidSetting`] naming `name`.
 pub fn count_at_least(name: &str, value: usize, min: usize) -> Result<(), InvalidSetting> {
     if value >= min {
-        return Ok(());
+        Ok(())
+    } else {
+        Err(invalid(name, value, &format!("at least {min}")))
     }
-    Err(invalid(
-        name,
-        value,
-        match min {
-            1 => "at least 1",
-            2 => "at least 2",
-            _ => "larger",
-        },
-    ))
 }
 
 /// `value` is at least `low` (another setting's value, named in the rule).
@@ -143,6 +136,8 @@ mod tests {
         assert!(ratio("a", 1.5).is_err());
         assert!(count_at_least("a", 1, 1).is_ok());
         assert!(count_at_least("a", 1, 2).is_err());
+        let e = count_at_least("selfcal.stripes", 0, 2).expect_err("out of range");
+        assert_eq!(e.to_string(), "selfcal.stripes is 0: it must be at least 2");
         assert!(not_below("a", 2.0, 2.0, "r").is_ok());
         assert!(not_below("a", 1.0, 2.0, "r").is_err());
         let e = at_least_zero("orb.stereo.row_tolerance_px", -1.0).expect_err("out of range");
