@@ -23,6 +23,7 @@ pub mod evidence;
 pub mod floor;
 pub mod model;
 pub mod noise;
+mod prepared;
 mod rounds;
 pub mod split;
 
@@ -30,6 +31,7 @@ use nalgebra::{Isometry3, Matrix6, Vector3, Vector6};
 
 use evidence::{PoseBlocks, Reduced};
 use model::{Linearized, Parts, StereoModel, StereoObservation};
+pub(crate) use prepared::Prepared;
 
 use crate::nls::lm::{Damping, LeastSquares};
 use crate::nls::pose::Pose;
@@ -170,7 +172,7 @@ fn moved(pose: &Pose, xi: &Vector6<f64>) -> Pose {
 /// Jacobians it leaves zero are then neither written nor copied (issue 34).
 #[inline(always)]
 fn linearize(
-    model: &StereoModel,
+    model: &Prepared,
     pose: &Pose,
     p: &Vector3<f64>,
     a: &StereoObservation,
@@ -186,7 +188,7 @@ fn linearize(
 /// Best point for a fixed pose: Gauss-Newton on its 6 residuals from `p`.
 #[inline(always)]
 fn fit_point(
-    model: &StereoModel,
+    model: &Prepared,
     pose: &Pose,
     mut p: Vector3<f64>,
     a: &StereoObservation,
@@ -206,7 +208,7 @@ fn fit_point(
 
 /// Working state of one round.
 struct Problem<'a> {
-    model: &'a StereoModel,
+    model: &'a Prepared,
     config: &'a RefineConfig,
     reference: &'a [StereoObservation],
     current: &'a [StereoObservation],
@@ -446,6 +448,8 @@ fn refine_with(
     start: &Isometry3<f64>,
     min_inliers: usize,
 ) -> Result<Refined, RefineError> {
+    // The model's constants computed once, not per point (issue 34).
+    let model = &Prepared::new(model);
     let mut pose = Pose::of(&start.inverse());
     // Points fitted to the starting pose, then gated.
     // A loop, not an iterator's map: compiled inside the dispatched copy.
