@@ -414,7 +414,7 @@ impl LeastSquares for PairLm<'_, '_> {
         {
             *t = back_substitute(p, &b.pp_inv, &(b.gradient + b.pose * dxi));
         }
-        let c = self.problem.cost(&next, &self.trial);
+        let c = self.problem.cost(&next, self.trial);
         self.step.1 = Some((next, c));
         c
     }
