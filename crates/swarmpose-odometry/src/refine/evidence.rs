@@ -112,8 +112,10 @@ impl Reduced {
     }
 
     /// [`Reduced::add_direct`] on equations accumulated from [`Reduced::default`] by
-    /// `add_direct*` and `eliminate*` alone ([`Reduced::has_negative_zero`]), the same bits.
-    #[inline(always)]
+    /// `add_direct*` and `eliminate*` alone ([`Reduced::has_negative_zero`]), the same bits
+    /// (the refinement's forms, [`Reduced::add_reference_accumulated`] and
+    /// [`Reduced::add_current_accumulated`], are compared with it in the tests).
+    #[cfg(test)]
     pub(crate) fn add_direct_accumulated(
         &mut self,
         w: f64,
@@ -127,7 +129,7 @@ impl Reduced {
 
     /// [`Reduced::add_direct_pose`] on equations accumulated from [`Reduced::default`] by
     /// `add_direct*` and `eliminate*` alone ([`Reduced::has_negative_zero`]), the same bits.
-    #[inline(always)]
+    #[cfg(test)]
     pub(crate) fn add_direct_pose_accumulated(
         &mut self,
         w: f64,
@@ -136,6 +138,70 @@ impl Reduced {
     ) {
         debug_assert!(!self.has_negative_zero(false));
         self.add_direct_pose_with(w, pose, e, true);
+    }
+
+    /// [`Reduced::add_direct_accumulated`] (with `corr`) or
+    /// [`Reduced::add_direct_pose_accumulated`] (without) of a measurement in frame A,
+    /// whose pose Jacobian `zero_pose` is zero: the same bits, its pose terms skipped
+    /// exactly when those skip them (`w`, `e` and `corr` finite) without scanning the
+    /// Jacobian for zeros (issue 34).
+    #[inline(always)]
+    pub(crate) fn add_reference_accumulated(
+        &mut self,
+        w: f64,
+        zero_pose: &Matrix3x6,
+        corr: Option<&Matrix3xK>,
+        e: &Vector3<f64>,
+    ) {
+        debug_assert!(zero_pose.iter().all(|v| *v == 0.0));
+        debug_assert!(!self.has_negative_zero(corr.is_some()));
+        let finite = |m: &[f64]| m.iter().fold(true, |a, v| a & v.is_finite());
+        let skip =
+            w.is_finite() && finite(e.as_slice()) && corr.is_none_or(|c| finite(c.as_slice()));
+        self.add_terms(w, zero_pose, corr, e, !skip);
+    }
+
+    /// [`Reduced::add_direct_accumulated`] (with `corr`) or
+    /// [`Reduced::add_direct_pose_accumulated`] (without) of a measurement in frame B:
+    /// the same bits with its pose terms always added. Where those forms skip them (a
+    /// zero pose Jacobian and finite factors) each term is a sum of products with a zero
+    /// factor, `±0`, and adding `±0` changes no entry of accumulated blocks, which hold
+    /// no `−0` ([`Reduced::has_negative_zero`]); the check is not worth its cost for B,
+    /// whose pose Jacobian is never zero in practice (issue 34).
+    #[inline(always)]
+    pub(crate) fn add_current_accumulated(
+        &mut self,
+        w: f64,
+        pose: &Matrix3x6,
+        corr: Option<&Matrix3xK>,
+        e: &Vector3<f64>,
+    ) {
+        debug_assert!(!self.has_negative_zero(corr.is_some()));
+        self.add_terms(w, pose, corr, e, true);
+    }
+
+    /// The terms of [`Reduced::add_direct_with`] (its correction's when `corr` is
+    /// given), the pose's when `pose_terms`.
+    #[inline(always)]
+    fn add_terms(
+        &mut self,
+        w: f64,
+        pose: &Matrix3x6,
+        corr: Option<&Matrix3xK>,
+        e: &Vector3<f64>,
+        pose_terms: bool,
+    ) {
+        if pose_terms {
+            products::add_gram(&mut self.pose_pose, pose, w);
+            if let Some(corr) = corr {
+                products::add_cross(&mut self.pose_correction, pose, corr, w);
+            }
+            products::add_cross(&mut self.pose_gradient, pose, e, w);
+        }
+        if let Some(corr) = corr {
+            products::add_gram(&mut self.correction_correction, corr, w);
+            products::add_cross(&mut self.correction_gradient, corr, e, w);
+        }
     }
 
     /// [`Reduced::add_direct`]; `accumulated`: the blocks hold no `−0`

@@ -23,6 +23,7 @@ pub mod evidence;
 pub mod floor;
 pub mod model;
 pub mod noise;
+mod prepared;
 mod rounds;
 pub mod split;
 
@@ -30,6 +31,7 @@ use nalgebra::{Isometry3, Matrix6, Vector3, Vector6};
 
 use evidence::{PoseBlocks, Reduced};
 use model::{Linearized, Parts, StereoModel, StereoObservation};
+pub(crate) use prepared::Prepared;
 
 use crate::nls::lm::{Damping, LeastSquares};
 use crate::nls::pose::Pose;
@@ -170,7 +172,7 @@ fn moved(pose: &Pose, xi: &Vector6<f64>) -> Pose {
 /// Jacobians it leaves zero are then neither written nor copied (issue 34).
 #[inline(always)]
 fn linearize(
-    model: &StereoModel,
+    model: &Prepared,
     pose: &Pose,
     p: &Vector3<f64>,
     a: &StereoObservation,
@@ -183,15 +185,20 @@ fn linearize(
     ))
 }
 
-/// Best point for a fixed pose: Gauss-Newton on its 6 residuals from `p`.
+/// A match's point fitted to a pose ([`fit_point`]) and the squared whitened residual
+/// norms of its measurements in A and in B there (their sum its χ²), or `None`.
+type Fitted = Option<(Vector3<f64>, f64, f64)>;
+
+/// Best point for a fixed pose: Gauss-Newton on its 6 residuals from `p`, with the
+/// squared whitened residual norms in A and in B at the point found.
 #[inline(always)]
 fn fit_point(
-    model: &StereoModel,
+    model: &Prepared,
     pose: &Pose,
     mut p: Vector3<f64>,
     a: &StereoObservation,
     b: &StereoObservation,
-) -> Option<(Vector3<f64>, f64)> {
+) -> Fitted {
     for _ in 0..2 {
         let (la, lb) = linearize(model, pose, &p, a, b, Parts::Point)?;
         // `aᵀ a + bᵀ b` as nalgebra sums it, without the transposed copies ([`products`]).
@@ -201,12 +208,12 @@ fn fit_point(
         p -= h.try_inverse()? * g;
     }
     let (a2, b2) = model.residuals2(&pose.rot, &pose.trans, &p, a, b)?;
-    Some((p, a2 + b2))
+    Some((p, a2, b2))
 }
 
 /// Working state of one round.
 struct Problem<'a> {
-    model: &'a StereoModel,
+    model: &'a Prepared,
     config: &'a RefineConfig,
     reference: &'a [StereoObservation],
     current: &'a [StereoObservation],
@@ -239,6 +246,9 @@ impl Problem<'_> {
     /// [`Parts::All`] only the pose blocks are computed (the correction's stay zero),
     /// the same bit for bit. Inlined into its two callers, each with `parts` constant
     /// (issue 34).
+    /// With `scores`, each match's Huber-weighted χ² is added to its first value and
+    /// its score on the pose ([`noise::Score`]) pushed to its second, from the same
+    /// linearisation.
     #[inline(always)]
     fn build(
         &self,
@@ -247,6 +257,7 @@ impl Problem<'_> {
         folds: Option<&[u8]>,
         blocks: &mut Vec<PoseBlocks>,
         parts: Parts,
+        mut scores: Option<&mut (f64, Vec<noise::Score>)>,
     ) -> Option<[Reduced; 2]> {
         let k = self.config.huber_k;
         let mut reduced = [Reduced::default(); 2];
@@ -274,33 +285,45 @@ impl Problem<'_> {
             let fold = folds.map_or(0, |f| usize::from(f[i] & 1));
             let r = &mut reduced[fold];
             // `reduced` is accumulated from zeros by these alone: it holds no `−0` (evidence.rs).
+            // A's pose Jacobian is zero; B's is not ([`Reduced::add_current_accumulated`]).
             if all {
-                r.add_direct_accumulated(wa, &la.d_pose, &la.d_correction, &la.residual);
-                r.add_direct_accumulated(wb, &lb.d_pose, &lb.d_correction, &lb.residual);
+                r.add_reference_accumulated(wa, &la.d_pose, Some(&la.d_correction), &la.residual);
+                r.add_current_accumulated(wb, &lb.d_pose, Some(&lb.d_correction), &lb.residual);
                 let hpc = products::cross(&la.d_point, &la.d_correction, wa)
                     + products::cross(&lb.d_point, &lb.d_correction, wb);
                 r.eliminate(&b.with_correction(hpc));
             } else {
-                r.add_direct_pose_accumulated(wa, &la.d_pose, &la.residual);
-                r.add_direct_pose_accumulated(wb, &lb.d_pose, &lb.residual);
+                r.add_reference_accumulated(wa, &la.d_pose, None, &la.residual);
+                r.add_current_accumulated(wb, &lb.d_pose, None, &lb.residual);
                 r.eliminate_pose_blocks(&b);
+            }
+            if let Some((chi2, scores)) = scores.as_deref_mut() {
+                let (sa, sb) = (la.residual.norm_squared(), lb.residual.norm_squared());
+                *chi2 += huber_weight(sa, k) * sa + wb * sb;
+                scores.push(score(&self.current[i], &lb, wb, &b));
             }
             blocks.push(b);
         }
         Some(reduced)
     }
 
-    /// Levenberg-Marquardt from `pose` and `points`; returns the iterations done.
+    /// Levenberg-Marquardt from `pose` and `points`, whose cost ([`Problem::cost`]) is
+    /// `cost`, in the buffers `work`; returns the iterations done.
     #[inline(always)]
-    fn solve(&self, pose: &mut Pose, points: &mut Vec<Vector3<f64>>) -> Result<usize, RefineError> {
-        let cost = self.cost(pose, points);
-        // As large as `points`: swapped with it, it leaves the next round room.
-        let mut trial = Vec::with_capacity(points.capacity());
-        trial.extend_from_slice(points);
+    fn solve(
+        &self,
+        pose: &mut Pose,
+        points: &mut Vec<Vector3<f64>>,
+        cost: f64,
+        work: &mut Work,
+    ) -> Result<usize, RefineError> {
+        // As large as `points` (written whole before it is read).
+        work.trial.clear();
+        work.trial.extend_from_slice(points);
         let mut lm = PairLm {
             problem: self,
-            blocks: Vec::with_capacity(points.len()),
-            trial,
+            blocks: &mut work.blocks,
+            trial: &mut work.trial,
             pose,
             points,
             cost,
@@ -318,6 +341,15 @@ const PAIR_DAMPING: Damping = Damping {
     ceiling_tried: false,
 };
 
+/// The buffers of a refinement's rounds, kept from round to round (issue 34: two
+/// allocations a round), each as large as the matches.
+pub(super) struct Work {
+    /// Each active point's blocks for back-substitution.
+    blocks: Vec<PoseBlocks>,
+    /// The points moved by the last step.
+    trial: Vec<Vector3<f64>>,
+}
+
 /// One round's Levenberg-Marquardt state: the pose and the active points, moved in
 /// place, with the reduced pose system of the last linearisation.
 struct PairLm<'p, 'a> {
@@ -325,9 +357,9 @@ struct PairLm<'p, 'a> {
     pose: &'p mut Pose,
     points: &'p mut Vec<Vector3<f64>>,
     /// Each point's blocks for back-substitution.
-    blocks: Vec<PoseBlocks>,
+    blocks: &'p mut Vec<PoseBlocks>,
     /// The points moved by the last step.
-    trial: Vec<Vector3<f64>>,
+    trial: &'p mut Vec<Vector3<f64>>,
     /// The robust cost at `pose`, `points`.
     cost: f64,
     /// The reduced pose system `(S, g)`.
@@ -347,8 +379,9 @@ impl LeastSquares for PairLm<'_, '_> {
                 self.pose,
                 self.points,
                 None,
-                &mut self.blocks,
+                self.blocks,
                 Parts::PointPose,
+                None,
             )
             .ok_or(RefineError::Singular)?;
         self.system = (r.pose_pose, r.pose_gradient);
@@ -377,11 +410,11 @@ impl LeastSquares for PairLm<'_, '_> {
             .trial
             .iter_mut()
             .zip(self.points.iter())
-            .zip(&self.blocks)
+            .zip(self.blocks.iter())
         {
             *t = back_substitute(p, &b.pp_inv, &(b.gradient + b.pose * dxi));
         }
-        let c = self.problem.cost(&next, &self.trial);
+        let c = self.problem.cost(&next, self.trial);
         self.step.1 = Some((next, c));
         c
     }
@@ -396,7 +429,7 @@ impl LeastSquares for PairLm<'_, '_> {
         if let Some((next, c)) = self.step.1.take() {
             *self.pose = next;
             // The buffers swapped, not copied: `trial` is written whole before it is read.
-            std::mem::swap(self.points, &mut self.trial);
+            std::mem::swap(self.points, self.trial);
             self.cost = c;
         }
     }
@@ -446,10 +479,12 @@ fn refine_with(
     start: &Isometry3<f64>,
     min_inliers: usize,
 ) -> Result<Refined, RefineError> {
+    // The model's constants computed once, not per point (issue 34).
+    let model = &Prepared::new(model);
     let mut pose = Pose::of(&start.inverse());
     // Points fitted to the starting pose, then gated.
     // A loop, not an iterator's map: compiled inside the dispatched copy.
-    let mut fitted: Vec<Option<(Vector3<f64>, f64)>> = Vec::with_capacity(reference.len());
+    let mut fitted: Vec<Fitted> = Vec::with_capacity(reference.len());
     for (a, b) in reference.iter().zip(current) {
         let p = model.anchor(a);
         let finite = p.z > 0.0 && p.iter().all(|v| v.is_finite());
@@ -466,10 +501,16 @@ fn refine_with(
         current,
         active: Vec::new(),
     };
+    // As large as every match: swapped with `trial`, neither needs more room.
     let mut points: Vec<Vector3<f64>> = Vec::with_capacity(fitted.len());
+    let mut work = Work {
+        blocks: Vec::with_capacity(fitted.len()),
+        trial: Vec::with_capacity(fitted.len()),
+    };
     let needed = min_inliers.max(3);
-    let iterations = problem.gated_rounds(&mut pose, &mut fitted, &mut points, needed)?;
-    problem.result(pose, points, folds, iterations)
+    let iterations =
+        problem.gated_rounds(&mut pose, &mut fitted, &mut points, &mut work, needed)?;
+    problem.result(pose, points, folds, iterations, work.blocks)
 }
 
 impl Problem<'_> {
@@ -483,17 +524,26 @@ impl Problem<'_> {
         points: Vec<Vector3<f64>>,
         folds: Option<&[u8]>,
         iterations: usize,
+        mut blocks: Vec<PoseBlocks>,
     ) -> Result<Refined, RefineError> {
-        let mut blocks = Vec::with_capacity(points.len());
+        // The χ² and the scores from the same linearisation (issue 34: it was done twice).
+        let mut sums = (0.0, Vec::with_capacity(points.len()));
         let reduced = self
-            .build(&pose, &points, folds, &mut blocks, Parts::All)
+            .build(
+                &pose,
+                &points,
+                folds,
+                &mut blocks,
+                Parts::All,
+                Some(&mut sums),
+            )
             .ok_or(RefineError::Singular)?;
         let mut both = reduced[0];
         both += &reduced[1];
         let info = both.pose_pose;
         let inv = info.try_inverse().ok_or(RefineError::Singular)?;
         let n = self.active.len();
-        let (chi2, mut scores) = self.scores(&pose, &points, &blocks);
+        let (chi2, mut scores) = sums;
         let dof = (3 * n).saturating_sub(6).max(1) as f64;
         let scale2 = chi2 / dof;
         let cluster_factor = noise::cluster_factor(&mut scores, &inv);
@@ -508,43 +558,17 @@ impl Problem<'_> {
             reduced,
         })
     }
+}
 
-    /// The Huber-weighted `χ²` of the active matches at `pose` with `points` (and their
-    /// elimination `blocks`), and each match's score on the pose with its point
-    /// eliminated, at its position in B ([`noise::cluster_factor`]).
-    #[inline(always)]
-    fn scores(
-        &self,
-        pose: &Pose,
-        points: &[Vector3<f64>],
-        blocks: &[PoseBlocks],
-    ) -> (f64, Vec<noise::Score>) {
-        let k = self.config.huber_k;
-        let (reference, current) = (self.reference, self.current);
-        let mut chi2 = 0.0;
-        let mut scores = Vec::with_capacity(self.active.len());
-        for ((&i, p), b) in self.active.iter().zip(points).zip(blocks) {
-            let Some((la, lb)) = linearize(
-                self.model,
-                pose,
-                p,
-                &reference[i],
-                &current[i],
-                Parts::PointPose,
-            ) else {
-                continue;
-            };
-            let (sa, sb) = (la.residual.norm_squared(), lb.residual.norm_squared());
-            let wb = huber_weight(sb, k);
-            chi2 += huber_weight(sa, k) * sa + wb * sb;
-            scores.push(noise::Score {
-                u: current[i].u,
-                v: current[i].v,
-                r: lb.d_pose.transpose() * lb.residual * wb
-                    - b.pose.transpose() * (b.pp_inv * b.gradient),
-            });
-        }
-        (chi2, scores)
+/// A match's score on the pose with its point eliminated ([`noise::Score`]), at its
+/// measurement `z` in B linearised as `lb` with the Huber weight `wb`, its point's
+/// elimination blocks `b`.
+#[inline(always)]
+fn score(z: &StereoObservation, lb: &Linearized, wb: f64, b: &PoseBlocks) -> noise::Score {
+    noise::Score {
+        u: z.u,
+        v: z.v,
+        r: lb.d_pose.transpose() * lb.residual * wb - b.pose.transpose() * (b.pp_inv * b.gradient),
     }
 }
 

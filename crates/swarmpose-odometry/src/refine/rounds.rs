@@ -6,8 +6,9 @@ use nalgebra::{Isometry3, Vector3};
 use swarmpose_vision::simd::Kernel;
 
 use super::model::{StereoModel, StereoObservation};
-use super::{Problem, RefineConfig, RefineError, Refined, fit_point, refine_with};
+use super::{Fitted, Problem, RefineConfig, RefineError, Refined, Work, fit_point, refine_with};
 use crate::nls::pose::Pose;
+use crate::nls::robust::huber_cost;
 
 /// A call of [`super::refine`] (its slices of equal lengths) for the dispatch.
 pub(super) struct Refine<'a> {
@@ -42,9 +43,9 @@ impl Kernel for Refine<'_> {
 /// `fitted` at the starting pose when that is larger (the first round keeps the better
 /// half, in case the start is rough).
 #[inline(always)]
-fn first_gate(config: &RefineConfig, fitted: &[Option<(Vector3<f64>, f64)>]) -> f64 {
+fn first_gate(config: &RefineConfig, fitted: &[Fitted]) -> f64 {
     let mut chi2s: Vec<f64> = Vec::with_capacity(fitted.len());
-    chi2s.extend(fitted.iter().filter_map(|f| f.map(|(_, c)| c)));
+    chi2s.extend(fitted.iter().filter_map(|f| f.map(|(_, a2, b2)| a2 + b2)));
     let median = if chi2s.is_empty() {
         0.0
     } else {
@@ -58,14 +59,16 @@ impl Problem<'_> {
     /// Rounds of gating the matches `fitted` (each one's point and χ², fitted to the
     /// pose) and refining `pose` on those within the gate, until the gated set settles
     /// or [`RefineConfig::rounds`] are done; every match is fitted again to each new
-    /// pose. Leaves the last round's matches in `self.active` and their points in
-    /// `points`; returns the Levenberg-Marquardt iterations.
+    /// pose that a next round gates on (`fitted` is left as the last gate saw it).
+    /// Leaves the last round's matches in `self.active` and their points in `points`;
+    /// returns the Levenberg-Marquardt iterations.
     #[inline(always)]
     pub(super) fn gated_rounds(
         &mut self,
         pose: &mut Pose,
-        fitted: &mut [Option<(Vector3<f64>, f64)>],
+        fitted: &mut [Fitted],
         points: &mut Vec<Vector3<f64>>,
+        work: &mut Work,
         needed: usize,
     ) -> Result<usize, RefineError> {
         let mut gate = first_gate(self.config, fitted);
@@ -73,13 +76,14 @@ impl Problem<'_> {
         // Each round's buffers: the matches within the gate and their points.
         let mut active: Vec<usize> = Vec::with_capacity(fitted.len());
         self.active.reserve(fitted.len());
-        for round in 0..self.config.rounds.max(1) {
+        let rounds = self.config.rounds.max(1);
+        for round in 0..rounds {
             active.clear();
             active.extend(
                 fitted
                     .iter()
                     .enumerate()
-                    .filter_map(|(i, f)| f.and_then(|(_, c2)| (c2 <= gate).then_some(i))),
+                    .filter_map(|(i, f)| f.and_then(|(_, a2, b2)| (a2 + b2 <= gate).then_some(i))),
             );
             if active.len() < needed {
                 return Err(RefineError::TooFewInliers {
@@ -92,13 +96,23 @@ impl Problem<'_> {
             if settled {
                 break;
             }
+            // The points and their cost at `pose` ([`Problem::cost`]) from their fit to
+            // it: the same residuals, not computed again (issue 34).
             points.clear();
-            points.extend(
-                self.active
-                    .iter()
-                    .filter_map(|&i| fitted[i].map(|(p, _)| p)),
-            );
-            iterations += self.solve(pose, points)?;
+            let k = self.config.huber_k;
+            let mut total = 0.0;
+            for &i in &self.active {
+                if let Some((p, a2, b2)) = fitted[i] {
+                    points.push(p);
+                    total += huber_cost(a2, k) + huber_cost(b2, k);
+                }
+            }
+            iterations += self.solve(pose, points, 0.5 * total, work)?;
+            if round + 1 == rounds {
+                // No round gates on them: the last round's refit would be thrown away
+                // (issue 34: every match fitted twice more for nothing).
+                break;
+            }
             self.refit(pose, fitted);
             gate = self.config.gate_chi2;
         }
@@ -107,11 +121,11 @@ impl Problem<'_> {
 
     /// Every match of `fitted` fitted again to `pose`, for the next gate.
     #[inline(always)]
-    fn refit(&self, pose: &Pose, fitted: &mut [Option<(Vector3<f64>, f64)>]) {
+    fn refit(&self, pose: &Pose, fitted: &mut [Fitted]) {
         let (model, reference, current) = (self.model, self.reference, self.current);
         for (i, f) in fitted.iter_mut().enumerate() {
             let start = match f {
-                Some((p, _)) => *p,
+                Some((p, _, _)) => *p,
                 None => model.anchor(&reference[i]),
             };
             *f = if start.z > 0.0 {

@@ -334,3 +334,158 @@ fn the_dispatched_refinement_is_the_baseline_bit_for_bit() {
     }
     assert!(refined >= 12, "{refined} of 16 refined");
 }
+
+/// A problem over every match of a seeded scene with wrong matches and special values,
+/// its points fitted to a rough start: the pose, the fits and the problem.
+fn fitted_problem<'a>(
+    m: &'a Prepared,
+    config: &'a RefineConfig,
+    (a, b): (&'a [StereoObservation], &'a [StereoObservation]),
+    start: &Isometry3<f64>,
+) -> (Pose, Vec<Fitted>, Problem<'a>) {
+    let pose = Pose::of(&start.inverse());
+    let fitted: Vec<Fitted> = a
+        .iter()
+        .zip(b)
+        .map(|(za, zb)| fit_point(m, &pose, m.anchor(za), za, zb))
+        .collect();
+    let active = (0..a.len()).filter(|&i| fitted[i].is_some()).collect();
+    let problem = Problem {
+        model: m,
+        config,
+        reference: a,
+        current: b,
+        active,
+    };
+    (pose, fitted, problem)
+}
+
+/// A seeded scene with wrong matches and zeros of both signs, and a rough start.
+fn rough_scene(
+    seed: u64,
+) -> (
+    Vec<StereoObservation>,
+    Vec<StereoObservation>,
+    Isometry3<f64>,
+) {
+    let bias = DisparityCorrection::from_coefficients([0.7, 1.9, -0.4, 0.3, 0.8]);
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let (mut a, mut b) = scene(&truth(), &bias, 40, seed);
+    for _ in 0..8 {
+        let i = rng.random_range(0..a.len());
+        match rng.random_range(0..4) {
+            0 => b[i].u = -0.0,
+            1 => b[i].d = 0.0,
+            2 => a[i].v = -0.0,
+            _ => b[i].v = -0.0,
+        }
+    }
+    let start = Isometry3::new(
+        truth().translation.vector + Vector3::from_fn(|_, _| rng.random_range(-0.1..0.1)),
+        truth().rotation.scaled_axis() + Vector3::from_fn(|_, _| rng.random_range(-0.01..0.01)),
+    );
+    (a, b, start)
+}
+
+/// A round's first cost taken from the fits ([`Problem::gated_rounds`]) is
+/// [`Problem::cost`] of the fitted points, bit for bit.
+#[test]
+fn the_cost_from_the_fits_is_the_cost() {
+    for seed in 0..8 {
+        let (a, b, start) = rough_scene(100 + seed);
+        let bias = DisparityCorrection::from_coefficients([0.7, 1.9, -0.4, 0.3, 0.8]);
+        let m = Prepared::new(&model(bias));
+        let config = RefineConfig::default();
+        let (pose, fitted, problem) = fitted_problem(&m, &config, (&a, &b), &start);
+        let k = config.huber_k;
+        let mut total = 0.0;
+        let mut points = Vec::new();
+        for &i in &problem.active {
+            let (p, a2, b2) = fitted[i].expect("active");
+            points.push(p);
+            total += huber_cost(a2, k) + huber_cost(b2, k);
+        }
+        assert!(points.len() > 300, "{}", points.len());
+        let want = problem.cost(&pose, &points);
+        assert_eq!((0.5 * total).to_bits(), want.to_bits(), "seed {seed}");
+    }
+}
+
+/// The χ² and scores taken from the linearisation of [`Problem::build`] are those of
+/// [`Problem::scores`], which linearises again, bit for bit.
+#[test]
+fn the_scores_of_the_build_are_the_scores() {
+    for seed in 0..8 {
+        let (a, b, start) = rough_scene(200 + seed);
+        let m = Prepared::new(&model(DisparityCorrection::from_coefficients([
+            0.7, 1.9, -0.4, 0.3, 0.8,
+        ])));
+        let config = RefineConfig::default();
+        let (pose, fitted, problem) = fitted_problem(&m, &config, (&a, &b), &start);
+        let points: Vec<Vector3<f64>> = problem
+            .active
+            .iter()
+            .filter_map(|&i| fitted[i].map(|f| f.0))
+            .collect();
+        let folds: Vec<u8> = (0..a.len()).map(|i| (i % 3 == 0) as u8).collect();
+        let mut blocks = Vec::new();
+        let mut sums = (0.0, Vec::new());
+        problem
+            .build(
+                &pose,
+                &points,
+                Some(&folds),
+                &mut blocks,
+                Parts::All,
+                Some(&mut sums),
+            )
+            .expect("linearised");
+        let (chi2, scores) = problem.scores(&pose, &points, &blocks);
+        assert_eq!(sums.0.to_bits(), chi2.to_bits(), "seed {seed}");
+        assert_eq!(sums.1.len(), scores.len());
+        assert!(scores.len() > 300);
+        for (g, w) in sums.1.iter().zip(&scores) {
+            assert_eq!(g.u.to_bits(), w.u.to_bits());
+            assert_eq!(g.v.to_bits(), w.v.to_bits());
+            for (x, y) in g.r.iter().zip(w.r.iter()) {
+                assert_eq!(x.to_bits(), y.to_bits(), "seed {seed}");
+            }
+        }
+    }
+}
+
+impl Problem<'_> {
+    /// The Huber-weighted `χ²` of the active matches at `pose` with `points` (and their
+    /// elimination `blocks`), and each match's score on the pose with its point
+    /// eliminated, at its position in B ([`noise::cluster_factor`]): the refinement
+    /// takes them from [`Problem::build`]'s linearisation; this computes them again,
+    /// for the tests.
+    fn scores(
+        &self,
+        pose: &Pose,
+        points: &[Vector3<f64>],
+        blocks: &[PoseBlocks],
+    ) -> (f64, Vec<noise::Score>) {
+        let k = self.config.huber_k;
+        let (reference, current) = (self.reference, self.current);
+        let mut chi2 = 0.0;
+        let mut scores = Vec::with_capacity(self.active.len());
+        for ((&i, p), b) in self.active.iter().zip(points).zip(blocks) {
+            let Some((la, lb)) = linearize(
+                self.model,
+                pose,
+                p,
+                &reference[i],
+                &current[i],
+                Parts::PointPose,
+            ) else {
+                continue;
+            };
+            let (sa, sb) = (la.residual.norm_squared(), lb.residual.norm_squared());
+            let wb = huber_weight(sb, k);
+            chi2 += huber_weight(sa, k) * sa + wb * sb;
+            scores.push(score(&current[i], &lb, wb, b));
+        }
+        (chi2, scores)
+    }
+}

@@ -65,6 +65,7 @@ use swarmpose_vision::stereo::RectifiedStereo;
 use crate::refine::evidence::{MatrixK, QuadraticCost, Reduced, VectorK};
 use crate::refine::model::FOCAL_TERM;
 use rows::{RowDecision, RowEvidence};
+use subset::Terms;
 
 pub(crate) const K: usize = crate::refine::model::CALIBRATION_TERMS;
 
@@ -417,7 +418,8 @@ impl SelfCalibration {
                 .iter()
                 .all(|f| f.a[(k, k)] * sigma * sigma >= 1.0)
         };
-        let mut free: Vec<usize> = Vec::new();
+        // On the stack: a copy for every candidate scored (issue 34).
+        let mut free = Terms::<K>::new();
         let mut best = 0.0;
         let next = loop {
             let candidate = causes
@@ -429,11 +431,7 @@ impl SelfCalibration {
                             && c.candidates.has(CorrectionModel::YAW));
                     allowed && !free.contains(k) && determined(*k)
                 })
-                .map(|&(cause, k)| {
-                    let mut f = free.clone();
-                    f.push(k);
-                    (cause, k, score(&f))
-                })
+                .map(|&(cause, k)| (cause, k, score(&free.with(k))))
                 .min_by(|a, b| a.2.total_cmp(&b.2));
             match candidate {
                 Some((cause, k, s)) if s < best - c.margin => {
@@ -462,7 +460,7 @@ struct Selection {
     /// The rotation terms' correction that the horizontal terms are fitted on.
     base: VectorK,
     /// Indices of the horizontal terms chosen.
-    free: Vec<usize>,
+    free: Terms<K>,
     /// Held-out score relative to the base, χ² units.
     relative: f64,
     /// Held-out score relative to no correction at all, χ² units.

@@ -24,7 +24,7 @@ use nalgebra::{SMatrix, SVector};
 use swarmpose_vision::frontend::DisparityCorrection;
 use swarmpose_vision::stereo::RectifiedStereo;
 
-use super::subset::{solve_on, sub_matrix};
+use super::subset::{Terms, solve_on, sub_matrix};
 
 /// Terms of the row-offset fit: `[1, x, y, x y, y², x², x² y, y³]`.
 const R: usize = 8;
@@ -213,7 +213,7 @@ impl RowEvidence {
     #[must_use]
     pub fn decide(&self, margin: f64) -> RowDecision {
         let all = self.folds[0].plus(&self.folds[1]);
-        let full: Vec<usize> = (0..R).collect();
+        let full: [usize; R] = std::array::from_fn(|k| k);
         let mut decision = RowDecision {
             measurements: all.n,
             ..RowDecision::default()
@@ -231,18 +231,15 @@ impl RowEvidence {
             let [f0, f1] = &self.folds;
             (f0.rss(&f1.fit(terms)) + f1.rss(&f0.fit(terms))) / variance
         };
-        let mut terms: Vec<usize> = NUISANCE.to_vec();
+        // On the stack: a copy for every candidate scored (issue 34).
+        let mut terms = Terms::<R>::of(&NUISANCE);
         let base = score(&terms);
         let mut best = 0.0;
         loop {
             let candidate = [YAW, ROLL, PITCH]
                 .into_iter()
                 .filter(|k| !terms.contains(k))
-                .map(|k| {
-                    let mut t = terms.clone();
-                    t.push(k);
-                    (k, score(&t) - base)
-                })
+                .map(|k| (k, score(&terms.with(k)) - base))
                 .min_by(|a, b| a.1.total_cmp(&b.1));
             match candidate {
                 Some((k, s)) if s < best - margin => {
@@ -259,11 +256,10 @@ impl RowEvidence {
         decision.weight = super::applied_fraction(best, terms.len() - NUISANCE.len(), margin);
         // The supported terms refitted without the unsupported ones.
         let c = all.fit(&terms);
-        let without: Vec<usize> = terms
-            .iter()
-            .copied()
-            .filter(|&k| k != VERTICAL_SCALE)
-            .collect();
+        let mut without = Terms::<R>::new();
+        for &k in terms.iter().filter(|&&k| k != VERTICAL_SCALE) {
+            without.push(k);
+        }
         decision.vertical_scale = score(&without) - score(&terms) > margin;
         decision.vertical_scale_px = c[VERTICAL_SCALE];
         decision.rotation_covariance = all.rotation_covariance(&terms, &c);

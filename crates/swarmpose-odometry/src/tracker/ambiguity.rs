@@ -27,7 +27,7 @@ use nalgebra::{Isometry3, UnitQuaternion};
 use swarmpose_core::{Correspondences, Estimator};
 
 use crate::refine::model::{StereoModel, StereoObservation};
-use crate::refine::{RefineConfig, Refined, refine};
+use crate::refine::{Prepared, RefineConfig, Refined, refine};
 
 /// Share of the first motion's inliers that the matches agreeing with the prediction
 /// must reach before they are refined as a second motion: a quarter (the robust
@@ -42,6 +42,8 @@ fn chi2_under(
     reference: &[StereoObservation],
     current: &[StereoObservation],
 ) -> Vec<f64> {
+    // The model's constants once, and its correction inlined (issue 34).
+    let model = Prepared::new(model);
     let a_in_b = motion.inverse();
     let rot = *a_in_b.rotation.to_rotation_matrix().matrix();
     let trans = a_in_b.translation.vector;
