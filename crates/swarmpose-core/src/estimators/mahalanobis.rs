@@ -166,33 +166,53 @@ pub(crate) fn add_point(
     let r = data.dst()[i].coords - q;
     let (q0, q1, q2) = (q[0], q[1], q[2]);
     let columns = &w.data.0; // columns[b][k] = w_kb
-    // P = Jᵀ w (6 × 3): rows 0-2 from the columns of [q]×, whose zero is left out; rows
-    // 3-5 are −w (−1 · x, the same bits as −x for finite x; the −0 terms left out).
-    let mut p = [[0.0f64; 3]; 6];
-    for (b, col) in columns.iter().enumerate() {
-        p[0][b] = q2 * col[1] + (-q1) * col[2];
-        p[1][b] = (-q2) * col[0] + q0 * col[2];
-        p[2][b] = q1 * col[0] + (-q0) * col[1];
-        for k in 0..3 {
-            p[3 + k][b] = -col[k];
-        }
-    }
-    // One sum tells: it is finite only when every term is (an infinity or NaN among them
-    // makes it ±∞ or NaN); a sum that overflows merely takes the full products.
-    let total: f64 = w.iter().sum::<f64>() + p.iter().flatten().sum::<f64>();
+    // P = Jᵀ w (6 × 3) by columns, pc[b][a] = P[a][b] (h is column-major too, so each
+    // update below is one 6-lane operation the compiler vectorises; the same operations
+    // on every element as row by row): rows 0-2 from the columns of [q]×, whose zero is
+    // left out; rows 3-5 are −w (−1 · x, the same bits as −x for finite x; the −0 terms
+    // left out).
+    let pc: [[f64; 6]; 3] = std::array::from_fn(|b| {
+        let col = &columns[b];
+        [
+            q2 * col[1] + (-q1) * col[2],
+            (-q2) * col[0] + q0 * col[2],
+            q1 * col[0] + (-q0) * col[1],
+            -col[0],
+            -col[1],
+            -col[2],
+        ]
+    });
+    // P's rows 3-5 are −w, so P holds every entry of w. A sum with an infinite or NaN
+    // term is ±∞ or NaN in any order, so these lane sums are all finite only when every
+    // entry of P (and w) is; a sum that overflows merely takes the full products (the
+    // same bits for finite w and P).
+    let lanes: [f64; 6] = std::array::from_fn(|a| pc[0][a] + pc[1][a] + pc[2][a]);
+    let total = (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]) + (lanes[4] + lanes[5]);
     if !total.is_finite() {
         add_point_full(h, g, &q, &r, w);
         return;
     }
-    for (a, pa) in p.iter().enumerate() {
-        // (P J)[a][c]: J's columns 0-2 are those of [q]×, 3-5 those of −I.
-        h[(a, 0)] += pa[1] * q2 + pa[2] * (-q1);
-        h[(a, 1)] += pa[0] * (-q2) + pa[2] * q0;
-        h[(a, 2)] += pa[0] * q1 + pa[1] * (-q0);
-        for k in 0..3 {
-            h[(a, 3 + k)] += -pa[k];
+    // (P J)[a][c]: J's columns 0-2 are those of [q]×, 3-5 those of −I.
+    let [p0, p1, p2] = &pc;
+    let hc = &mut h.data.0; // hc[c][a] = h[(a, c)]
+    for a in 0..6 {
+        hc[0][a] += p1[a] * q2 + p2[a] * (-q1);
+    }
+    for a in 0..6 {
+        hc[1][a] += p0[a] * (-q2) + p2[a] * q0;
+    }
+    for a in 0..6 {
+        hc[2][a] += p0[a] * q1 + p1[a] * (-q0);
+    }
+    for (k, pk) in pc.iter().enumerate() {
+        for a in 0..6 {
+            hc[3 + k][a] += -pk[a];
         }
-        g[a] += pa[0] * r[0] + pa[1] * r[1] + pa[2] * r[2];
+    }
+    let (r0, r1, r2) = (r[0], r[1], r[2]);
+    let gc = &mut g.data.0[0];
+    for a in 0..6 {
+        gc[a] += p0[a] * r0 + p1[a] * r1 + p2[a] * r2;
     }
 }
 
