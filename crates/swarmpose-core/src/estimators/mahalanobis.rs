@@ -57,16 +57,13 @@ pub fn refine_mahalanobis(
         )));
     }
     let select = |pose: &Isometry3<f64>, gate: f64, out: &mut Vec<usize>| {
-        let rot = pose.rotation.to_rotation_matrix();
-        out.clear();
-        out.extend((0..data.len()).filter(|&i| {
-            let r = data.dst()[i] - pose * data.src()[i];
-            // rᵀ Σ⁻¹ r ≥ |r|² / tr Σ (tr Σ_s is rotation-invariant): most wrong matches
-            // fail without an inversion.
-            r.norm_squared() < gate * (src_cov[i].trace() + dst_cov[i].trace())
-                && inverse3(&(rot.matrix() * src_cov[i] * rot.matrix().transpose() + dst_cov[i]))
-                    .is_some_and(|w| r.dot(&(w * r)) < gate)
-        }));
+        simd::dispatch(Select {
+            pose,
+            data,
+            covariance: (src_cov, dst_cov),
+            gate,
+            out,
+        });
     };
     let schedule = |round: usize| gate * [16.0, 4.0].get(round).copied().unwrap_or(1.0);
     let too_few = |got: usize| PoseError::InsufficientSupport {
@@ -107,6 +104,45 @@ pub fn refine_mahalanobis(
         return Err(too_few(inliers.len()));
     }
     Ok((pose, inliers))
+}
+
+/// The rows of `data` within the χ²(3) gate `gate` of `pose` (ascending, into `out`): those
+/// whose residual `r` has `rᵀ (R Σ_s Rᵀ + Σ_d)⁻¹ r < gate`. A [`simd::Kernel`], compiled for
+/// the best instruction set of the CPU (the same operations, so the same rows; issue 34).
+struct Select<'a> {
+    pose: &'a Isometry3<f64>,
+    data: &'a Correspondences,
+    covariance: CovariancePair<'a>,
+    gate: f64,
+    out: &'a mut Vec<usize>,
+}
+
+impl simd::Kernel for Select<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn run(self) {
+        let Self {
+            pose,
+            data,
+            covariance: (src_cov, dst_cov),
+            gate,
+            out,
+        } = self;
+        let rot = pose.rotation.to_rotation_matrix();
+        out.clear();
+        for i in 0..data.len() {
+            let r = data.dst()[i] - pose * data.src()[i];
+            // rᵀ Σ⁻¹ r ≥ |r|² / tr Σ (tr Σ_s is rotation-invariant): most wrong matches
+            // fail without an inversion.
+            if r.norm_squared() < gate * (src_cov[i].trace() + dst_cov[i].trace())
+                && inverse3(&(rot.matrix() * src_cov[i] * rot.matrix().transpose() + dst_cov[i]))
+                    .is_some_and(|w| r.dot(&(w * r)) < gate)
+            {
+                out.push(i);
+            }
+        }
+    }
 }
 
 /// The normal equations `(h, g)` of a Gauss-Newton step on `pose` over `rows` of `data`,
@@ -166,33 +202,53 @@ pub(crate) fn add_point(
     let r = data.dst()[i].coords - q;
     let (q0, q1, q2) = (q[0], q[1], q[2]);
     let columns = &w.data.0; // columns[b][k] = w_kb
-    // P = Jᵀ w (6 × 3): rows 0-2 from the columns of [q]×, whose zero is left out; rows
-    // 3-5 are −w (−1 · x, the same bits as −x for finite x; the −0 terms left out).
-    let mut p = [[0.0f64; 3]; 6];
-    for (b, col) in columns.iter().enumerate() {
-        p[0][b] = q2 * col[1] + (-q1) * col[2];
-        p[1][b] = (-q2) * col[0] + q0 * col[2];
-        p[2][b] = q1 * col[0] + (-q0) * col[1];
-        for k in 0..3 {
-            p[3 + k][b] = -col[k];
-        }
-    }
-    // One sum tells: it is finite only when every term is (an infinity or NaN among them
-    // makes it ±∞ or NaN); a sum that overflows merely takes the full products.
-    let total: f64 = w.iter().sum::<f64>() + p.iter().flatten().sum::<f64>();
+    // P = Jᵀ w (6 × 3) by columns, pc[b][a] = P[a][b] (h is column-major too, so each
+    // update below is one 6-lane operation the compiler vectorises; the same operations
+    // on every element as row by row): rows 0-2 from the columns of [q]×, whose zero is
+    // left out; rows 3-5 are −w (−1 · x, the same bits as −x for finite x; the −0 terms
+    // left out).
+    let pc: [[f64; 6]; 3] = std::array::from_fn(|b| {
+        let col = &columns[b];
+        [
+            q2 * col[1] + (-q1) * col[2],
+            (-q2) * col[0] + q0 * col[2],
+            q1 * col[0] + (-q0) * col[1],
+            -col[0],
+            -col[1],
+            -col[2],
+        ]
+    });
+    // P's rows 3-5 are −w, so P holds every entry of w. A sum with an infinite or NaN
+    // term is ±∞ or NaN in any order, so these lane sums are all finite only when every
+    // entry of P (and w) is; a sum that overflows merely takes the full products (the
+    // same bits for finite w and P).
+    let lanes: [f64; 6] = std::array::from_fn(|a| pc[0][a] + pc[1][a] + pc[2][a]);
+    let total = (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]) + (lanes[4] + lanes[5]);
     if !total.is_finite() {
         add_point_full(h, g, &q, &r, w);
         return;
     }
-    for (a, pa) in p.iter().enumerate() {
-        // (P J)[a][c]: J's columns 0-2 are those of [q]×, 3-5 those of −I.
-        h[(a, 0)] += pa[1] * q2 + pa[2] * (-q1);
-        h[(a, 1)] += pa[0] * (-q2) + pa[2] * q0;
-        h[(a, 2)] += pa[0] * q1 + pa[1] * (-q0);
-        for k in 0..3 {
-            h[(a, 3 + k)] += -pa[k];
+    // (P J)[a][c]: J's columns 0-2 are those of [q]×, 3-5 those of −I.
+    let [p0, p1, p2] = &pc;
+    let hc = &mut h.data.0; // hc[c][a] = h[(a, c)]
+    for a in 0..6 {
+        hc[0][a] += p1[a] * q2 + p2[a] * (-q1);
+    }
+    for a in 0..6 {
+        hc[1][a] += p0[a] * (-q2) + p2[a] * q0;
+    }
+    for a in 0..6 {
+        hc[2][a] += p0[a] * q1 + p1[a] * (-q0);
+    }
+    for (k, pk) in pc.iter().enumerate() {
+        for a in 0..6 {
+            hc[3 + k][a] += -pk[a];
         }
-        g[a] += pa[0] * r[0] + pa[1] * r[1] + pa[2] * r[2];
+    }
+    let (r0, r1, r2) = (r[0], r[1], r[2]);
+    let gc = &mut g.data.0[0];
+    for a in 0..6 {
+        gc[a] += p0[a] * r0 + p1[a] * r1 + p2[a] * r2;
     }
 }
 
@@ -267,232 +323,4 @@ pub(crate) fn gauss_newton_step(
 }
 
 #[cfg(test)]
-mod tests {
-    use nalgebra::{Point3, Vector3};
-
-    use super::*;
-    use crate::arun::arun;
-    use crate::estimators::test_scenes::{moved_after, stereo_scene};
-    use crate::geometry::rotation_angle_between;
-
-    #[test]
-    fn beats_isotropic_least_squares_on_stereo_noise() {
-        let (mut better, mut within) = (0, 0);
-        for seed in 0..10 {
-            let (data, truth, inlier) = stereo_scene(seed, 5);
-            let (pose, inliers) =
-                refine_mahalanobis(&data, &truth, CHI2_3_99, 10).expect("refined");
-            let idx: Vec<usize> = (0..data.len()).filter(|&i| inlier[i]).collect();
-            let sel = data.select(&idx);
-            let ls = arun(sel.src(), sel.dst()).expect("fit");
-            let err = |p: &Isometry3<f64>| (p.translation.vector - truth.translation.vector).norm();
-            better += usize::from(err(&pose) < err(&ls));
-            within += usize::from(
-                err(&pose) < 0.05
-                    && rotation_angle_between(&pose.rotation, &truth.rotation).to_degrees() < 0.2,
-            );
-            assert!(
-                inliers.iter().all(|&i| inlier[i]),
-                "a wrong match passed the gate"
-            );
-            assert!(
-                inliers.len() as f64 > 0.9 * idx.len() as f64,
-                "{} of {} inliers",
-                inliers.len(),
-                idx.len()
-            );
-        }
-        assert!(
-            better >= 9,
-            "Mahalanobis beat isotropic least squares on the true inliers {better}/10"
-        );
-        assert_eq!(within, 10);
-    }
-
-    #[test]
-    fn add_point_has_the_bits_of_the_full_products() {
-        use rand::RngExt;
-        let mut rng = crate::rng::seeded(34);
-        let value = |rng: &mut crate::rng::SeededRng| -> f64 {
-            match rng.random_range(0..12) {
-                0 => 0.0,
-                1 => -0.0,
-                _ => rng.random_range(-50.0..50.0),
-            }
-        };
-        for case in 0..400 {
-            let n = 6;
-            let src: Vec<Point3<f64>> = (0..n)
-                .map(|_| Point3::new(value(&mut rng), value(&mut rng), value(&mut rng)))
-                .collect();
-            let dst: Vec<Point3<f64>> = (0..n)
-                .map(|_| Point3::new(value(&mut rng), value(&mut rng), value(&mut rng)))
-                .collect();
-            let data = Correspondences::new(src, dst).expect("valid");
-            let axis = Vector3::new(value(&mut rng), value(&mut rng), value(&mut rng)) * 0.01;
-            let pose = Isometry3::new(
-                Vector3::new(value(&mut rng), value(&mut rng), value(&mut rng)),
-                axis,
-            );
-            let (mut h, mut g) = (Matrix6::<f64>::zeros(), Vector6::<f64>::zeros());
-            let (mut h_ref, mut g_ref) = (Matrix6::<f64>::zeros(), Vector6::<f64>::zeros());
-            for i in 0..n {
-                let mut w = Matrix3::from_fn(|_, _| value(&mut rng));
-                if case % 4 == 0 {
-                    w = w * w.transpose(); // symmetric, as an information is
-                }
-                match rng.random_range(0..20) {
-                    0 => w[(rng.random_range(0..3), rng.random_range(0..3))] = f64::NAN,
-                    1 => w[(rng.random_range(0..3), rng.random_range(0..3))] = f64::INFINITY,
-                    2 => w *= 1e307, // P overflows
-                    _ => {}
-                }
-                add_point(&mut h, &mut g, &pose, &data, i, &w);
-                let q = (pose * data.src()[i]).coords;
-                let r = data.dst()[i].coords - q;
-                add_point_full(&mut h_ref, &mut g_ref, &q, &r, &w);
-            }
-            let bits = |m: &[f64]| m.iter().map(|v| v.to_bits()).collect::<Vec<u64>>();
-            assert_eq!(bits(h.as_slice()), bits(h_ref.as_slice()), "h, case {case}");
-            assert_eq!(bits(g.as_slice()), bits(g_ref.as_slice()), "g, case {case}");
-        }
-    }
-
-    #[test]
-    fn normal_equations_have_the_same_bits_in_every_instruction_set() {
-        use rand::RngExt;
-        let mut rng = crate::rng::seeded(37);
-        let value = |rng: &mut crate::rng::SeededRng| -> f64 {
-            match rng.random_range(0..40) {
-                0 => 0.0,
-                1 => -0.0,
-                2 => f64::NAN,
-                3 => f64::INFINITY,
-                _ => rng.random_range(-20.0..20.0),
-            }
-        };
-        // Every NaN as one: Rust leaves a NaN's sign and payload unspecified (x86 passes on
-        // the first operand's NaN, and SSE and AVX code may order the operands of a
-        // commutative operation differently); the callers only ask whether a value is finite.
-        let bits = |m: &[f64]| {
-            m.iter()
-                .map(|v| if v.is_nan() { u64::MAX } else { v.to_bits() })
-                .collect::<Vec<u64>>()
-        };
-        for case in 0..200 {
-            let n = 40;
-            // Points and poses finite (the correspondences reject others); covariances any.
-            let finite = |rng: &mut crate::rng::SeededRng| {
-                let v = value(rng);
-                if v.is_finite() { v } else { -0.0 }
-            };
-            let point = |rng: &mut crate::rng::SeededRng| {
-                Point3::new(finite(rng), finite(rng), finite(rng))
-            };
-            let src: Vec<Point3<f64>> = (0..n).map(|_| point(&mut rng)).collect();
-            let dst: Vec<Point3<f64>> = (0..n).map(|_| point(&mut rng)).collect();
-            let cov = |rng: &mut crate::rng::SeededRng| {
-                let a = Matrix3::from_fn(|_, _| value(rng));
-                if rng.random_range(0..4) == 0 {
-                    a
-                } else {
-                    a * a.transpose()
-                }
-            };
-            let sc: Vec<Matrix3<f64>> = (0..n).map(|_| cov(&mut rng)).collect();
-            let dc: Vec<Matrix3<f64>> = (0..n).map(|_| cov(&mut rng)).collect();
-            let data = Correspondences::new(src, dst).expect("valid");
-            let axis = Vector3::new(finite(&mut rng), finite(&mut rng), finite(&mut rng)) * 0.01;
-            let t = Vector3::new(finite(&mut rng), finite(&mut rng), finite(&mut rng));
-            let pose = Isometry3::new(t, axis);
-            let rows: Vec<usize> = (0..n).filter(|_| rng.random_range(0..3) > 0).collect();
-            let kernel = || NormalEquations {
-                pose: &pose,
-                data: &data,
-                covariance: (&sc, &dc),
-                rows: &rows,
-            };
-            let (h, g) = simd::dispatch(kernel());
-            let (h_ref, g_ref) = simd::baseline(|| simd::dispatch(kernel()));
-            assert_eq!(bits(h.as_slice()), bits(h_ref.as_slice()), "h, case {case}");
-            assert_eq!(bits(g.as_slice()), bits(g_ref.as_slice()), "g, case {case}");
-        }
-        // And whole refinements on stereo scenes.
-        for seed in 0..4 {
-            let (data, truth, _) = stereo_scene(seed, 5);
-            let fit = || refine_mahalanobis(&data, &truth, CHI2_3_99, 10).expect("refined");
-            let ((pose, inliers), (pose_ref, inliers_ref)) = (fit(), simd::baseline(fit));
-            assert_eq!(inliers, inliers_ref);
-            let pose_bits = |p: &Isometry3<f64>| {
-                bits(
-                    &[
-                        p.translation.vector.as_slice(),
-                        p.rotation.coords.as_slice(),
-                    ]
-                    .concat(),
-                )
-            };
-            assert_eq!(pose_bits(&pose), pose_bits(&pose_ref), "scene {seed}");
-        }
-    }
-
-    #[test]
-    fn determinant_and_inverse_have_nalgebras_bits() {
-        use rand::RngExt;
-        let mut rng = crate::rng::seeded(35);
-        let bits = |m: &Matrix3<f64>| m.iter().map(|v| v.to_bits()).collect::<Vec<u64>>();
-        for case in 0..4000 {
-            let mut m = Matrix3::from_fn(|_, _| match rng.random_range(0..10) {
-                0 => 0.0,
-                1 => -0.0,
-                2 => rng.random_range(-3..=3) as f64, // small integers: exact zero determinants
-                _ => rng.random_range(-1e3..1e3),
-            });
-            match case % 7 {
-                0 => m = m * m.transpose(), // symmetric, as a covariance is
-                1 => m[(rng.random_range(0..3), rng.random_range(0..3))] = f64::NAN,
-                2 => m[(rng.random_range(0..3), rng.random_range(0..3))] = f64::NEG_INFINITY,
-                3 => m *= 1e-120, // the determinant underflows
-                4 => m *= 1e110,  // the determinant overflows
-                5 => m.set_column(2, &m.column(0).clone_owned()), // singular
-                _ => {}
-            }
-            let (det, inverse) = determinant_and_inverse(&m);
-            assert_eq!(det.to_bits(), m.determinant().to_bits(), "case {case}: {m}");
-            let expected = m.try_inverse();
-            assert_eq!(inverse.is_some(), expected.is_some(), "case {case}: {m}");
-            if let (Some(a), Some(b)) = (inverse, expected) {
-                assert_eq!(bits(&a), bits(&b), "case {case}: {m}");
-            }
-            assert_eq!(inverse3(&m).map(|a| bits(&a)), inverse.map(|a| bits(&a)));
-        }
-    }
-
-    #[test]
-    fn needs_covariances_and_support() {
-        let p = |x: f64, y: f64, z: f64| Point3::new(x, y, z);
-        let pts = vec![
-            p(0.0, 0.0, 1.0),
-            p(1.0, 0.0, 2.0),
-            p(0.0, 1.0, 3.0),
-            p(1.0, 1.0, 5.0),
-            p(2.0, 0.5, 4.0),
-        ];
-        let plain = Correspondences::new(pts.clone(), pts.clone()).expect("valid");
-        let id = Isometry3::identity();
-        assert!(matches!(
-            refine_mahalanobis(&plain, &id, CHI2_3_99, 5),
-            Err(PoseError::InvalidConfig(_))
-        ));
-        let cov = vec![Matrix3::identity() * 1e-4; 5];
-        let far = moved_after(&pts, 2, |_| Vector3::new(9.0, 0.0, 0.0));
-        let data = Correspondences::new(pts, far)
-            .and_then(|c| c.with_noise_covariance(cov.clone(), cov))
-            .expect("valid");
-        assert!(matches!(
-            refine_mahalanobis(&data, &id, CHI2_3_99, 5),
-            Err(PoseError::InsufficientSupport { .. })
-        ));
-        assert!(refine_mahalanobis(&data, &id, f64::NAN, 5).is_err());
-    }
-}
+mod tests;

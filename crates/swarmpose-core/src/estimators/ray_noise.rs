@@ -44,7 +44,7 @@ use super::mahalanobis::{self, inverse3};
 use super::mixture::outlier_volume;
 use crate::geometry::{Correspondences, MIN_CORRESPONDENCES};
 use crate::simd;
-use kernels::{EStep, Scoring, WeightedNormalEquations};
+use kernels::{EStep, IsotropicSums, Scoring, WeightedNormalEquations};
 
 /// A noise model that grows with the range along and across the viewing ray from each
 /// frame's origin, fitted by `pso` from the residuals of plain coordinates (see
@@ -371,14 +371,7 @@ fn isotropic_step(
     rows: &[Row],
     floor: f64,
 ) -> Option<RangeNoise> {
-    let (mut num, mut den) = (0.0, 0.0);
-    for (i, row) in rows.iter().enumerate() {
-        if row.weight < MIN_WEIGHT {
-            continue;
-        }
-        num += row.weight * (data.dst()[i] - pose * data.src()[i]).norm_squared();
-        den += 3.0 * row.weight;
-    }
+    let (num, den) = simd::dispatch(IsotropicSums { data, pose, rows });
     let f = (0.5 * num / den).max(floor);
     f.is_finite().then(|| RangeNoise::from_array([f, 0.0, 0.0]))
 }

@@ -16,6 +16,9 @@
 //! have produced is [`PoseError::InsufficientSupport`] with the support needed, never a
 //! plain success.
 
+use std::marker::PhantomData;
+
+use nalgebra::{Isometry3, Matrix3, Point3};
 use rand::RngExt;
 
 use super::graph::PairGraph;
@@ -23,8 +26,9 @@ use super::{Found, PsoEstimator};
 use crate::error::PoseError;
 use crate::estimators::consensus::Tolerance;
 use crate::estimators::mahalanobis::{inverse3, refine_mahalanobis};
-use crate::geometry::{Correspondences, MIN_CORRESPONDENCES};
+use crate::geometry::{Correspondences, CovariancePair, MIN_CORRESPONDENCES};
 use crate::rng::SeededRng;
+use crate::simd;
 
 /// Probability that a consensus of wrong matches passes, over all triangles.
 pub(super) const FALSE_ALARM: f64 = 0.01;
@@ -94,19 +98,49 @@ pub(super) fn chance_rate<R>(
     row: impl Fn(usize) -> R,
     passes: impl Fn(&R, usize) -> bool,
 ) -> f64 {
+    /// The closures as a [`PairTest`].
+    struct Closures<F, G, R>(F, G, PhantomData<fn() -> R>);
+    impl<R, F: Fn(usize) -> R, G: Fn(&R, usize) -> bool> PairTest for Closures<F, G, R> {
+        type Row = R;
+        #[inline(always)]
+        fn row(&self, i: usize) -> R {
+            (self.0)(i)
+        }
+        #[inline(always)]
+        fn passes(&self, row: &R, j: usize) -> bool {
+            (self.1)(row, j)
+        }
+    }
+    chance_rate_of(n, rng, &Closures(row, passes, PhantomData))
+}
+
+/// An inlier test of a source row against a destination row, for [`chance_rate_of`].
+trait PairTest {
+    /// What the test prepares once per source row.
+    type Row;
+    /// Source row `i`, prepared.
+    fn row(&self, i: usize) -> Self::Row;
+    /// Whether the prepared source row passes against destination row `j`.
+    fn passes(&self, row: &Self::Row, j: usize) -> bool;
+}
+
+/// [`chance_rate`] of `test`: inlined into its callers, so that a [`simd::Kernel`] compiles
+/// the test into each of its instruction sets (closures would be compiled apart, once).
+#[inline(always)]
+fn chance_rate_of<T: PairTest>(n: usize, rng: &mut SeededRng, test: &T) -> f64 {
     if n < 2 {
         return 1.0;
     }
     let (mut hits, mut trials) = (0u64, 0u64);
     for a in 0..ROWS.min(n) {
         let i = if n <= ROWS { a } else { rng.random_range(0..n) };
-        let prepared = row(i);
+        let prepared = test.row(i);
         for _ in 0..PARTNERS.min(n - 1) {
             let mut j = rng.random_range(0..n - 1);
             if j >= i {
                 j += 1;
             }
-            hits += u64::from(passes(&prepared, j));
+            hits += u64::from(test.passes(&prepared, j));
             trials += 1;
         }
     }
@@ -125,11 +159,84 @@ pub(super) fn check_chance<R>(
     passes: impl Fn(&R, usize) -> bool,
 ) -> Result<(), PoseError> {
     let p = chance_rate(n, rng, row, passes);
+    check_rate(n, support, p, triangles)
+}
+
+/// [`check_chance`] once the chance rate `p` is known.
+fn check_rate(n: usize, support: usize, p: f64, triangles: f64) -> Result<(), PoseError> {
     let needed = needed_support(n, p, triangles);
     if support < needed {
         return Err(PoseError::InsufficientSupport { support, needed });
     }
     Ok(())
+}
+
+/// [`chance_rate`] of the Mahalanobis test at `pose` (gate `gate`, χ²(3) units): source row
+/// `i` moved by `pose` against destination row `j`, with covariance `R Σ_s,i Rᵀ + Σ_d,j`. A
+/// [`simd::Kernel`], compiled for the best instruction set of the CPU (the same operations
+/// and the same draws, so the same rate; issue 34).
+struct MahalanobisChance<'a> {
+    data: &'a Correspondences,
+    covariance: CovariancePair<'a>,
+    pose: Isometry3<f64>,
+    gate: f64,
+    rng: &'a mut SeededRng,
+}
+
+impl simd::Kernel for MahalanobisChance<'_> {
+    type Output = f64;
+
+    #[inline(always)]
+    fn run(self) -> f64 {
+        let Self {
+            data,
+            covariance: (src_cov, dst_cov),
+            pose,
+            gate,
+            rng,
+        } = self;
+        let test = MahalanobisTest {
+            src: data.src(),
+            dst: data.dst(),
+            src_cov,
+            dst_cov,
+            pose,
+            rotation: pose.rotation.to_rotation_matrix().into_inner(),
+            gate,
+        };
+        chance_rate_of(data.len(), rng, &test)
+    }
+}
+
+/// The test of [`MahalanobisChance`], with the rotation's matrix.
+struct MahalanobisTest<'a> {
+    src: &'a [Point3<f64>],
+    dst: &'a [Point3<f64>],
+    src_cov: &'a [Matrix3<f64>],
+    dst_cov: &'a [Matrix3<f64>],
+    pose: Isometry3<f64>,
+    rotation: Matrix3<f64>,
+    gate: f64,
+}
+
+impl PairTest for MahalanobisTest<'_> {
+    /// The moved source point and its rotated covariance `R Σ_s Rᵀ`.
+    type Row = (Point3<f64>, Matrix3<f64>);
+
+    #[inline(always)]
+    fn row(&self, i: usize) -> Self::Row {
+        let r = &self.rotation;
+        (self.pose * self.src[i], r * self.src_cov[i] * r.transpose())
+    }
+
+    #[inline(always)]
+    fn passes(&self, (q, c): &Self::Row, j: usize) -> bool {
+        let e = self.dst[j] - q;
+        let cov = c + self.dst_cov[j];
+        // eᵀ Σ⁻¹ e ≥ |e|² / tr Σ: most pairs fail without an inversion.
+        e.norm_squared() < self.gate * cov.trace()
+            && inverse3(&cov).is_some_and(|w| e.dot(&(w * e)) < self.gate)
+    }
 }
 
 impl PsoEstimator {
@@ -155,22 +262,14 @@ impl PsoEstimator {
             found.pose = pose;
             found.inliers = inliers;
         }
-        let (src, dst, pose) = (data.src(), data.dst(), found.pose);
-        let r = pose.rotation.to_rotation_matrix().into_inner();
-        check_chance(
-            data.len(),
-            found.inliers.len(),
-            triangles,
+        let p = simd::dispatch(MahalanobisChance {
+            data,
+            covariance: (src_cov, dst_cov),
+            pose: found.pose,
+            gate,
             rng,
-            |i| (pose * src[i], r * src_cov[i] * r.transpose()),
-            |(q, c), j| {
-                let e = dst[j] - q;
-                let cov = c + dst_cov[j];
-                // eᵀ Σ⁻¹ e ≥ |e|² / tr Σ: most pairs fail without an inversion.
-                e.norm_squared() < gate * cov.trace()
-                    && inverse3(&cov).is_some_and(|w| e.dot(&(w * e)) < gate)
-            },
-        )
+        });
+        check_rate(data.len(), found.inliers.len(), p, triangles)
     }
 
     /// The self-check of [`check`] on the isotropic test at `tol`.
@@ -219,6 +318,85 @@ mod tests {
         assert!(big > 30 && big < 200, "{big}");
         // Fewer rigid triples to start from: less to fear from chance.
         assert!(needed_support(600, 1e-3, 1e4) < mid);
+    }
+
+    /// The Mahalanobis chance rate through the kernel, dispatched and baseline, against the
+    /// closures `checked` passed to `check_chance` before it (issue 34): the same rate, and
+    /// the generator left in the same state.
+    #[test]
+    fn mahalanobis_chance_matches_the_closures_in_every_instruction_set() {
+        use nalgebra::Vector3;
+        let mut rng = crate::rng::seeded(42);
+        let value = |rng: &mut SeededRng| -> f64 {
+            match rng.random_range(0..60) {
+                0 => 0.0,
+                1 => -0.0,
+                2 => f64::NAN,
+                3 => f64::INFINITY,
+                _ => rng.random_range(-0.5..0.5),
+            }
+        };
+        let mut rates = Vec::new();
+        for case in 0..30 {
+            let n = [50, 128, 300][case % 3];
+            let point = |rng: &mut SeededRng| {
+                Point3::new(
+                    rng.random_range(-2.0..2.0),
+                    rng.random_range(-2.0..2.0),
+                    rng.random_range(-2.0..2.0),
+                )
+            };
+            let src: Vec<Point3<f64>> = (0..n).map(|_| point(&mut rng)).collect();
+            let dst: Vec<Point3<f64>> = (0..n).map(|_| point(&mut rng)).collect();
+            let cov = |rng: &mut SeededRng| {
+                let a = Matrix3::from_fn(|_, _| value(rng));
+                a * a.transpose()
+            };
+            let sc: Vec<Matrix3<f64>> = (0..n).map(|_| cov(&mut rng)).collect();
+            let dc: Vec<Matrix3<f64>> = (0..n).map(|_| cov(&mut rng)).collect();
+            let data = Correspondences::new(src.clone(), dst.clone()).expect("valid");
+            let pose = Isometry3::new(
+                Vector3::new(rng.random_range(-0.5..0.5), 0.0, 0.1),
+                Vector3::new(0.0, rng.random_range(-0.3..0.3), 0.01),
+            );
+            let gate = 11.345;
+            let seed: u64 = rng.random();
+            // The reference: the closures as `checked` passed them.
+            let r = pose.rotation.to_rotation_matrix().into_inner();
+            let mut reference_rng = crate::rng::seeded(seed);
+            let expected = chance_rate(
+                n,
+                &mut reference_rng,
+                |i| (pose * src[i], r * sc[i] * r.transpose()),
+                |(q, c), j| {
+                    let e = dst[j] - q;
+                    let cov = c + dc[j];
+                    e.norm_squared() < gate * cov.trace()
+                        && inverse3(&cov).is_some_and(|w| e.dot(&(w * e)) < gate)
+                },
+            );
+            let after: u64 = reference_rng.random();
+            let run = || {
+                let mut rng = crate::rng::seeded(seed);
+                let p = simd::dispatch(MahalanobisChance {
+                    data: &data,
+                    covariance: (&sc, &dc),
+                    pose,
+                    gate,
+                    rng: &mut rng,
+                });
+                (p.to_bits(), rng.random::<u64>())
+            };
+            assert_eq!(run(), (expected.to_bits(), after), "case {case}");
+            assert_eq!(
+                simd::baseline(run),
+                (expected.to_bits(), after),
+                "case {case}"
+            );
+            rates.push(expected);
+        }
+        // Neither no hit nor all: the test compares rates that depend on the data.
+        assert!(rates.iter().any(|&p| p > 0.05) && rates.iter().any(|&p| p < 0.95));
     }
 
     #[test]

@@ -31,9 +31,11 @@ pub(super) struct PairGraph {
     words: usize,
     /// Adjacency bitsets, one row of `words` words per local point.
     rows: Vec<u64>,
-    /// Consistent pairs `(i, j, common neighbours)` in local indices; the first `scored`
-    /// are the best ranked, in rank order.
+    /// Every consistent pair `(i, j, common neighbours)` in local indices, `i < j`, in
+    /// lexicographic order.
     pairs: Vec<(u32, u32, u32)>,
+    /// The (at most `max_pairs`) best ranked pairs, in rank order: the scored pairs.
+    ranked: Vec<(u32, u32, u32)>,
     /// Scored pairs: source differences `a = s_i - s_j`, metres (single precision: the
     /// fitness loop vectorises).
     a: [Vec<f32>; 3],
@@ -81,13 +83,15 @@ impl PairGraph {
             min_len: min_len_m as f32,
         });
         count_common_dispatched(&mut pairs, &rows, words);
-        let scored = rank_prefix(&mut pairs, max_pairs, m);
+        let ranked = ranked_prefix(&pairs, max_pairs, m);
+        let scored = ranked.len();
         let lanes = scored.next_multiple_of(LANES);
         let mut graph = Self {
             points,
             words,
             rows,
             pairs,
+            ranked,
             a: std::array::from_fn(|_| Vec::with_capacity(lanes)),
             b: std::array::from_fn(|_| Vec::with_capacity(lanes)),
             inv_tol2: Vec::with_capacity(lanes),
@@ -114,9 +118,9 @@ impl PairGraph {
         graph
     }
 
-    /// Global indices of pair `k`.
+    /// Global indices of scored pair `k`.
     fn global(&self, k: usize) -> (usize, usize) {
-        let (i, j, _) = self.pairs[k];
+        let (i, j, _) = self.ranked[k];
         (self.points[i as usize], self.points[j as usize])
     }
 
@@ -167,7 +171,7 @@ impl PairGraph {
         let mut count = vec![0u32; self.points.len()];
         for p in 0..self.scored() {
             if self.normalised_residual2(m, p) < 1.0 {
-                let (i, j, _) = self.pairs[p];
+                let (i, j, _) = self.ranked[p];
                 count[i as usize] += 1;
                 count[j as usize] += 1;
             }
@@ -194,7 +198,7 @@ impl PairGraph {
         let (src, dst) = (data.src(), data.dst());
         for _ in 0..count {
             for _ in 0..SEED_TRIES {
-                let (i, j, c) = self.pairs[rng.random_range(0..pool)];
+                let (i, j, c) = self.ranked[rng.random_range(0..pool)];
                 if c == 0 {
                     continue;
                 }
@@ -327,8 +331,8 @@ impl simd::Kernel for Consistency<'_> {
         let m = tl.len();
         let words = m.div_ceil(64);
         let mut rows = vec![0u64; m * words];
-        let mut pairs = Vec::new();
         let mut consistent = vec![false; m];
+        let mut count = 0;
         for li in 0..m {
             let j0 = li + 1;
             let row = &mut consistent[j0..];
@@ -345,18 +349,45 @@ impl simd::Kernel for Consistency<'_> {
                 let lb = ((bx - u) * (bx - u) + (by - v) * (by - v) + (bz - w) * (bz - w)).sqrt();
                 *flag = (la >= min_len) & ((la - lb).abs() < ti + t);
             }
-            // The flags 64 at a time as a bitset, then its set bits in ascending order.
+            // The flags 64 at a time as a bitset: into row `li` a word (or two) at a time,
+            // shifted to its place, and bit by bit into the rows of the points they name.
+            let (upper, lower) = (li * words, li / 64);
             for (c, chunk) in row.chunks(64).enumerate() {
                 let mut bits = chunk
                     .iter()
                     .enumerate()
                     .fold(0u64, |b, (k, &f)| b | (u64::from(f) << k));
+                count += bits.count_ones() as usize;
+                let start = j0 + 64 * c;
+                let (word, shift) = (start / 64, start % 64);
+                rows[upper + word] |= bits << shift;
+                if shift > 0 && bits >> (64 - shift) != 0 {
+                    rows[upper + word + 1] |= bits >> (64 - shift);
+                }
                 while bits != 0 {
-                    let lj = j0 + 64 * c + bits.trailing_zeros() as usize;
+                    let lj = start + bits.trailing_zeros() as usize;
                     bits &= bits - 1;
-                    rows[li * words + lj / 64] |= 1 << (lj % 64);
-                    rows[lj * words + li / 64] |= 1 << (li % 64);
-                    pairs.push((li as u32, lj as u32, 0));
+                    rows[lj * words + lower] |= 1 << (li % 64);
+                }
+            }
+        }
+        // The pairs: each row's bits above the diagonal, rows in order (their number known,
+        // so the list is allocated once).
+        let mut pairs = Vec::with_capacity(count);
+        if words > 0 {
+            for (li, row) in rows.chunks_exact(words).enumerate() {
+                let first = (li + 1) / 64;
+                for (w, &word) in row.iter().enumerate().skip(first) {
+                    let mut bits = if w == first {
+                        word & (u64::MAX << ((li + 1) % 64))
+                    } else {
+                        word
+                    };
+                    while bits != 0 {
+                        let lj = 64 * w + bits.trailing_zeros() as usize;
+                        bits &= bits - 1;
+                        pairs.push((li as u32, lj as u32, 0));
+                    }
                 }
             }
         }
@@ -422,17 +453,27 @@ fn common_count(a: &[u64], b: &[u64]) -> u32 {
     a.iter().zip(b).map(|(x, y)| (x & y).count_ones()).sum()
 }
 
-/// Moves the (at most) `max_pairs` pairs with the most common neighbours to the front, in
-/// rank order (more first, then by index), and returns how many that is. Counting sort on
-/// the neighbour count: `O(pairs + points)`, deterministic.
-fn rank_prefix(pairs: &mut [(u32, u32, u32)], max_pairs: usize, points: usize) -> usize {
+/// The (at most) `max_pairs` pairs with the most common neighbours, in rank order (more
+/// first, then by index). Counting sort on the neighbour count: `O(pairs + points)`,
+/// deterministic. `pairs` itself is left as it is: the graph keeps every pair for the
+/// order-free questions (their count of triangles, the largest count outside a set), so
+/// the rest need no compaction (issue 34).
+fn ranked_prefix(
+    pairs: &[(u32, u32, u32)],
+    max_pairs: usize,
+    points: usize,
+) -> Vec<(u32, u32, u32)> {
+    // A total order (each pair once): unstable is the same order, without a buffer.
+    let order =
+        |x: &(u32, u32, u32), y: &(u32, u32, u32)| y.2.cmp(&x.2).then((x.0, x.1).cmp(&(y.0, y.1)));
+    let mut front: Vec<(u32, u32, u32)> = Vec::with_capacity(max_pairs.min(pairs.len()));
     if pairs.len() <= max_pairs {
-        // A total order (each pair once): unstable is the same order, without a buffer.
-        pairs.sort_unstable_by(|x, y| y.2.cmp(&x.2).then((x.0, x.1).cmp(&(y.0, y.1))));
-        return pairs.len();
+        front.extend_from_slice(pairs);
+        front.sort_unstable_by(order);
+        return front;
     }
     let mut histogram = vec![0usize; points + 1];
-    for p in pairs.iter() {
+    for p in pairs {
         histogram[p.2 as usize] += 1;
     }
     // Smallest count `cut` such that the pairs with more than `cut` fit.
@@ -442,9 +483,8 @@ fn rank_prefix(pairs: &mut [(u32, u32, u32)], max_pairs: usize, points: usize) -
         above += histogram[cut];
         cut -= 1;
     }
-    // Stable partition: pairs above `cut`, then those at `cut` (index order) up to the cap.
+    // Pairs above `cut`, then those at `cut` (index order) up to the cap.
     let cut_count = cut as u32;
-    let mut front: Vec<(u32, u32, u32)> = Vec::with_capacity(max_pairs.min(pairs.len()));
     front.extend(pairs.iter().copied().filter(|p| p.2 > cut_count));
     let above_cut = front.len();
     front.extend(
@@ -454,33 +494,8 @@ fn rank_prefix(pairs: &mut [(u32, u32, u32)], max_pairs: usize, points: usize) -
             .filter(|p| p.2 == cut_count)
             .take(max_pairs - above_cut),
     );
-    // As above: unstable is the same order.
-    front.sort_unstable_by(|x, y| y.2.cmp(&x.2).then((x.0, x.1).cmp(&(y.0, y.1))));
-    let n = front.len();
-    // The rest keep their order after the ranked prefix: compacted in place towards the
-    // end, walking from the back (a pair only moves right, onto one already read), without
-    // a second buffer of all pairs. The first `taken_at_cut` pairs at `cut` (index order)
-    // are in the prefix.
-    let taken_at_cut = n - above_cut;
-    let mut at_cut_left = histogram[cut];
-    let mut write = pairs.len();
-    for read in (0..pairs.len()).rev() {
-        let p = pairs[read];
-        if p.2 > cut_count {
-            continue;
-        }
-        if p.2 == cut_count {
-            at_cut_left -= 1;
-            if at_cut_left < taken_at_cut {
-                continue;
-            }
-        }
-        write -= 1;
-        pairs[write] = p;
-    }
-    debug_assert_eq!(write, n, "the prefix and the rest hold every pair once");
-    pairs[..n].copy_from_slice(&front);
-    n
+    front.sort_unstable_by(order);
+    front
 }
 
 #[cfg(test)]

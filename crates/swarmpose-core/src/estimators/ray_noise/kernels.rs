@@ -114,6 +114,33 @@ impl simd::Kernel for WeightedNormalEquations<'_> {
     }
 }
 
+/// The sums `(Σ w |e|², Σ 3 w)` of [`super::isotropic_step`] over the rows of weight at least
+/// `MIN_WEIGHT`, in order: a [`simd::Kernel`], compiled for the best instruction set of the CPU
+/// (the same operations, so the same bits).
+pub(super) struct IsotropicSums<'a> {
+    pub(super) data: &'a Correspondences,
+    pub(super) pose: &'a Isometry3<f64>,
+    pub(super) rows: &'a [Row],
+}
+
+impl simd::Kernel for IsotropicSums<'_> {
+    type Output = (f64, f64);
+
+    #[inline(always)]
+    fn run(self) -> Self::Output {
+        let Self { data, pose, rows } = self;
+        let (mut num, mut den) = (0.0, 0.0);
+        for (i, row) in rows.iter().enumerate() {
+            if row.weight < MIN_WEIGHT {
+                continue;
+            }
+            num += row.weight * (data.dst()[i] - pose * data.src()[i]).norm_squared();
+            den += 3.0 * row.weight;
+        }
+        (num, den)
+    }
+}
+
 /// [`super::scoring_step`] as a kernel.
 pub(super) struct Scoring<'a> {
     pub(super) data: &'a Correspondences,

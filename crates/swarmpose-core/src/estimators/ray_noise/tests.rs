@@ -95,3 +95,59 @@ fn the_fits_have_the_same_bits_in_every_instruction_set() {
         );
     }
 }
+
+/// The isotropic M step's sums before their kernel (issue 34), dispatched and baseline, on
+/// seeded random rows (weights below `MIN_WEIGHT`, zeros of both signs).
+#[test]
+fn isotropic_sums_match_the_reference_in_every_instruction_set() {
+    use nalgebra::{Isometry3, Matrix3, Point3};
+    use rand::RngExt;
+    let mut rng = crate::rng::seeded(44);
+    for case in 0..100 {
+        let n: usize = rng.random_range(1..150);
+        let point = |rng: &mut crate::rng::SeededRng| {
+            Point3::new(
+                rng.random_range(-3.0..3.0),
+                rng.random_range(-3.0..3.0),
+                rng.random_range(1.0..9.0),
+            )
+        };
+        let src: Vec<Point3<f64>> = (0..n).map(|_| point(&mut rng)).collect();
+        let dst: Vec<Point3<f64>> = (0..n).map(|_| point(&mut rng)).collect();
+        let data = Correspondences::new(src, dst).expect("valid");
+        let pose = Isometry3::new(
+            Vector3::new(rng.random_range(-1.0..1.0), 0.0, 0.2),
+            Vector3::new(0.0, rng.random_range(-0.5..0.5), 0.0),
+        );
+        let rows: Vec<Row> = (0..n)
+            .map(|_| Row {
+                weight: match rng.random_range(0..10) {
+                    0 => 0.0,
+                    1 => -0.0,
+                    2 => rng.random_range(0.0..2.0 * MIN_WEIGHT),
+                    _ => rng.random_range(0.0..1.0),
+                },
+                information: Matrix3::identity(),
+            })
+            .collect();
+        let (mut num, mut den) = (0.0f64, 0.0f64);
+        for (i, row) in rows.iter().enumerate() {
+            if row.weight < MIN_WEIGHT {
+                continue;
+            }
+            num += row.weight * (data.dst()[i] - pose * data.src()[i]).norm_squared();
+            den += 3.0 * row.weight;
+        }
+        let kernel = || {
+            let (a, b) = crate::simd::dispatch(IsotropicSums {
+                data: &data,
+                pose: &pose,
+                rows: &rows,
+            });
+            (a.to_bits(), b.to_bits())
+        };
+        let expected = (num.to_bits(), den.to_bits());
+        assert_eq!(kernel(), expected, "case {case}");
+        assert_eq!(crate::simd::baseline(kernel), expected, "case {case}");
+    }
+}

@@ -3,7 +3,9 @@
 use super::*;
 use crate::rng::seeded;
 
-/// `rank_prefix` as it was before the in-place compaction (issue 34): the reference.
+/// `rank_prefix` as it was before the in-place compaction (issue 34): the reference. It
+/// reorders `pairs` (the ranked prefix first, then the rest in their order); the graph
+/// now keeps the ranked prefix apart ([`ranked_prefix`]) and every pair as built.
 fn rank_prefix_reference(pairs: &mut [(u32, u32, u32)], max_pairs: usize, points: usize) -> usize {
     let order =
         |x: &(u32, u32, u32), y: &(u32, u32, u32)| y.2.cmp(&x.2).then((x.0, x.1).cmp(&(y.0, y.1)));
@@ -50,7 +52,7 @@ fn rank_prefix_reference(pairs: &mut [(u32, u32, u32)], max_pairs: usize, points
 }
 
 #[test]
-fn rank_prefix_matches_the_reference_on_random_pairs() {
+fn ranked_prefix_matches_the_reference_on_random_pairs() {
     let mut rng = seeded(34);
     for case in 0..300 {
         let points: usize = rng.random_range(2..60);
@@ -73,9 +75,10 @@ fn rank_prefix_matches_the_reference_on_random_pairs() {
         let max_pairs = rng.random_range(1..=len.max(1) + 2);
         let mut expected = pairs.clone();
         let n_expected = rank_prefix_reference(&mut expected, max_pairs, points);
-        let n = rank_prefix(&mut pairs, max_pairs, points);
-        assert_eq!(n, n_expected, "case {case}");
-        assert_eq!(pairs, expected, "case {case}");
+        let before = pairs.clone();
+        let ranked = ranked_prefix(&pairs, max_pairs, points);
+        assert_eq!(ranked, expected[..n_expected], "case {case}");
+        assert_eq!(pairs, before, "case {case}: the pairs are left as they are");
     }
 }
 
@@ -131,21 +134,105 @@ fn common_count_matches_the_indexed_sum() {
 }
 
 #[test]
-fn rank_prefix_keeps_the_best_and_all_pairs() {
-    let mut pairs: Vec<(u32, u32, u32)> = (0..10)
+fn ranked_prefix_keeps_the_best() {
+    let pairs: Vec<(u32, u32, u32)> = (0..10)
         .map(|k| (k, k + 1, [3, 7, 1, 7, 0, 5, 5, 2, 9, 5][k as usize]))
         .collect();
-    let before = pairs.clone();
-    let n = rank_prefix(&mut pairs, 4, 20);
-    assert_eq!(n, 4);
-    let counts: Vec<u32> = pairs[..4].iter().map(|p| p.2).collect();
+    let ranked = ranked_prefix(&pairs, 4, 20);
+    let counts: Vec<u32> = ranked.iter().map(|p| p.2).collect();
     assert_eq!(counts, vec![9, 7, 7, 5]);
-    assert_eq!(pairs[3], (5, 6, 5)); // first of the tied 5s by index
-    let mut a = before;
-    let mut b = pairs.clone();
-    a.sort_unstable();
-    b.sort_unstable();
-    assert_eq!(a, b);
+    assert_eq!(ranked[3], (5, 6, 5)); // first of the tied 5s by index
+    // Fewer pairs than the cap: all of them, ranked.
+    let all = ranked_prefix(&pairs, 10, 20);
+    let counts: Vec<u32> = all.iter().map(|p| p.2).collect();
+    assert_eq!(counts, vec![9, 7, 7, 5, 5, 5, 3, 2, 1, 0]);
+}
+
+/// A graph built as before the ranked prefix was kept apart (issue 34): the reference
+/// consistency loop and the reference ranking, whose reordered pairs answer the
+/// order-free questions (triangles, the largest count outside a set).
+#[test]
+fn graph_matches_the_reference_ranking() {
+    use nalgebra::Point3;
+    let mut rng = seeded(40);
+    for case in 0..40 {
+        let n: usize = rng.random_range(5..150);
+        let src: Vec<Point3<f64>> = (0..n)
+            .map(|_| {
+                Point3::new(
+                    rng.random_range(-5.0..5.0),
+                    rng.random_range(-2.0..2.0),
+                    rng.random_range(2.0..20.0),
+                )
+            })
+            .collect();
+        // Half the rows moved rigidly (a shift), the rest anywhere: a dense cluster.
+        let dst: Vec<Point3<f64>> = src
+            .iter()
+            .map(|p| {
+                if rng.random_range(0..2) == 0 {
+                    p + nalgebra::Vector3::new(0.5, 0.0, -1.0)
+                } else {
+                    Point3::new(
+                        rng.random_range(-5.0..5.0),
+                        rng.random_range(-2.0..2.0),
+                        rng.random_range(2.0..20.0),
+                    )
+                }
+            })
+            .collect();
+        let data = Correspondences::new(src.clone(), dst.clone()).expect("valid");
+        let max_pairs = [4, 50, 256, 100_000][case % 4];
+        let points: Vec<usize> = (0..n).collect();
+        let graph = PairGraph::build(&data, points, Tolerance::Uniform(0.3), max_pairs, 0.5);
+        // The reference.
+        let column = |f: &dyn Fn(usize) -> f64| (0..n).map(|g| f(g) as f32).collect::<Vec<_>>();
+        let (sx, sy, sz) = (
+            column(&|g| src[g].x),
+            column(&|g| src[g].y),
+            column(&|g| src[g].z),
+        );
+        let (dx, dy, dz) = (
+            column(&|g| dst[g].x),
+            column(&|g| dst[g].y),
+            column(&|g| dst[g].z),
+        );
+        let tl = vec![0.3f32; n];
+        let (rows, mut pairs) = consistency_reference([&sx, &sy, &sz], [&dx, &dy, &dz], &tl, 0.5);
+        let words = n.div_ceil(64);
+        for p in &mut pairs {
+            let (ri, rj) = (p.0 as usize * words, p.1 as usize * words);
+            p.2 = (0..words)
+                .map(|w| (rows[ri + w] & rows[rj + w]).count_ones())
+                .sum();
+        }
+        let scored = rank_prefix_reference(&mut pairs, max_pairs, n);
+        assert_eq!(graph.rows, rows, "case {case}");
+        assert_eq!(graph.ranked, pairs[..scored], "case {case}");
+        assert_eq!(graph.scored(), scored, "case {case}");
+        let triangles = pairs.iter().map(|p| u64::from(p.2)).sum::<u64>() / 3;
+        assert_eq!(graph.triangles(), triangles, "case {case}");
+        for _ in 0..5 {
+            let taken: Vec<bool> = (0..n).map(|_| rng.random_range(0..3) == 0).collect();
+            let free = |l: u32| !taken[l as usize];
+            let expected = pairs
+                .iter()
+                .filter(|(i, j, _)| free(*i) && free(*j))
+                .map(|&(i, j, _)| {
+                    (0..n as u32)
+                        .filter(|&l| free(l))
+                        .filter(|&l| {
+                            let bit =
+                                |a: u32| rows[a as usize * words + l as usize / 64] >> (l % 64) & 1;
+                            bit(i) == 1 && bit(j) == 1
+                        })
+                        .count() as u32
+                })
+                .max()
+                .unwrap_or(0);
+            assert_eq!(graph.max_common_outside(&taken), expected, "case {case}");
+        }
+    }
 }
 
 /// The consistency loop as it was before the bitset scan and the dispatch (issue 34): the
