@@ -35,7 +35,7 @@ use crate::refine::evidence::{Matrix6xK, MatrixK, VectorK};
 use crate::refine::model::{Matrix3x6, StereoModel};
 use crate::refine::noise::{Score, cluster_factor, variance_factor};
 use swarmpose_vision::simd::{Kernel, dispatch};
-use system::build;
+use system::{Blocks, build};
 
 /// Robust cost `Σ ρ` of every track at the relative poses `rel` of `n` keyframes, or
 /// infinity when a point leaves a view.
@@ -126,7 +126,7 @@ pub(super) fn linearised_system(
     sc: &mut Scratch,
 ) -> Option<(DMatrix<f64>, DVector<f64>)> {
     let points: Vec<Vector3<f64>> = tracks.list.iter().map(|t| t.point).collect();
-    build(model, k, (poses, 0), tracks, &points, sc)?;
+    build(model, k, (poses, 0, Blocks::Full), tracks, &points, sc)?;
     Some((std::mem::take(&mut sc.s), std::mem::take(&mut sc.g)))
 }
 
@@ -313,9 +313,11 @@ impl LeastSquares for WindowLm<'_> {
     fn linearise(&mut self) -> Result<f64, ()> {
         self.iterations += 1;
         let Self { ws, model, k, .. } = self;
-        // The cost at the current state comes with its linearisation.
+        // The cost at the current state comes with its linearisation. Both factorisations
+        // of `S` (the step's, the covariance's) read its lower triangle only.
         let sc = &mut ws.sc;
-        build(model, *k, (&ws.poses, 1), &ws.tracks, &ws.points, sc).ok_or(())?;
+        let poses = (&ws.poses[..], 1, Blocks::Lower);
+        build(model, *k, poses, &ws.tracks, &ws.points, sc).ok_or(())?;
         if let Some((p, slots)) = &self.prior {
             let system = (&mut sc.s, &mut sc.g);
             p.add_to(
