@@ -34,6 +34,20 @@ pub(super) struct Tracks {
     /// For each of `gathered`, its track identity (high half) and its index there (low
     /// half): sorted, each track's measurements together in slot order.
     keys: Vec<u64>,
+    /// Each track's key in the order of the list ([`list_key`]) and its index there.
+    order: Vec<(ListKey, usize)>,
+    /// The tracks in that order.
+    sorted: Vec<Track>,
+}
+
+/// A track's place in the list: the keyframe of its first measurement, then where that
+/// is in the image (1/64 pixel).
+type ListKey = (usize, i64, i64);
+
+/// The [`ListKey`] of the track whose first measurement is `(slot, z)`.
+#[inline(always)]
+fn list_key(&(slot, z): &(usize, StereoObservation)) -> ListKey {
+    (slot, (z.u * 64.0) as i64, (z.v * 64.0) as i64)
 }
 
 impl Tracks {
@@ -68,6 +82,8 @@ impl Tracks {
             + self.measurements.capacity() * size_of::<(usize, StereoObservation)>()
             + self.gathered.capacity() * size_of::<(usize, StereoObservation)>()
             + self.keys.capacity() * size_of::<u64>()
+            + self.order.capacity() * size_of::<(ListKey, usize)>()
+            + self.sorted.capacity() * size_of::<Track>()
     }
 }
 
@@ -91,6 +107,8 @@ pub(super) fn tracks_of(
         measurements,
         gathered,
         keys,
+        order,
+        sorted,
     } = out;
     gathered.clear();
     keys.clear();
@@ -127,11 +145,23 @@ pub(super) fn tracks_of(
             });
         }
     }
-    // By the first measurement: its keyframe, then where it is in the image.
-    list.sort_unstable_by_key(|t| {
-        let (s, z) = measurements[t.start];
-        (s, (z.u * 64.0) as i64, (z.v * 64.0) as i64)
-    });
+    // By the first measurement: its keyframe, then where it is in the image. The keys
+    // computed once, not in every comparison (issue 34); when two are equal the order
+    // of those tracks is the unstable sort's, which that sort of the list alone gives.
+    order.clear();
+    order.extend(
+        list.iter()
+            .enumerate()
+            .map(|(i, t)| (list_key(&measurements[t.start]), i)),
+    );
+    order.sort_unstable();
+    if order.windows(2).all(|w| w[0].0 != w[1].0) {
+        sorted.clear();
+        sorted.extend(order.iter().map(|&(_, i)| list[i].clone()));
+        std::mem::swap(list, sorted);
+    } else {
+        list.sort_unstable_by_key(|t| list_key(&measurements[t.start]));
+    }
     let n = poses.len();
     relative_poses(poses, rel);
     for t in list.iter_mut() {
@@ -236,7 +266,7 @@ mod tests {
         ]));
         let mut rng = ChaCha8Rng::seed_from_u64(3437);
         let (mut rel, mut out) = (Vec::new(), Tracks::default());
-        let mut tracks = 0;
+        let (mut tracks, mut tied) = (0, 0);
         for trial in 0..200 {
             let n = rng.random_range(2..9);
             let ids: Vec<u32> = (0..120)
@@ -260,6 +290,9 @@ mod tests {
                                 d: rng.random_range(1.0..60.0),
                             };
                             match rng.random_range(0..40) {
+                                // Another track's first measurement in the same place:
+                                // tied keys in the list's order.
+                                0 if rng.random_range(0..4) == 0 => (z.u, z.v) = (512.0, 100.0),
                                 0 => z.d = f64::NAN,
                                 1 => z.u = 0.0,
                                 2 => z.v = -0.0,
@@ -296,7 +329,16 @@ mod tests {
                 .collect();
             assert_eq!(format!("{got:?}"), format!("{want:?}"), "trial {trial}");
             tracks += got.len();
+            let first =
+                |(_, obs): &(Vector3<f64>, Vec<(usize, StereoObservation)>)| list_key(&obs[0]);
+            tied += got
+                .windows(2)
+                .filter(|w| first(&w[0]) == first(&w[1]))
+                .count();
         }
-        assert!(tracks > 10_000, "{tracks} tracks");
+        assert!(
+            tracks > 10_000 && tied >= 10,
+            "{tracks} tracks, {tied} tied"
+        );
     }
 }
