@@ -29,6 +29,7 @@ use super::tracks::{Tracks, tracks_of};
 use super::{Keyframe, WindowConfig, WindowReport};
 use crate::nls::lm::{Damping, LeastSquares};
 use crate::nls::pose::Pose;
+use crate::nls::products::{mul, mul_vec, tr_mul};
 use crate::nls::robust::huber;
 use crate::nls::schur::back_substitute;
 use crate::refine::evidence::{Matrix6xK, MatrixK, VectorK};
@@ -421,7 +422,9 @@ impl Workspace {
         for ((tp, p), e) in trial_points.iter_mut().zip(points.iter()).zip(&sc.elim) {
             let mut rhs = e.gp;
             for (v, b) in &sc.hpx[e.start..e.end] {
-                rhs += b * dx.fixed_rows::<6>(6 * v);
+                // nalgebra's `b * dx.fixed_rows::<6>(6 v)` bit for bit ([`mul_vec`]).
+                let x: [f64; 6] = std::array::from_fn(|k| dx[6 * v + k]);
+                rhs += mul_vec(b, &x);
             }
             *tp = back_substitute(p, &e.hpp_inv, &rhs);
         }
@@ -496,10 +499,14 @@ fn track_scores(sc: &Scratch, tracks: &Tracks, columns: &DMatrix<f64>) -> Vec<Sc
     let mut scores = Vec::with_capacity(tracks.len());
     for ((_, obs), e) in tracks.iter().zip(&sc.elim) {
         let mut g = Vector6::zeros();
+        // nalgebra's products bit for bit, without its generic ones ([`mul`], [`tr_mul`],
+        // [`mul_vec`]); `H_pp⁻¹ g_p` once per track.
+        let through = mul(&e.hpp_inv, &e.gp);
         for i in e.start..e.end {
             let (v, hpx) = &sc.hpx[i];
-            let r = sc.hgx[i] - hpx.transpose() * (e.hpp_inv * e.gp);
-            g += columns.fixed_view::<6, 6>(6 * v, 0).transpose() * r;
+            let r = sc.hgx[i] - tr_mul(hpx, &through);
+            let c: Matrix6<f64> = columns.fixed_view::<6, 6>(6 * v, 0).transpose();
+            g += mul_vec(&c, &r.data.0[0]);
         }
         let z = obs[0].1;
         scores.push(Score {
