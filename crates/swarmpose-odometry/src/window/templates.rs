@@ -28,11 +28,11 @@ impl Templates {
 
     /// Keeps `template` as the template of track `t` (in place of the one it had).
     pub(super) fn insert(&mut self, t: u32, template: PatchTemplate) {
-        if let Some(&i) = self.slot.get(&t) {
-            if let Some(s) = self.slots.get_mut(i) {
-                *s = template;
-                return;
-            }
+        if let Some(&i) = self.slot.get(&t)
+            && let Some(s) = self.slots.get_mut(i)
+        {
+            *s = template;
+            return;
         }
         let i = match self.free.pop() {
             Some(i) => {
