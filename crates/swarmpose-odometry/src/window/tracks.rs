@@ -6,6 +6,7 @@ use nalgebra::{Matrix3, Vector3};
 use super::Keyframe;
 use super::residual::{Relative, linearize_point, relative_poses};
 use crate::nls::pose::Pose;
+use crate::nls::products::add_gram;
 use crate::nls::robust::huber;
 use crate::refine::model::{StereoModel, StereoObservation};
 
@@ -174,7 +175,9 @@ pub(super) fn tracks_of(
                 linearize_point(model, (rel, n), anchor, *slot, &t.point, z)
             {
                 let (w, _) = huber(residual.norm_squared(), k);
-                h += d_point.transpose() * d_point * w;
+                // nalgebra's `h += d_pointᵀ d_point w` bit for bit, without its generic
+                // product ([`add_gram`]).
+                add_gram(&mut h, &d_point, w);
                 g += d_point.transpose() * residual * w;
             }
         }
