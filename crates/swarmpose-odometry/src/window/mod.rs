@@ -41,6 +41,7 @@
 //! track identities and patches of the newest frame's features.
 
 mod calibration;
+mod ids;
 mod link;
 pub mod marginal;
 mod prior;
@@ -49,7 +50,9 @@ pub mod solve;
 mod templates;
 mod tracks;
 
-use std::collections::{HashMap, HashSet, VecDeque};
+use std::collections::VecDeque;
+
+use ids::{IdMap, IdSet};
 
 use nalgebra::{Isometry3, Matrix6, UnitQuaternion};
 
@@ -189,7 +192,7 @@ pub struct Window {
     config: WindowConfig,
     frames: VecDeque<Keyframe>,
     /// Track of each feature (by index) of the newest keyframe.
-    newest_tracks: HashMap<usize, u32>,
+    newest_tracks: IdMap<usize, u32>,
     /// The patch of each live track in the frame where it began (with images).
     templates: templates::Templates,
     next_track: u32,
@@ -199,8 +202,8 @@ pub struct Window {
     /// [`Window::newest_tracks`], the tracks of the newest frame, the measurement buffers
     /// of keyframes that left, and the keyframe rule's.
     workspace: solve::Workspace,
-    next_tracks: HashMap<usize, u32>,
-    used: HashSet<u32>,
+    next_tracks: IdMap<usize, u32>,
+    used: IdSet<u32>,
     spare: Vec<Vec<(u32, StereoObservation)>>,
     rule: KeyframeRule,
 }
@@ -444,7 +447,7 @@ pub const KEYFRAME_MIN_MOVE: f64 = 3.0;
 /// to frame.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct KeyframeRule {
-    seen: HashMap<u32, StereoObservation>,
+    seen: IdMap<u32, StereoObservation>,
     moves: Vec<f64>,
 }
 

@@ -4,15 +4,15 @@
 //! (page faults in the window's stage, issue 34). The map holds slot numbers; a slot
 //! freed by a track that ended takes the next new track's template.
 
-use std::collections::HashMap;
-
 use swarmpose_vision::temporal::template::PatchTemplate;
+
+use super::ids::IdMap;
 
 /// The templates of the live tracks ([`super::Window`]).
 #[derive(Debug, Clone, Default)]
 pub(super) struct Templates {
     /// The slot of each track's template.
-    slot: HashMap<u32, usize>,
+    slot: IdMap<u32, usize>,
     /// The templates; a free slot holds the template of a track that ended.
     slots: Vec<PatchTemplate>,
     /// The free slots.
