@@ -147,6 +147,8 @@ pub(crate) struct Workspace {
     dx: DVector<f64>,
     /// The newest pose's columns of `S⁻¹` ([`newest_covariance`]).
     columns: DMatrix<f64>,
+    /// The tracks' pulls on the newest pose ([`track_scores`]).
+    scores: Vec<Score>,
 }
 
 impl Workspace {
@@ -166,6 +168,7 @@ impl Workspace {
             + (self.poses.capacity() + self.trial.capacity()) * size_of::<Pose>()
             + (self.points.capacity() + self.trial_points.capacity()) * size_of::<Vector3<f64>>()
             + self.trial_rel.capacity() * size_of::<Relative>()
+            + self.scores.capacity() * size_of::<Score>()
     }
 }
 
@@ -338,7 +341,7 @@ impl LeastSquares for WindowLm<'_> {
                 &ws.sc,
                 (self.observations, &ws.tracks),
                 self.calibration_covariance,
-                (&mut ws.damped, &mut ws.columns),
+                (&mut ws.damped, &mut ws.columns, &mut ws.scores),
             );
         }
         Ok(current)
@@ -444,13 +447,13 @@ impl Workspace {
 /// evidence. The calibration's part:
 /// the solution moves with the calibration terms `c` as `∂ξ/∂c = −S⁻¹ S_ξc`, so their
 /// covariance `Σ_c` adds `G Σ_c Gᵀ` with `G` the newest pose's rows of `S⁻¹ S_ξc`.
-/// `None` when `S` is not positive definite. `factor` and `columns` are buffers.
+/// `None` when `S` is not positive definite. `factor`, `columns` and `scores` are buffers.
 #[inline(always)]
 fn newest_covariance(
     sc: &Scratch,
     (observations, tracks): (usize, &Tracks),
     calibration_covariance: &MatrixK,
-    (factor, columns): (&mut DMatrix<f64>, &mut DMatrix<f64>),
+    (factor, columns, scores): (&mut DMatrix<f64>, &mut DMatrix<f64>, &mut Vec<Score>),
 ) -> Option<Matrix6<f64>> {
     let (s, pose_calibration) = (&sc.s, &sc.pose_calibration);
     let n = s.nrows();
@@ -476,7 +479,10 @@ fn newest_covariance(
     let classic = sc.chi2 / dof;
     // A match, not a closure: the scores are compiled inside the dispatched copy.
     let cluster = match block.try_inverse() {
-        Some(info) => cluster_factor(&mut track_scores(sc, tracks, columns), &info),
+        Some(info) => {
+            track_scores(sc, tracks, columns, scores);
+            cluster_factor(scores, &info)
+        }
         None => None,
     };
     let mut cov = block * variance_factor(classic, cluster);
@@ -492,11 +498,11 @@ fn newest_covariance(
 /// Each track's pull on the newest pose, `(S⁻¹ r_t)` of the newest pose (`columns`, its
 /// columns of `S⁻¹`), `r_t` the track's score over every free pose with its point
 /// eliminated, all its measurements in the window together: at the track's position in
-/// its anchor keyframe.
+/// its anchor keyframe; into `scores`, a buffer kept from frame to frame (issue 34).
 // A loop, not an iterator's map: compiled inside the dispatched copy.
 #[inline(always)]
-fn track_scores(sc: &Scratch, tracks: &Tracks, columns: &DMatrix<f64>) -> Vec<Score> {
-    let mut scores = Vec::with_capacity(tracks.len());
+fn track_scores(sc: &Scratch, tracks: &Tracks, columns: &DMatrix<f64>, scores: &mut Vec<Score>) {
+    scores.clear();
     for ((_, obs), e) in tracks.iter().zip(&sc.elim) {
         let mut g = Vector6::zeros();
         // nalgebra's products bit for bit, without its generic ones ([`mul`], [`tr_mul`],
@@ -515,7 +521,6 @@ fn track_scores(sc: &Scratch, tracks: &Tracks, columns: &DMatrix<f64>) -> Vec<Sc
             r: g,
         });
     }
-    scores
 }
 
 #[cfg(test)]
