@@ -114,6 +114,45 @@ pub(crate) fn tr_mul<const C1: usize, const C2: usize>(
     out
 }
 
+/// `t b`, the same bits as `t * b` (each entry written, not added to zeros).
+// The index form, as in `accumulate_product`.
+#[allow(clippy::needless_range_loop)]
+#[inline(always)]
+pub(crate) fn mul<const R: usize, const C: usize>(
+    t: &SMatrix<f64, R, 3>,
+    b: &SMatrix<f64, 3, C>,
+) -> SMatrix<f64, R, C> {
+    let mut out = SMatrix::<f64, R, C>::zeros();
+    let (t, b, o) = (&t.data.0, &b.data.0, &mut out.data.0);
+    for j in 0..C {
+        for i in 0..R {
+            o[j][i] = dot(t, i, &b[j]);
+        }
+    }
+    out
+}
+
+/// `a x` for `a` with `K` columns and `x` given by its `K` entries, the same bits as
+/// nalgebra's `a * x` (its matrix-vector product sums `a[(i, k)] x[k]` over `k` in
+/// order, the first term written, not added to zero).
+#[allow(clippy::needless_range_loop)]
+#[inline(always)]
+pub(crate) fn mul_vec<const R: usize, const K: usize>(
+    a: &SMatrix<f64, R, K>,
+    x: &[f64; K],
+) -> SMatrix<f64, R, 1> {
+    let mut out = SMatrix::<f64, R, 1>::zeros();
+    let (a, o) = (&a.data.0, &mut out.data.0[0]);
+    for i in 0..R {
+        let mut sum = a[0][i] * x[0];
+        for k in 1..K {
+            sum += a[k][i] * x[k];
+        }
+        o[i] = sum;
+    }
+    out
+}
+
 /// `acc += t b`, the same bits as `*acc += t * b`.
 #[inline(always)]
 pub(crate) fn add_product<const R: usize, const C: usize>(

@@ -100,6 +100,57 @@ fn sub_product_is_nalgebra_bit_for_bit() {
     assert_eq!(ok, 20_000);
 }
 
+/// The window's products `t b` (3x3 by 3x6, 6x3 by 3x1, 3x3 by 3x1), NaN now and then
+/// among the entries.
+#[test]
+fn mul_is_nalgebra_bit_for_bit() {
+    let ok = trials(|rng| {
+        let mut t: SMatrix<f64, 3, 3> = random(rng);
+        let b: SMatrix<f64, 3, 6> = random(rng);
+        let u: SMatrix<f64, 6, 3> = random(rng);
+        let e: SMatrix<f64, 3, 1> = random(rng);
+        if rng.random_range(0..16) == 0 {
+            t[(rng.random_range(0..3), rng.random_range(0..3))] = f64::NAN;
+        }
+        // NaN for NaN: Rust leaves the sign and payload of an arithmetic NaN unspecified.
+        let same = |got: &[f64], want: &[f64]| {
+            got.iter()
+                .zip(want)
+                .all(|(a, b)| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()))
+        };
+        same(mul(&t, &b).as_slice(), (t * b).as_slice())
+            && same(mul(&u, &e).as_slice(), (u * e).as_slice())
+            && same(mul(&t, &e).as_slice(), (t * e).as_slice())
+    });
+    assert_eq!(ok, 20_000);
+}
+
+/// `a x` with 6 columns (the back-substitution's `H_pξ δξ`, the covariance's `Cᵀ r`),
+/// NaN now and then among the entries.
+#[test]
+fn mul_vec_is_nalgebra_bit_for_bit() {
+    let ok = trials(|rng| {
+        let mut a: SMatrix<f64, 3, 6> = random(rng);
+        let c: SMatrix<f64, 6, 6> = random(rng);
+        let x: SMatrix<f64, 6, 1> = random(rng);
+        if rng.random_range(0..16) == 0 {
+            a[(rng.random_range(0..3), rng.random_range(0..6))] = f64::NAN;
+        }
+        let same = |got: &[f64], want: &[f64]| {
+            got.iter()
+                .zip(want)
+                .all(|(a, b)| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()))
+        };
+        let xs = &x.data.0[0];
+        same(mul_vec(&a, xs).as_slice(), (a * x).as_slice())
+            && same(
+                mul_vec(&c.transpose(), xs).as_slice(),
+                (c.transpose() * x).as_slice(),
+            )
+    });
+    assert_eq!(ok, 20_000);
+}
+
 /// `fit_point`'s normal equations (`aᵀ a` and `aᵀ e` of its 3x3 Jacobians), NaN now and
 /// then among the entries.
 #[test]

@@ -65,7 +65,7 @@ impl Window {
         // The map of the frame before is kept for the next frame's.
         self.next_tracks = std::mem::replace(&mut self.newest_tracks, tracks);
         // `used` holds the tracks of the newest frame: the live ones.
-        self.templates.retain(|t, _| used.contains(t));
+        self.templates.retain(|t| used.contains(&t));
         self.used = used;
     }
 
@@ -74,7 +74,7 @@ impl Window {
     /// when it is not found again the track ends, and the feature begins a new one at
     /// its detected keypoint.
     fn continue_track(&mut self, t: u32, l: &Link, im: Images<'_>) -> (u32, StereoObservation) {
-        let found = self.templates.get_mut(&t).and_then(|tpl| {
+        let found = self.templates.get_mut(t).and_then(|tpl| {
             let limits = AlignLimits {
                 iterations: ALIGN_ITERATIONS,
                 max_move_px: ALIGN_MAX_MOVE_PX,

@@ -37,6 +37,7 @@
 //! estimates of the moment each was linearised).
 
 use std::collections::HashSet;
+use std::hash::BuildHasher;
 
 use nalgebra::{DMatrix, DVector, Matrix6, SymmetricEigen};
 
@@ -116,9 +117,9 @@ fn pseudo_inverse(m: &Matrix6<f64>) -> Matrix6<f64> {
 
 /// The tracks that go with `leaving` (the keyframe that leaves) under `mode`: those whose
 /// track has ended (not in `live`, the newest frame's), or all it sees.
-pub(super) fn leaving_tracks(
+pub(super) fn leaving_tracks<S: BuildHasher>(
     leaving: &Keyframe,
-    live: &HashSet<u32>,
+    live: &HashSet<u32, S>,
     mode: Marginalisation,
 ) -> HashSet<u32> {
     leaving
@@ -135,12 +136,12 @@ pub(super) fn leaving_tracks(
 /// marginalised tracks' measurements from `frames[1..]` (they are in the prior now).
 /// `None` (nothing removed) when there is nothing to marginalise into or the system is
 /// singular: the keyframe's information is then discarded as without marginalisation.
-pub(crate) fn marginalise(
+pub(crate) fn marginalise<S: BuildHasher>(
     model: &StereoModel,
     config: &WindowConfig,
     frames: &mut [Keyframe],
     prior: Option<Prior>,
-    live: &HashSet<u32>,
+    live: &HashSet<u32, S>,
     mode: Marginalisation,
 ) -> Option<Prior> {
     let n = frames.len();

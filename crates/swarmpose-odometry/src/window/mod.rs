@@ -6,7 +6,7 @@
 //! starts a new one. A track is one 3D point, anchored by inverse depth in the first
 //! keyframe of the window that sees it ([`crate::refine::model`]), and it is re-estimated
 //! with every new observation. Its measurement in each frame is where the image patch of
-//! the frame where it began appears (a [`PatchTemplate`] aligned under an affine warp, to
+//! the frame where it began appears (a [`PatchTemplate`](swarmpose_vision::temporal::template::PatchTemplate) aligned under an affine warp, to
 //! a fraction of a pixel), so that every frame measures the same physical point without
 //! the errors of the detected keypoints (whole pixels, moving with the corner's apparent
 //! size) and without the bias a translation-only alignment takes from the patch's growing
@@ -41,19 +41,22 @@
 //! track identities and patches of the newest frame's features.
 
 mod calibration;
+mod ids;
 mod link;
 pub mod marginal;
 mod prior;
 mod residual;
 pub mod solve;
+mod templates;
 mod tracks;
 
-use std::collections::{HashMap, HashSet, VecDeque};
+use std::collections::VecDeque;
+
+use ids::{IdMap, IdSet};
 
 use nalgebra::{Isometry3, Matrix6, UnitQuaternion};
 
 use swarmpose_vision::features::GrayView;
-use swarmpose_vision::temporal::template::PatchTemplate;
 
 use crate::refine::evidence::MatrixK;
 use crate::refine::model::{StereoModel, StereoObservation};
@@ -189,9 +192,9 @@ pub struct Window {
     config: WindowConfig,
     frames: VecDeque<Keyframe>,
     /// Track of each feature (by index) of the newest keyframe.
-    newest_tracks: HashMap<usize, u32>,
+    newest_tracks: IdMap<usize, u32>,
     /// The patch of each live track in the frame where it began (with images).
-    templates: HashMap<u32, PatchTemplate>,
+    templates: templates::Templates,
     next_track: u32,
     /// The prior left by the keyframes marginalised so far ([`WindowConfig::marginalise`]).
     prior: Option<prior::Prior>,
@@ -199,8 +202,8 @@ pub struct Window {
     /// [`Window::newest_tracks`], the tracks of the newest frame, the measurement buffers
     /// of keyframes that left, and the keyframe rule's.
     workspace: solve::Workspace,
-    next_tracks: HashMap<usize, u32>,
-    used: HashSet<u32>,
+    next_tracks: IdMap<usize, u32>,
+    used: IdSet<u32>,
     spare: Vec<Vec<(u32, StereoObservation)>>,
     rule: KeyframeRule,
 }
@@ -292,7 +295,7 @@ impl Window {
             + (self.newest_tracks.capacity() + self.next_tracks.capacity())
                 * (size_of::<usize>() + size_of::<u32>())
             + self.used.capacity() * size_of::<u32>()
-            + self.templates.capacity() * (size_of::<u32>() + size_of::<PatchTemplate>())
+            + self.templates.heap_bytes()
             + self.prior.as_ref().map_or(0, prior::Prior::heap_bytes)
             + self.workspace.heap_bytes()
             + self.rule.heap_bytes()
@@ -315,7 +318,7 @@ impl Window {
     /// anything to the pair (or the refinement failed; the pair's pose stands then).
     ///
     /// With `images`, a track's measurement in each frame is where the patch of the frame
-    /// where it began appears ([`PatchTemplate::align_affine`]): the same physical point
+    /// where it began appears ([`PatchTemplate::align_affine`](swarmpose_vision::temporal::template::PatchTemplate::align_affine)): the same physical point
     /// in every frame. A track whose patch is not found again ends there, and its feature begins a
     /// new track at its detected keypoint. Without images, the detected keypoints.
     pub fn add(
@@ -444,7 +447,7 @@ pub const KEYFRAME_MIN_MOVE: f64 = 3.0;
 /// to frame.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct KeyframeRule {
-    seen: HashMap<u32, StereoObservation>,
+    seen: IdMap<u32, StereoObservation>,
     moves: Vec<f64>,
 }
 

@@ -6,6 +6,7 @@
 use nalgebra::{Matrix3, Vector3};
 
 use crate::nls::pose::Pose;
+use crate::nls::products::mul;
 use crate::refine::model::{Matrix3x6, Matrix3xK, Parts, StereoModel, StereoObservation};
 
 /// A relative pose `T_ja`: rotation and translation (`P_j = R P_a + t`, metres).
@@ -62,7 +63,8 @@ pub(super) fn linearize(
         residual: l.residual,
         d_point: l.d_point,
         d_correction: l.d_correction,
-        poses: Some((l.d_pose, l.d_h * dh_da)),
+        // nalgebra's `l.d_h * dh_da` bit for bit, without its generic product.
+        poses: Some((l.d_pose, mul(&l.d_h, &dh_da))),
     })
 }
 

@@ -29,13 +29,14 @@ use super::tracks::{Tracks, tracks_of};
 use super::{Keyframe, WindowConfig, WindowReport};
 use crate::nls::lm::{Damping, LeastSquares};
 use crate::nls::pose::Pose;
+use crate::nls::products::{mul, mul_vec, tr_mul};
 use crate::nls::robust::huber;
 use crate::nls::schur::back_substitute;
 use crate::refine::evidence::{Matrix6xK, MatrixK, VectorK};
 use crate::refine::model::{Matrix3x6, StereoModel};
 use crate::refine::noise::{Score, cluster_factor, variance_factor};
 use swarmpose_vision::simd::{Kernel, dispatch};
-use system::build;
+use system::{Blocks, build};
 
 /// Robust cost `Σ ρ` of every track at the relative poses `rel` of `n` keyframes, or
 /// infinity when a point leaves a view.
@@ -126,7 +127,7 @@ pub(super) fn linearised_system(
     sc: &mut Scratch,
 ) -> Option<(DMatrix<f64>, DVector<f64>)> {
     let points: Vec<Vector3<f64>> = tracks.list.iter().map(|t| t.point).collect();
-    build(model, k, (poses, 0), tracks, &points, sc)?;
+    build(model, k, (poses, 0, Blocks::Full), tracks, &points, sc)?;
     Some((std::mem::take(&mut sc.s), std::mem::take(&mut sc.g)))
 }
 
@@ -146,6 +147,8 @@ pub(crate) struct Workspace {
     dx: DVector<f64>,
     /// The newest pose's columns of `S⁻¹` ([`newest_covariance`]).
     columns: DMatrix<f64>,
+    /// The tracks' pulls on the newest pose ([`track_scores`]).
+    scores: Vec<Score>,
 }
 
 impl Workspace {
@@ -165,6 +168,7 @@ impl Workspace {
             + (self.poses.capacity() + self.trial.capacity()) * size_of::<Pose>()
             + (self.points.capacity() + self.trial_points.capacity()) * size_of::<Vector3<f64>>()
             + self.trial_rel.capacity() * size_of::<Relative>()
+            + self.scores.capacity() * size_of::<Score>()
     }
 }
 
@@ -313,9 +317,11 @@ impl LeastSquares for WindowLm<'_> {
     fn linearise(&mut self) -> Result<f64, ()> {
         self.iterations += 1;
         let Self { ws, model, k, .. } = self;
-        // The cost at the current state comes with its linearisation.
+        // The cost at the current state comes with its linearisation. Both factorisations
+        // of `S` (the step's, the covariance's) read its lower triangle only.
         let sc = &mut ws.sc;
-        build(model, *k, (&ws.poses, 1), &ws.tracks, &ws.points, sc).ok_or(())?;
+        let poses = (&ws.poses[..], 1, Blocks::Lower);
+        build(model, *k, poses, &ws.tracks, &ws.points, sc).ok_or(())?;
         if let Some((p, slots)) = &self.prior {
             let system = (&mut sc.s, &mut sc.g);
             p.add_to(
@@ -335,7 +341,7 @@ impl LeastSquares for WindowLm<'_> {
                 &ws.sc,
                 (self.observations, &ws.tracks),
                 self.calibration_covariance,
-                (&mut ws.damped, &mut ws.columns),
+                (&mut ws.damped, &mut ws.columns, &mut ws.scores),
             );
         }
         Ok(current)
@@ -419,7 +425,9 @@ impl Workspace {
         for ((tp, p), e) in trial_points.iter_mut().zip(points.iter()).zip(&sc.elim) {
             let mut rhs = e.gp;
             for (v, b) in &sc.hpx[e.start..e.end] {
-                rhs += b * dx.fixed_rows::<6>(6 * v);
+                // nalgebra's `b * dx.fixed_rows::<6>(6 v)` bit for bit ([`mul_vec`]).
+                let x: [f64; 6] = std::array::from_fn(|k| dx[6 * v + k]);
+                rhs += mul_vec(b, &x);
             }
             *tp = back_substitute(p, &e.hpp_inv, &rhs);
         }
@@ -439,13 +447,13 @@ impl Workspace {
 /// evidence. The calibration's part:
 /// the solution moves with the calibration terms `c` as `∂ξ/∂c = −S⁻¹ S_ξc`, so their
 /// covariance `Σ_c` adds `G Σ_c Gᵀ` with `G` the newest pose's rows of `S⁻¹ S_ξc`.
-/// `None` when `S` is not positive definite. `factor` and `columns` are buffers.
+/// `None` when `S` is not positive definite. `factor`, `columns` and `scores` are buffers.
 #[inline(always)]
 fn newest_covariance(
     sc: &Scratch,
     (observations, tracks): (usize, &Tracks),
     calibration_covariance: &MatrixK,
-    (factor, columns): (&mut DMatrix<f64>, &mut DMatrix<f64>),
+    (factor, columns, scores): (&mut DMatrix<f64>, &mut DMatrix<f64>, &mut Vec<Score>),
 ) -> Option<Matrix6<f64>> {
     let (s, pose_calibration) = (&sc.s, &sc.pose_calibration);
     let n = s.nrows();
@@ -471,7 +479,10 @@ fn newest_covariance(
     let classic = sc.chi2 / dof;
     // A match, not a closure: the scores are compiled inside the dispatched copy.
     let cluster = match block.try_inverse() {
-        Some(info) => cluster_factor(&mut track_scores(sc, tracks, columns), &info),
+        Some(info) => {
+            track_scores(sc, tracks, columns, scores);
+            cluster_factor(scores, &info)
+        }
         None => None,
     };
     let mut cov = block * variance_factor(classic, cluster);
@@ -487,17 +498,21 @@ fn newest_covariance(
 /// Each track's pull on the newest pose, `(S⁻¹ r_t)` of the newest pose (`columns`, its
 /// columns of `S⁻¹`), `r_t` the track's score over every free pose with its point
 /// eliminated, all its measurements in the window together: at the track's position in
-/// its anchor keyframe.
+/// its anchor keyframe; into `scores`, a buffer kept from frame to frame (issue 34).
 // A loop, not an iterator's map: compiled inside the dispatched copy.
 #[inline(always)]
-fn track_scores(sc: &Scratch, tracks: &Tracks, columns: &DMatrix<f64>) -> Vec<Score> {
-    let mut scores = Vec::with_capacity(tracks.len());
+fn track_scores(sc: &Scratch, tracks: &Tracks, columns: &DMatrix<f64>, scores: &mut Vec<Score>) {
+    scores.clear();
     for ((_, obs), e) in tracks.iter().zip(&sc.elim) {
         let mut g = Vector6::zeros();
+        // nalgebra's products bit for bit, without its generic ones ([`mul`], [`tr_mul`],
+        // [`mul_vec`]); `H_pp⁻¹ g_p` once per track.
+        let through = mul(&e.hpp_inv, &e.gp);
         for i in e.start..e.end {
             let (v, hpx) = &sc.hpx[i];
-            let r = sc.hgx[i] - hpx.transpose() * (e.hpp_inv * e.gp);
-            g += columns.fixed_view::<6, 6>(6 * v, 0).transpose() * r;
+            let r = sc.hgx[i] - tr_mul(hpx, &through);
+            let c: Matrix6<f64> = columns.fixed_view::<6, 6>(6 * v, 0).transpose();
+            g += mul_vec(&c, &r.data.0[0]);
         }
         let z = obs[0].1;
         scores.push(Score {
@@ -506,7 +521,6 @@ fn track_scores(sc: &Scratch, tracks: &Tracks, columns: &DMatrix<f64>) -> Vec<Sc
             r: g,
         });
     }
-    scores
 }
 
 #[cfg(test)]

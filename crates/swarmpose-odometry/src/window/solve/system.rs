@@ -1,6 +1,14 @@
 //! The window's reduced system: each track's measurements linearised at the keyframe
 //! poses and its point eliminated by its Schur complement, into the dense system of the
 //! free poses ([`build`]).
+//!
+//! The refinement factorises its system by Cholesky, which reads the lower triangle only
+//! (nalgebra's `cholesky()` and its `solve_mut`): there the blocks above the diagonal
+//! are not computed but mirrored from those below ([`Blocks::Lower`]), and every entry
+//! the factorisation reads is the same number, bit for bit, as with all blocks
+//! computed ([`Blocks::Full`], for the marginalisation, which uses the whole matrix).
+//! The blocks on the diagonal are always computed whole: a block `bᵀ w b` summed in
+//! floating point is not exactly symmetric.
 
 use nalgebra::{DMatrix, DVector, Matrix3, Matrix6, SMatrix, Vector3, Vector6};
 use swarmpose_vision::simd::{Kernel, dispatch};
@@ -36,6 +44,25 @@ fn add_hpx(
     }
 }
 
+/// Which blocks of the reduced system [`build`] computes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Blocks {
+    /// Every block.
+    Full,
+    /// The blocks on and below the diagonal (pose variable of the row not before that
+    /// of the column); those above are their mirror (issue 34). For a solver that reads
+    /// the lower triangle only.
+    Lower,
+}
+
+impl Blocks {
+    /// Whether the block of row variable `v1` and column variable `v2` is computed.
+    #[inline(always)]
+    fn computes(self, v1: usize, v2: usize) -> bool {
+        self == Self::Full || v2 <= v1
+    }
+}
+
 impl Scratch {
     /// Empties the buffers for a reduced system of `m` pose variables.
     fn reset(&mut self, m: usize) {
@@ -53,8 +80,9 @@ impl Scratch {
     }
 
     /// The reduced system's blocks of `m` pose variables written out densely into `s`
-    /// and `g`.
-    fn assemble(&mut self, m: usize) {
+    /// and `g`; with [`Blocks::Lower`], the entries of the blocks above the diagonal are
+    /// those below, mirrored.
+    fn assemble(&mut self, m: usize, blocks: Blocks) {
         let size = 6 * m;
         if self.s.shape() != (size, size) {
             self.s = DMatrix::zeros(size, size);
@@ -64,7 +92,12 @@ impl Scratch {
         }
         for c in 0..size {
             for r in 0..size {
-                self.s[(r, c)] = self.blocks[(r / 6) * m + c / 6][(r % 6, c % 6)];
+                let (v1, v2) = (r / 6, c / 6);
+                self.s[(r, c)] = if blocks.computes(v1, v2) {
+                    self.blocks[v1 * m + v2][(r % 6, c % 6)]
+                } else {
+                    self.blocks[v2 * m + v1][(c % 6, r % 6)]
+                };
             }
         }
         for r in 0..size {
@@ -74,13 +107,14 @@ impl Scratch {
 }
 
 /// The reduced system at `poses` and `points`, over the poses after the first `fixed`
-/// (held fixed: 1 in the refinement, 0 to marginalise the first), into `sc.s` and `sc.g`;
-/// `None` if a point left a view or its block is singular. Compiled for the CPU's best
-/// instruction set ([`dispatch`]): the same IEEE operations, fewer instructions (issue 34).
+/// (held fixed: 1 in the refinement, 0 to marginalise the first), into `sc.s` and `sc.g`,
+/// with the `blocks` computed; `None` if a point left a view or its block is singular.
+/// Compiled for the CPU's best instruction set ([`dispatch`]): the same IEEE operations,
+/// fewer instructions (issue 34).
 pub(super) fn build(
     model: &StereoModel,
     k: f64,
-    (poses, fixed): (&[Pose], usize),
+    (poses, fixed, blocks): (&[Pose], usize, Blocks),
     tracks: &Tracks,
     points: &[Vector3<f64>],
     sc: &mut Scratch,
@@ -88,7 +122,7 @@ pub(super) fn build(
     dispatch(Build {
         model,
         k,
-        poses: (poses, fixed),
+        poses: (poses, fixed, blocks),
         tracks,
         points,
         sc,
@@ -99,7 +133,7 @@ pub(super) fn build(
 struct Build<'a> {
     model: &'a StereoModel,
     k: f64,
-    poses: (&'a [Pose], usize),
+    poses: (&'a [Pose], usize, Blocks),
     tracks: &'a Tracks,
     points: &'a [Vector3<f64>],
     sc: &'a mut Scratch,
@@ -127,7 +161,7 @@ impl Kernel for Build<'_> {
 fn build_with(
     model: &StereoModel,
     k: f64,
-    (poses, fixed): (&[Pose], usize),
+    (poses, fixed, blocks): (&[Pose], usize, Blocks),
     tracks: &Tracks,
     points: &[Vector3<f64>],
     sc: &mut Scratch,
@@ -137,10 +171,10 @@ fn build_with(
     relative_poses(poses, &mut sc.rel);
     sc.reset(m);
     for ((_, obs), p) in tracks.iter().zip(points) {
-        let point = add_track(model, k, (n, fixed, m), obs, p, sc)?;
-        eliminate_point(point, m, sc)?;
+        let point = add_track(model, k, (n, fixed, m, blocks), obs, p, sc)?;
+        eliminate_point(point, (m, blocks), sc)?;
     }
-    sc.assemble(m);
+    sc.assemble(m, blocks);
     Some(())
 }
 
@@ -162,7 +196,7 @@ struct PointSums {
 fn add_track(
     model: &StereoModel,
     k: f64,
-    (n, fixed, m): (usize, usize, usize),
+    (n, fixed, m, blocks): (usize, usize, usize, Blocks),
     obs: &[(usize, StereoObservation)],
     p: &Vector3<f64>,
     sc: &mut Scratch,
@@ -201,7 +235,9 @@ fn add_track(
             sc.gradient[v1] += score;
             add_product(&mut sc.pose_calibration[v1], &b1w, &j.d_correction);
             for &(v2, b2) in &pair {
-                let Some(v2) = v2 else { continue };
+                let Some(v2) = v2.filter(|&v2| blocks.computes(v1, v2)) else {
+                    continue;
+                };
                 add_product(&mut sc.blocks[v1 * m + v2], &b1w, b2);
             }
         }
@@ -209,11 +245,11 @@ fn add_track(
     Some(point)
 }
 
-/// Eliminates the track's `point` (its Schur complement subtracted from the system of
-/// `m` pose variables) and keeps its blocks for back-substitution; `None` when its
-/// block is singular.
+/// Eliminates the track's `point` (its Schur complement subtracted from the `blocks` of
+/// the system of `m` pose variables) and keeps its blocks for back-substitution; `None`
+/// when its block is singular.
 #[inline(always)]
-fn eliminate_point(point: PointSums, m: usize, sc: &mut Scratch) -> Option<()> {
+fn eliminate_point(point: PointSums, (m, blocks): (usize, Blocks), sc: &mut Scratch) -> Option<()> {
     let PointSums {
         hpp,
         gp,
@@ -229,7 +265,9 @@ fn eliminate_point(point: PointSums, m: usize, sc: &mut Scratch) -> Option<()> {
         sub_product(&mut sc.pose_calibration[v1], &t1, &hpc);
         for i2 in start..end {
             let (v2, b2) = &sc.hpx[i2];
-            sub_product(&mut sc.blocks[v1 * m + v2], &t1, b2);
+            if blocks.computes(v1, *v2) {
+                sub_product(&mut sc.blocks[v1 * m + v2], &t1, b2);
+            }
         }
     }
     sc.elim.push(Eliminated {

@@ -238,3 +238,96 @@ fn random_window(
         })
         .collect()
 }
+
+/// The refinement's system with the blocks below the diagonal only ([`Blocks::Lower`])
+/// has every entry of the whole one's ([`Blocks::Full`]) on and below the diagonal blocks
+/// bit for bit, those above mirrored, and the same gradient, pose-calibration blocks,
+/// costs and eliminated blocks; the Cholesky factors of both are the same bits (the
+/// factorisation reads the lower triangle only), on seeded windows of 2 to 6 keyframes,
+/// the first held fixed or not.
+#[test]
+fn the_lower_blocks_give_the_whole_systems_factor_bit_for_bit() {
+    use swarmpose_vision::frontend::DisparityCorrection;
+    let model = crate::refine::model::test_model(DisparityCorrection::from_coefficients([
+        0.7, 1.9, -0.4, 0.3, 0.8,
+    ]));
+    let mut rng = ChaCha8Rng::seed_from_u64(37);
+    let bits = |m: &[f64]| m.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+    let mut factored = 0;
+    for trial in 0..60 {
+        let frames = random_window(&model, &mut rng);
+        let poses: Vec<Pose> = frames.iter().map(|f| Pose::of(&f.pose_cw)).collect();
+        let (mut rel, mut tracks) = (Vec::new(), Tracks::default());
+        tracks_of(
+            &model,
+            2.5,
+            &frames,
+            &poses,
+            |_| true,
+            &mut rel,
+            &mut tracks,
+        );
+        let points: Vec<Vector3<f64>> = tracks.list.iter().map(|t| t.point).collect();
+        for fixed in [0, 1] {
+            let (mut full, mut lower) = (Scratch::default(), Scratch::default());
+            let a = build(
+                &model,
+                2.5,
+                (&poses, fixed, Blocks::Full),
+                &tracks,
+                &points,
+                &mut full,
+            );
+            let b = build(
+                &model,
+                2.5,
+                (&poses, fixed, Blocks::Lower),
+                &tracks,
+                &points,
+                &mut lower,
+            );
+            assert_eq!(a, b, "trial {trial}");
+            if a.is_none() {
+                continue;
+            }
+            let n = full.s.nrows();
+            for c in 0..n {
+                for r in 0..n {
+                    // The blocks above the diagonal mirrored; those on it whole.
+                    let (i, j) = if r / 6 < c / 6 { (c, r) } else { (r, c) };
+                    let want = full.s[(i, j)].to_bits();
+                    assert_eq!(lower.s[(r, c)].to_bits(), want, "trial {trial} ({r}, {c})");
+                }
+            }
+            // Everything but the upper blocks: the same bits (`{:?}` prints them all).
+            let rest = |sc: &Scratch| {
+                let blocks = (0..sc.gradient.len())
+                    .flat_map(|v1| (0..=v1).map(move |v2| (v1, v2)))
+                    .map(|(v1, v2)| sc.blocks[v1 * sc.gradient.len() + v2])
+                    .collect::<Vec<_>>();
+                format!(
+                    "{blocks:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?}",
+                    sc.g,
+                    sc.gradient,
+                    sc.pose_calibration,
+                    sc.chi2,
+                    sc.cost,
+                    sc.elim,
+                    sc.hpx,
+                    sc.hgx,
+                    sc.rel
+                )
+            };
+            assert_eq!(rest(&full), rest(&lower), "trial {trial}");
+            let (f, l) = (full.s.clone().cholesky(), lower.s.clone().cholesky());
+            assert_eq!(f.is_some(), l.is_some(), "trial {trial}");
+            if let (Some(f), Some(l)) = (f, l) {
+                assert_eq!(bits(f.l().as_slice()), bits(l.l().as_slice()), "{trial}");
+                let (x, y) = (f.solve(&full.g), l.solve(&lower.g));
+                assert_eq!(bits(x.as_slice()), bits(y.as_slice()), "{trial}");
+                factored += 1;
+            }
+        }
+    }
+    assert!(factored >= 40, "{factored} factorised");
+}
