@@ -102,10 +102,11 @@ fn summary(label: &str, counts: &[(u64, u64)], from: usize) -> (f64, u64) {
 /// The built-in synthetic street (a right camera with a principal point 1 px off, so
 /// that the self-calibration corrects it), 40 frames through the default engine (a window
 /// of 10 keyframes): in steady state (from frame 15, the window full) the frames
-/// allocate at most [`MAX_CALLS`] times each. Measured: 238 per frame on average, 290 at
-/// most, after the covariance floor (a split check every frame) and the frame's inlier
-/// list were added (177 and 181 before them; 3427 and 3552 before the buffers were kept;
-/// RESULTS.md, "Allocations per frame").
+/// allocate at most [`MAX_CALLS`] times each. Measured at 96c456f: 212 per frame on
+/// average, 251 at most, 3.4 MB a frame (245, 296 and 6.1 MB before issue 34's fifth
+/// round kept the estimator's, window's and refinement's buffers; 177 and 181 before the
+/// covariance floor and the frame's inlier list were added; 3427 and 3552 before the
+/// buffers were kept: RESULTS.md, "Allocations per frame").
 #[test]
 fn steady_state_allocations_per_frame() {
     let seq = SyntheticSequence::new(40, 0.4, 0.5f64.to_radians()).with_right_camera_error(
@@ -130,8 +131,9 @@ fn steady_state_allocations_per_frame() {
 const MAX_CALLS: u64 = 360;
 
 /// The same on kitti_vo_seq2 (51 frames, in memory), when present, with a bound above
-/// the largest measured (214 per frame on average, 255 at most; 3647 and 4766 before; 304
-/// at most with the focal length among the self-calibration's default causes).
+/// the largest measured (at 96c456f 219 per frame on average, 253 at most, 3.9 MB a frame;
+/// 289, 318 and 5.8 MB before issue 34's fifth round; 3647 and 4766 before the buffers
+/// were kept).
 #[test]
 fn kitti_allocations_per_frame() {
     let Some(dir) = swarmpose_testdata::dataset_for_test("kitti_vo_seq2") else {
