@@ -103,6 +103,15 @@ pub(super) fn tracks_of(
     rel: &mut Vec<Relative>,
     out: &mut Tracks,
 ) {
+    gather(model, frames, keep, out);
+    relative_poses(poses, rel);
+    step_points(model, k, (rel, poses.len()), out);
+}
+
+/// [`tracks_of`]'s tracks seen at least twice, anchored in their first keyframe, in their
+/// deterministic order (by the first measurement's keyframe, then its place in the image).
+#[inline(always)]
+fn gather(model: &StereoModel, frames: &[Keyframe], keep: impl Fn(u32) -> bool, out: &mut Tracks) {
     let Tracks {
         list,
         measurements,
@@ -163,8 +172,16 @@ pub(super) fn tracks_of(
     } else {
         list.sort_unstable_by_key(|t| list_key(&measurements[t.start]));
     }
-    let n = poses.len();
-    relative_poses(poses, rel);
+}
+
+/// [`tracks_of`]'s one Gauss-Newton step of each track's point on its own measurements
+/// (`rel`: the relative poses of the `n` keyframes), dropping the points it leaves behind
+/// a camera or not finite.
+#[inline(always)]
+fn step_points(model: &StereoModel, k: f64, (rel, n): (&[Relative], usize), out: &mut Tracks) {
+    let Tracks {
+        list, measurements, ..
+    } = out;
     for t in list.iter_mut() {
         let obs = &measurements[t.start..t.end];
         let anchor = obs[0].0;
@@ -261,6 +278,53 @@ mod tests {
     /// identities (among them the largest), now and then NaN or a zero of either sign,
     /// with and without a filter on the identities; the buffers reused from window to
     /// window.
+    /// `n` keyframes measuring a random three quarters of the tracks `ids` each, in a
+    /// shuffled order, with zeros of both signs, NaN disparities, integer columns and
+    /// tracks first measured in the same place (tied keys).
+    fn random_frames(rng: &mut ChaCha8Rng, n: usize, ids: &[u32]) -> Vec<Keyframe> {
+        (0..n)
+            .map(|k| {
+                let mut observations: Vec<(u32, StereoObservation)> = ids
+                    .iter()
+                    .filter_map(|&t| {
+                        if rng.random_range(0..4) == 0 {
+                            return None;
+                        }
+                        let mut z = StereoObservation {
+                            u: rng.random_range(0.0..1240.0),
+                            v: rng.random_range(0.0..370.0),
+                            d: rng.random_range(1.0..60.0),
+                        };
+                        match rng.random_range(0..40) {
+                            // Another track's first measurement in the same place:
+                            // tied keys in the list's order.
+                            0 if rng.random_range(0..4) == 0 => (z.u, z.v) = (512.0, 100.0),
+                            0 => z.d = f64::NAN,
+                            1 => z.u = 0.0,
+                            2 => z.v = -0.0,
+                            3 => z.u = z.u.round(),
+                            _ => {}
+                        }
+                        Some((t, z))
+                    })
+                    .collect();
+                // Shuffled: the sort, not the order of the measurements, groups them.
+                for i in (1..observations.len()).rev() {
+                    observations.swap(i, rng.random_range(0..=i));
+                }
+                Keyframe {
+                    index: k,
+                    pose_cw: Isometry3::new(
+                        Vector3::new(0.0, 0.0, -0.5 * k as f64),
+                        Vector3::new(0.0, 0.01 * k as f64, 0.0),
+                    ),
+                    observations,
+                    keyframe: true,
+                }
+            })
+            .collect()
+    }
+
     #[test]
     fn the_tracks_are_the_former_sorts_bit_for_bit() {
         use swarmpose_vision::frontend::DisparityCorrection;
@@ -279,47 +343,7 @@ mod tests {
                     _ => rng.random_range(0..u32::MAX),
                 })
                 .collect();
-            let frames: Vec<Keyframe> = (0..n)
-                .map(|k| {
-                    let mut observations: Vec<(u32, StereoObservation)> = ids
-                        .iter()
-                        .filter_map(|&t| {
-                            if rng.random_range(0..4) == 0 {
-                                return None;
-                            }
-                            let mut z = StereoObservation {
-                                u: rng.random_range(0.0..1240.0),
-                                v: rng.random_range(0.0..370.0),
-                                d: rng.random_range(1.0..60.0),
-                            };
-                            match rng.random_range(0..40) {
-                                // Another track's first measurement in the same place:
-                                // tied keys in the list's order.
-                                0 if rng.random_range(0..4) == 0 => (z.u, z.v) = (512.0, 100.0),
-                                0 => z.d = f64::NAN,
-                                1 => z.u = 0.0,
-                                2 => z.v = -0.0,
-                                3 => z.u = z.u.round(),
-                                _ => {}
-                            }
-                            Some((t, z))
-                        })
-                        .collect();
-                    // Shuffled: the sort, not the order of the measurements, groups them.
-                    for i in (1..observations.len()).rev() {
-                        observations.swap(i, rng.random_range(0..=i));
-                    }
-                    Keyframe {
-                        index: k,
-                        pose_cw: Isometry3::new(
-                            Vector3::new(0.0, 0.0, -0.5 * k as f64),
-                            Vector3::new(0.0, 0.01 * k as f64, 0.0),
-                        ),
-                        observations,
-                        keyframe: true,
-                    }
-                })
-                .collect();
+            let frames = random_frames(&mut rng, n, &ids);
             let poses: Vec<Pose> = frames.iter().map(|f| Pose::of(&f.pose_cw)).collect();
             let odd = trial % 3 == 0;
             let keep = |t: u32| !odd || t % 2 == 1;
