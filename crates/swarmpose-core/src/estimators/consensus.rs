@@ -269,15 +269,8 @@ mod tests {
         let mut selected = 0;
         for case in 0..100 {
             let n: usize = rng.random_range(3..200);
-            let point = |rng: &mut crate::rng::SeededRng| {
-                Point3::new(
-                    rng.random_range(-3.0..3.0),
-                    rng.random_range(-3.0..3.0),
-                    rng.random_range(1.0..9.0),
-                )
-            };
-            let src: Vec<Point3<f64>> = (0..n).map(|_| point(&mut rng)).collect();
-            let dst: Vec<Point3<f64>> = (0..n).map(|_| point(&mut rng)).collect();
+            let (src, dst) =
+                crate::estimators::test_scenes::random_clouds(&mut rng, n, -3.0..3.0, 1.0..9.0);
             let data = Correspondences::new(src, dst).expect("valid");
             let t = Isometry3::new(
                 Vector3::new(rng.random_range(-1.0..1.0), 0.0, 0.2),

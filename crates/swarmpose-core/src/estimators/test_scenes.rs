@@ -7,7 +7,7 @@ use rand::RngExt;
 use rand_distr::{Distribution, StandardNormal};
 
 use crate::geometry::Correspondences;
-use crate::rng::seeded;
+use crate::rng::{SeededRng, seeded};
 
 /// 200 stereo-like points, 4 to 40 m deep: noise σ = 0.002 z² m along the viewing ray
 /// and 0.002 z m across it, with the matching covariances attached; every
@@ -82,4 +82,25 @@ pub(crate) fn moved_after(
         .enumerate()
         .map(|(k, p)| if k < kept { *p } else { p + offset(k) })
         .collect()
+}
+
+/// Two independent clouds of `n` random points each (source first, then destination;
+/// each point's x, y drawn from `xy` and z from `z`, metres), for the tests comparing a
+/// kernel with its reference on arbitrary data.
+pub(crate) fn random_clouds(
+    rng: &mut SeededRng,
+    n: usize,
+    xy: std::ops::Range<f64>,
+    z: std::ops::Range<f64>,
+) -> (Vec<Point3<f64>>, Vec<Point3<f64>>) {
+    let mut point = || {
+        Point3::new(
+            rng.random_range(xy.clone()),
+            rng.random_range(xy.clone()),
+            rng.random_range(z.clone()),
+        )
+    };
+    let src = (0..n).map(|_| point()).collect();
+    let dst = (0..n).map(|_| point()).collect();
+    (src, dst)
 }

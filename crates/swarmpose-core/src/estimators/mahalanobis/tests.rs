@@ -200,15 +200,8 @@ fn selection_matches_the_reference_in_every_instruction_set() {
     let mut selected = 0;
     for case in 0..200 {
         let n = 60;
-        let point = |rng: &mut crate::rng::SeededRng| {
-            Point3::new(
-                rng.random_range(-2.0..2.0),
-                rng.random_range(-2.0..2.0),
-                rng.random_range(-2.0..2.0),
-            )
-        };
-        let src: Vec<Point3<f64>> = (0..n).map(|_| point(&mut rng)).collect();
-        let dst: Vec<Point3<f64>> = (0..n).map(|_| point(&mut rng)).collect();
+        let (src, dst) =
+            crate::estimators::test_scenes::random_clouds(&mut rng, n, -2.0..2.0, -2.0..2.0);
         let cov = |rng: &mut crate::rng::SeededRng| {
             let a = Matrix3::from_fn(|_, _| value(rng));
             if rng.random_range(0..4) == 0 {

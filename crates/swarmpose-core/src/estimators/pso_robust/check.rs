@@ -339,15 +339,8 @@ mod tests {
         let mut rates = Vec::new();
         for case in 0..30 {
             let n = [50, 128, 300][case % 3];
-            let point = |rng: &mut SeededRng| {
-                Point3::new(
-                    rng.random_range(-2.0..2.0),
-                    rng.random_range(-2.0..2.0),
-                    rng.random_range(-2.0..2.0),
-                )
-            };
-            let src: Vec<Point3<f64>> = (0..n).map(|_| point(&mut rng)).collect();
-            let dst: Vec<Point3<f64>> = (0..n).map(|_| point(&mut rng)).collect();
+            let (src, dst) =
+                crate::estimators::test_scenes::random_clouds(&mut rng, n, -2.0..2.0, -2.0..2.0);
             let cov = |rng: &mut SeededRng| {
                 let a = Matrix3::from_fn(|_, _| value(rng));
                 a * a.transpose()

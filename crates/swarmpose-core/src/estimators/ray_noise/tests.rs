@@ -100,20 +100,13 @@ fn the_fits_have_the_same_bits_in_every_instruction_set() {
 /// seeded random rows (weights below `MIN_WEIGHT`, zeros of both signs).
 #[test]
 fn isotropic_sums_match_the_reference_in_every_instruction_set() {
-    use nalgebra::{Isometry3, Matrix3, Point3};
+    use nalgebra::{Isometry3, Matrix3};
     use rand::RngExt;
     let mut rng = crate::rng::seeded(44);
     for case in 0..100 {
         let n: usize = rng.random_range(1..150);
-        let point = |rng: &mut crate::rng::SeededRng| {
-            Point3::new(
-                rng.random_range(-3.0..3.0),
-                rng.random_range(-3.0..3.0),
-                rng.random_range(1.0..9.0),
-            )
-        };
-        let src: Vec<Point3<f64>> = (0..n).map(|_| point(&mut rng)).collect();
-        let dst: Vec<Point3<f64>> = (0..n).map(|_| point(&mut rng)).collect();
+        let (src, dst) =
+            crate::estimators::test_scenes::random_clouds(&mut rng, n, -3.0..3.0, 1.0..9.0);
         let data = Correspondences::new(src, dst).expect("valid");
         let pose = Isometry3::new(
             Vector3::new(rng.random_range(-1.0..1.0), 0.0, 0.2),
