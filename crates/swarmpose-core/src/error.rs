@@ -82,3 +82,9 @@ pub enum PoseError {
     #[error("invalid configuration: {0}")]
     InvalidConfig(String),
 }
+
+impl From<crate::settings::InvalidSetting> for PoseError {
+    fn from(e: crate::settings::InvalidSetting) -> Self {
+        Self::InvalidConfig(e.to_string())
+    }
+}

@@ -115,6 +115,62 @@ pub fn not_below(
     }
 }
 
+/// `value` is in `[low, high]` (both finite).
+///
+/// # Errors
+/// [`InvalidSetting`] naming `name`.
+pub fn within(name: &str, value: f64, low: f64, high: f64) -> Result<(), InvalidSetting> {
+    if value >= low && value <= high {
+        Ok(())
+    } else {
+        Err(invalid(
+            name,
+            value,
+            &format!("a number from {low} to {high}"),
+        ))
+    }
+}
+
+/// `value` is a probability strictly between 0 and 1.
+///
+/// # Errors
+/// [`InvalidSetting`] naming `name`.
+pub fn open_unit(name: &str, value: f64) -> Result<(), InvalidSetting> {
+    if value > 0.0 && value < 1.0 {
+        Ok(())
+    } else {
+        Err(invalid(name, value, "a number above 0 and below 1"))
+    }
+}
+
+/// `value` is a count from `min` to `max`.
+///
+/// # Errors
+/// [`InvalidSetting`] naming `name`.
+pub fn count_within(
+    name: &str,
+    value: usize,
+    min: usize,
+    max: usize,
+) -> Result<(), InvalidSetting> {
+    if (min..=max).contains(&value) {
+        Ok(())
+    } else {
+        Err(invalid(name, value, &format!("from {min} to {max}")))
+    }
+}
+
+/// The path of setting `name` below `prefix` (`prefix.name`; `name` alone when `prefix`
+/// is empty, as for a configuration given on its own).
+#[must_use]
+pub fn path(prefix: &str, name: &str) -> String {
+    if prefix.is_empty() {
+        name.to_owned()
+    } else {
+        format!("{prefix}.{name}")
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -195,8 +195,8 @@ impl OdometryConfig {
         self
     }
 
-    /// Checks the range of every setting (the working-size band and the camera are
-    /// checked with the camera; the estimator's settings by the estimator): a value
+    /// Checks the range of every setting, the estimator's included (the working-size band
+    /// and the camera are checked with the camera): a value
     /// outside its range, such as a negative tolerance or noise sigma, is an error naming
     /// the setting by its path in a run configuration (`orb.stereo.row_tolerance_px`).
     ///
@@ -228,6 +228,7 @@ impl OdometryConfig {
         };
         self.orb.check("orb").map_err(named)?;
         self.surf.check("surf").map_err(named)?;
+        self.estimator.check("estimator").map_err(named)?;
         self.check_engine_ranges().map_err(named)
     }
 

@@ -525,4 +525,28 @@ fn a_run_s_configuration_reruns_it_byte_for_byte() {
            finite number, 0 or more",
         ],
     );
+    // The estimator's settings too, before the first frame (each frame once failed on
+    // them, and the run ended "not usable" without naming the setting).
+    let estimator = tmp.0.join("estimator.json");
+    std::fs::write(
+        &estimator,
+        r#"{"odometry": {"estimator": {"method": "pso", "ambiguity_ratio": 2.0}}}"#,
+    )
+    .expect("estimator");
+    let out = swarmpose(
+        &[
+            "odometry",
+            "--out",
+            s(&tmp.0.join("est")),
+            "--config",
+            s(&estimator),
+        ],
+        None,
+    );
+    check_error(
+        &out,
+        &[
+            "estimator.json: configuration: estimator.ambiguity_ratio is 2: it must be a number from 0 to 1",
+        ],
+    );
 }

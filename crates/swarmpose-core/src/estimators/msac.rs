@@ -5,12 +5,13 @@ use std::time::Instant;
 use nalgebra::Isometry3;
 use rand::seq::index::sample_array;
 
-use super::consensus::{check_input, check_threshold, refine, residual_sq, thresholded_estimate};
+use super::consensus::{check_input, refine, residual_sq, thresholded_estimate};
 use super::{Estimate, Estimator};
 use crate::arun::arun_pairs;
 use crate::error::PoseError;
 use crate::geometry::Correspondences;
 use crate::rng::SeededRng;
+use crate::settings::{self, InvalidSetting};
 
 /// Settings of [`MsacEstimator`]. Defaults in brackets.
 #[derive(Debug, Clone, PartialEq)]
@@ -69,22 +70,21 @@ impl MsacConfig {
     }
 
     fn validate(&self) -> Result<(), PoseError> {
-        check_threshold(self.threshold_m)?;
-        if !(self.confidence > 0.0 && self.confidence < 1.0) {
-            return Err(PoseError::InvalidConfig(
-                "confidence must be in (0, 1)".into(),
-            ));
-        }
-        if self.max_iterations == 0 || self.refine_rounds == 0 {
-            return Err(PoseError::InvalidConfig(
-                "max_iterations and refine_rounds must be at least 1".into(),
-            ));
-        }
-        if self.max_iterations > MAX_SAMPLES || self.refine_rounds > MAX_SAMPLES {
-            return Err(PoseError::InvalidConfig(format!(
-                "max_iterations and refine_rounds may be at most {MAX_SAMPLES}"
-            )));
-        }
+        Ok(self.check("")?)
+    }
+
+    /// Checks every setting's range, naming each below `prefix` (`estimator`) as in a
+    /// run configuration: a threshold finite and above 0, a confidence in `(0, 1)`, the
+    /// counts from 1 to [`MAX_SAMPLES`].
+    ///
+    /// # Errors
+    /// [`InvalidSetting`] naming the first setting out of its range.
+    pub fn check(&self, prefix: &str) -> Result<(), InvalidSetting> {
+        let name = |n: &str| settings::path(prefix, n);
+        settings::positive(&name("threshold_m"), self.threshold_m)?;
+        settings::open_unit(&name("confidence"), self.confidence)?;
+        settings::count_within(&name("max_iterations"), self.max_iterations, 1, MAX_SAMPLES)?;
+        settings::count_within(&name("refine_rounds"), self.refine_rounds, 1, MAX_SAMPLES)?;
         Ok(())
     }
 }

@@ -13,6 +13,7 @@ use crate::error::PoseError;
 use crate::geometry::{Correspondences, rotation_from_particle, wrap_rotation_vector};
 use crate::pso::{ParticleSwarm, PsoConfig};
 use crate::rng::SeededRng;
+use crate::settings::{self, InvalidSetting};
 
 /// Settings of [`PsoPaperEstimator`]. Defaults in brackets.
 #[derive(Debug, Clone, PartialEq)]
@@ -45,6 +46,16 @@ impl PsoPaperConfig {
     pub fn with_threshold(mut self, threshold_m: f64) -> Self {
         self.threshold_m = threshold_m;
         self
+    }
+
+    /// Checks every setting's range, naming each below `prefix` (`estimator`) as in a
+    /// run configuration: δ finite and above 0, the swarm's ranges ([`PsoConfig::check`]).
+    ///
+    /// # Errors
+    /// [`InvalidSetting`] naming the first setting out of its range.
+    pub fn check(&self, prefix: &str) -> Result<(), InvalidSetting> {
+        settings::positive(&settings::path(prefix, "threshold_m"), self.threshold_m)?;
+        self.pso.check(&settings::path(prefix, "pso"))
     }
 
     /// Sets the swarm settings.

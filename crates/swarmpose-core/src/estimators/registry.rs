@@ -5,6 +5,7 @@ use super::{
     Estimator, MsacConfig, MsacEstimator, PsoEstimator, PsoEstimatorConfig, PsoPaperConfig,
     PsoPaperEstimator, SvdEstimator, WlsEstimator,
 };
+use crate::settings::InvalidSetting;
 
 /// An estimator of the project, by its command-line name.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -143,6 +144,21 @@ impl EstimatorConfig {
             Self::Svd => Method::Svd,
             Self::Msac(_) => Method::Msac,
             Self::Wls => Method::Wls,
+        }
+    }
+
+    /// Checks the range of every setting, naming each below `prefix` (`estimator`) as in
+    /// a run configuration, before any estimate (each estimator checks its settings
+    /// again when it runs).
+    ///
+    /// # Errors
+    /// [`InvalidSetting`] naming the first setting out of its range.
+    pub fn check(&self, prefix: &str) -> Result<(), InvalidSetting> {
+        match self {
+            Self::Pso(c) => c.check(prefix),
+            Self::PsoPaper(c) => c.check(prefix),
+            Self::Msac(c) => c.check(prefix),
+            Self::Svd | Self::Wls => Ok(()),
         }
     }
 

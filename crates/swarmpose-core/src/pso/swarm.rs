@@ -4,6 +4,7 @@ use rand::RngExt;
 
 use crate::error::PoseError;
 use crate::rng::SeededRng;
+use crate::settings::{self, InvalidSetting};
 
 /// Most particles a swarm may have (a million: tens of megabytes, and seconds of work
 /// per estimate). More were allocated at once: 10^12 particles asked for 24 TB and
@@ -80,33 +81,28 @@ impl PsoConfig {
     /// # Errors
     /// [`PoseError::InvalidConfig`] naming the bad field.
     pub fn validate(&self) -> Result<(), PoseError> {
-        let bad = |m: &str| Err(PoseError::InvalidConfig(m.to_string()));
-        if self.swarm_size == 0 {
-            return bad("swarm_size must be at least 1");
-        }
-        if self.swarm_size > MAX_SWARM_SIZE {
-            return bad(&format!(
-                "swarm_size {} is more than the {MAX_SWARM_SIZE} a swarm may have",
-                self.swarm_size
-            ));
-        }
-        if self.max_iterations > MAX_ITERATIONS {
-            return bad(&format!(
-                "max_iterations {} is more than the {MAX_ITERATIONS} a swarm may run",
-                self.max_iterations
-            ));
-        }
-        if !(self.inertia.is_finite() && self.inertia >= 0.0) {
-            return bad("inertia must be finite and >= 0");
-        }
-        if !(self.acceleration.is_finite() && self.acceleration >= 0.0) {
-            return bad("acceleration must be finite and >= 0");
-        }
-        if !(self.velocity_clamp > 0.0 && self.velocity_clamp <= 1.0) {
-            return bad("velocity_clamp must be in (0, 1]");
-        }
-        if self.stall_iterations == Some(0) {
-            return bad("stall_iterations must be at least 1");
+        Ok(self.check("")?)
+    }
+
+    /// [`PsoConfig::validate`], naming each setting below `prefix` (`estimator.pso`) as
+    /// in a run configuration.
+    ///
+    /// # Errors
+    /// [`InvalidSetting`] naming the first setting out of its range.
+    pub fn check(&self, prefix: &str) -> Result<(), InvalidSetting> {
+        let name = |n: &str| settings::path(prefix, n);
+        settings::count_within(&name("swarm_size"), self.swarm_size, 1, MAX_SWARM_SIZE)?;
+        settings::count_within(
+            &name("max_iterations"),
+            self.max_iterations,
+            0,
+            MAX_ITERATIONS,
+        )?;
+        settings::at_least_zero(&name("inertia"), self.inertia)?;
+        settings::at_least_zero(&name("acceleration"), self.acceleration)?;
+        settings::ratio(&name("velocity_clamp"), self.velocity_clamp)?;
+        if let Some(n) = self.stall_iterations {
+            settings::count_at_least(&name("stall_iterations"), n, 1)?;
         }
         Ok(())
     }
@@ -397,7 +393,7 @@ mod tests {
             .expect_err("too many particles");
         assert!(
             e.to_string()
-                .contains("swarm_size 1000000000000 is more than the 1000000"),
+                .contains("swarm_size is 1000000000000: it must be from 1 to 1000000"),
             "{e}"
         );
     }

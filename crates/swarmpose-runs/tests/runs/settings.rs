@@ -1,7 +1,8 @@
 //! Every numeric setting of the engine's configuration, set to values a user may type by
-//! mistake (-1, -0.5, 0): the engine refuses the configuration with an error naming the
-//! setting, or runs the first frames without a panic. A negative stereo row tolerance
-//! once passed the check and panicked in the middle of the first frame.
+//! mistake (-1, -0.5, 0, 1e30): the engine refuses the configuration with an error naming
+//! the setting, or runs the first frames without a panic. A negative stereo row tolerance
+//! once passed the check and panicked in the middle of the first frame; an estimator's
+//! ratio of 1e30 once passed it and failed every frame without naming the setting.
 
 use serde_json::Value;
 use swarmpose_datasets::StereoSequence;
@@ -45,9 +46,9 @@ fn no_setting_makes_the_engine_panic() {
     let mut leaves = Vec::new();
     numeric_leaves(&base, &mut Vec::new(), &mut leaves);
     assert!(leaves.len() > 80, "{} numeric settings", leaves.len());
-    let (mut refused, mut ran) = (0, 0);
+    let (mut refused, mut ran) = (Vec::new(), 0);
     for path in &leaves {
-        for to in [-1.0, -0.5, 0.0] {
+        for to in [-1.0, -0.5, 0.0, 1e30] {
             let mut v = base.clone();
             set(&mut v, path, serde_json::json!(to));
             // A count given a negative or fractional value does not parse: refused
@@ -78,15 +79,31 @@ fn no_setting_makes_the_engine_panic() {
                 Ok(Err(message)) => {
                     let leaf = path.last().map_or("", String::as_str);
                     assert!(message.contains(leaf), "{name} = {to}: {message}");
-                    refused += 1;
+                    refused.push(format!("{name} = {to}"));
                 }
                 Err(_) => panic!("{name} = {to} made the engine panic"),
             }
         }
     }
     println!(
-        "{} settings: {refused} values refused, {ran} ran",
-        leaves.len()
+        "{} settings: {} values refused, {ran} ran",
+        leaves.len(),
+        refused.len()
     );
-    assert!(refused > 40 && ran > 40, "{refused} refused, {ran} ran");
+    assert!(
+        refused.len() > 40 && ran > 40,
+        "{} refused, {ran} ran",
+        refused.len()
+    );
+    // The estimator's settings are checked with the others, before the first frame.
+    for named in [
+        "estimator.ambiguity_ratio = 1000000000000000000000000000000",
+        "estimator.pso.velocity_clamp = 1000000000000000000000000000000",
+        "estimator.sigma_multiplier = -1",
+    ] {
+        assert!(
+            refused.iter().any(|r| r == named),
+            "{named} was not refused"
+        );
+    }
 }

@@ -1,9 +1,9 @@
 //! Settings of [`super::PsoEstimator`].
 
-use super::check_threshold;
 use crate::error::PoseError;
 use crate::geometry::MIN_CORRESPONDENCES;
 use crate::pso::{MAX_SWARM_SIZE, PsoConfig};
+use crate::settings::{self, InvalidSetting};
 
 /// How `pso` chooses its inlier threshold when the data carry no per-point noise.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -164,41 +164,48 @@ impl PsoEstimatorConfig {
     }
 
     pub(super) fn validate(&self) -> Result<(), PoseError> {
+        Ok(self.check("")?)
+    }
+
+    /// Checks every setting's range, naming each below `prefix` (`estimator`) as in a
+    /// run configuration: thresholds, fractions and the multiplier finite and above 0
+    /// (`auto_min_fraction` at most `auto_max_fraction`), the ratios in `[0, 1]`, the
+    /// swarm's ranges ([`PsoConfig::check`]) and the counts.
+    ///
+    /// # Errors
+    /// [`InvalidSetting`] naming the first setting out of its range.
+    pub fn check(&self, prefix: &str) -> Result<(), InvalidSetting> {
+        let name = |n: &str| settings::path(prefix, n);
         if let Threshold::Fixed(d) = self.threshold {
-            check_threshold(d)?;
+            settings::positive(&name("threshold"), d)?;
         }
-        check_threshold(self.auto_initial_fraction)?;
-        check_threshold(self.auto_min_fraction)?;
-        check_threshold(self.auto_max_fraction)?;
-        if self.auto_min_fraction > self.auto_max_fraction || self.max_sample_growth == 0 {
-            return Err(PoseError::InvalidConfig(
-                "auto_min_fraction must not exceed auto_max_fraction; max_sample_growth >= 1"
-                    .into(),
-            ));
-        }
-        check_threshold(self.sigma_multiplier)?;
-        self.pso.validate()?;
-        if self.seeded_particles > MAX_SWARM_SIZE {
-            return Err(PoseError::InvalidConfig(format!(
-                "seeded_particles {} is more than the {MAX_SWARM_SIZE} a swarm may have",
-                self.seeded_particles
-            )));
-        }
-        if self.max_points < MIN_CORRESPONDENCES || self.max_pairs == 0 || self.refine_rounds == 0 {
-            return Err(PoseError::InvalidConfig(
-                "max_points must be >= 4, max_pairs and refine_rounds >= 1".into(),
-            ));
-        }
-        if !(0.0..=1.0).contains(&self.restart_below_ratio) {
-            return Err(PoseError::InvalidConfig(
-                "restart_below_ratio must be in [0, 1]".into(),
-            ));
-        }
-        if !(0.0..=1.0).contains(&self.ambiguity_ratio) {
-            return Err(PoseError::InvalidConfig(
-                "ambiguity_ratio must be in [0, 1]".into(),
-            ));
-        }
+        settings::positive(&name("auto_initial_fraction"), self.auto_initial_fraction)?;
+        settings::positive(&name("auto_min_fraction"), self.auto_min_fraction)?;
+        settings::not_below(
+            &name("auto_max_fraction"),
+            self.auto_max_fraction,
+            self.auto_min_fraction,
+            "a finite fraction, at least auto_min_fraction",
+        )?;
+        settings::count_at_least(&name("max_sample_growth"), self.max_sample_growth, 1)?;
+        settings::positive(&name("sigma_multiplier"), self.sigma_multiplier)?;
+        self.pso.check(&name("pso"))?;
+        settings::count_within(
+            &name("seeded_particles"),
+            self.seeded_particles,
+            0,
+            MAX_SWARM_SIZE,
+        )?;
+        settings::count_at_least(&name("max_points"), self.max_points, MIN_CORRESPONDENCES)?;
+        settings::count_at_least(&name("max_pairs"), self.max_pairs, 1)?;
+        settings::count_at_least(&name("refine_rounds"), self.refine_rounds, 1)?;
+        settings::within(
+            &name("restart_below_ratio"),
+            self.restart_below_ratio,
+            0.0,
+            1.0,
+        )?;
+        settings::within(&name("ambiguity_ratio"), self.ambiguity_ratio, 0.0, 1.0)?;
         Ok(())
     }
 }

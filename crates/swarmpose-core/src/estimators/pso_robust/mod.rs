@@ -95,7 +95,7 @@ use nalgebra::{Isometry3, Translation3};
 use rand::seq::index::sample;
 
 use super::consensus::{
-    Tolerance, check_support, check_threshold, collect_inliers_within, refine_within, residual_rms,
+    Tolerance, check_support, collect_inliers_within, refine_within, residual_rms,
     truncated_cost_within,
 };
 
