@@ -356,30 +356,53 @@ fn fast9_in<'a>(
 /// The sums are of integers: each product of two gradients is at most 255², and 49 of them
 /// at most 3 186 225, below 2²⁴, so that summing them in `f32` (as this function did until
 /// issue 34) is exact in any order and gives the integer sum (never `-0`, starting from
-/// `+0`): summed as integers, converted once.
+/// `+0`): summed as integers, converted once. Each row is read as [`HARRIS_LANES`]
+/// columns whose products are summed in vector registers, all 8: the eighth column's are
+/// then subtracted (a mask on it had the compiler sum three columns one by one). Its pixels
+/// lie at most 5 past the window's centre, inside the image's buffer (the next row's first
+/// pixel at worst).
 #[must_use]
 #[inline(always)]
 pub fn harris(img: GrayView<'_>, x: usize, y: usize) -> f32 {
     let w = img.width;
     let d = img.data;
-    let (mut sxx, mut syy, mut sxy) = (0i32, 0i32, 0i32);
+    let (mut sxx, mut syy) = ([0i32; HARRIS_LANES], [0i32; HARRIS_LANES]);
+    let (mut sxy, mut past) = ([0i32; HARRIS_LANES], [0i32; 3]);
     for yy in y - 3..=y + 3 {
         // The window's row with a pixel either side, and the rows above and below.
-        let here = &d[yy * w + x - 4..][..9];
-        let above = &d[(yy - 1) * w + x - 3..][..7];
-        let below = &d[(yy + 1) * w + x - 3..][..7];
-        for k in 0..7 {
-            let gx = i32::from(here[k + 2]) - i32::from(here[k]);
-            let gy = i32::from(below[k]) - i32::from(above[k]);
-            sxx += gx * gx;
-            syy += gy * gy;
-            sxy += gx * gy;
+        let here = &d[yy * w + x - 4..][..HARRIS_LANES + 2];
+        let above = &d[(yy - 1) * w + x - 3..][..HARRIS_LANES];
+        let below = &d[(yy + 1) * w + x - 3..][..HARRIS_LANES];
+        let gradient = |k: usize| {
+            (
+                i32::from(here[k + 2]) - i32::from(here[k]),
+                i32::from(below[k]) - i32::from(above[k]),
+            )
+        };
+        for k in 0..HARRIS_LANES {
+            let (gx, gy) = gradient(k);
+            sxx[k] += gx * gx;
+            syy[k] += gy * gy;
+            sxy[k] += gx * gy;
         }
+        let (gx, gy) = gradient(7);
+        past[0] += gx * gx;
+        past[1] += gy * gy;
+        past[2] += gx * gy;
     }
+    let total = |s: [i32; HARRIS_LANES], p: i32| s.iter().sum::<i32>() - p;
+    let (sxx, syy, sxy) = (
+        total(sxx, past[0]),
+        total(syy, past[1]),
+        total(sxy, past[2]),
+    );
     let scale = 1.0 / (255.0 * 255.0 * 49.0);
     let (sxx, syy, sxy) = (sxx as f32 * scale, syy as f32 * scale, sxy as f32 * scale);
     sxx * syy - sxy * sxy - 0.04 * (sxx + syy) * (sxx + syy)
 }
+
+/// Columns of a row of [`harris`]'s window read at once (7 and one subtracted).
+const HARRIS_LANES: usize = 8;
 
 /// Half-widths of the rows of a disc of radius `r` pixels: `u_max[v]` for `v = 0..=r`.
 #[must_use]

@@ -54,9 +54,11 @@ fn ssd(window: PairWindow<'_>, xr: usize) -> u32 {
 const SSD_LANES: usize = 8;
 
 /// [`ssd`] for a window side `N ≤ SSD_LANES` known to the compiler (`N = 2 r + 1`): rows
-/// read as [`SSD_LANES`] pixels (those past the window's row count zero), whose squared
-/// differences (integers, exact in any order) the compiler sums in vector registers;
-/// [`ssd`] where the last row has no pixels past it. The caller keeps both windows inside.
+/// read as [`SSD_LANES`] pixels, whose squared differences (integers, exact in any order,
+/// wrapping) the compiler sums in vector registers, all of them: those past the window's
+/// row are then subtracted (a mask on the lanes let the compiler drop lanes and sum the
+/// rest pixel by pixel); [`ssd`] where the last row has no pixels past it. The caller
+/// keeps both windows inside.
 #[inline(always)]
 fn ssd_fixed<const N: usize>(window: PairWindow<'_>, xr: usize) -> u32 {
     const { assert!(N <= SSD_LANES) };
@@ -66,16 +68,22 @@ fn ssd_fixed<const N: usize>(window: PairWindow<'_>, xr: usize) -> u32 {
     {
         return ssd(window, xr);
     }
-    let mut sums = [0u32; SSD_LANES];
+    let (mut sums, mut past) = ([0u32; SSD_LANES], 0u32);
     for yy in y - r..=y + r {
         let lrow = &left.data[yy * left.width + xl - r..][..SSD_LANES];
         let rrow = &right.data[yy * right.width + xr - r..][..SSD_LANES];
         for k in 0..SSD_LANES {
             let d = i32::from(lrow[k]) - i32::from(rrow[k]);
-            sums[k] += if k < N { (d * d) as u32 } else { 0 };
+            sums[k] = sums[k].wrapping_add((d * d) as u32);
+        }
+        for k in N..SSD_LANES {
+            let d = i32::from(lrow[k]) - i32::from(rrow[k]);
+            past = past.wrapping_add((d * d) as u32);
         }
     }
-    sums.iter().sum()
+    sums.iter()
+        .fold(0u32, |s, &v| s.wrapping_add(v))
+        .wrapping_sub(past)
 }
 
 /// Refines the disparity of left pixel `(xl, y)` (integers) near `d0` pixels: the SSD of

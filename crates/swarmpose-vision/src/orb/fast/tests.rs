@@ -87,9 +87,33 @@ fn harris_in_floats(img: GrayView<'_>, x: usize, y: usize) -> f32 {
     sxx * syy - sxy * sxy - 0.04 * (sxx + syy) * (sxx + syy)
 }
 
-/// [`harris`] gives the bits of [`harris_in_floats`] at every pixel 4 from the edges of
-/// seeded random images, of flat ones (all zero sums) and of the extremes (stripes and
-/// checkerboards of 0 and 255: the largest sums, of both signs).
+/// [`harris`] as it was before its rows were read as 8 lanes: the sums as integers, pixel
+/// by pixel in raster order.
+fn harris_scalar(img: GrayView<'_>, x: usize, y: usize) -> f32 {
+    let w = img.width;
+    let d = img.data;
+    let (mut sxx, mut syy, mut sxy) = (0i32, 0i32, 0i32);
+    for yy in y - 3..=y + 3 {
+        let here = &d[yy * w + x - 4..][..9];
+        let above = &d[(yy - 1) * w + x - 3..][..7];
+        let below = &d[(yy + 1) * w + x - 3..][..7];
+        for k in 0..7 {
+            let gx = i32::from(here[k + 2]) - i32::from(here[k]);
+            let gy = i32::from(below[k]) - i32::from(above[k]);
+            sxx += gx * gx;
+            syy += gy * gy;
+            sxy += gx * gy;
+        }
+    }
+    let scale = 1.0 / (255.0 * 255.0 * 49.0);
+    let (sxx, syy, sxy) = (sxx as f32 * scale, syy as f32 * scale, sxy as f32 * scale);
+    sxx * syy - sxy * sxy - 0.04 * (sxx + syy) * (sxx + syy)
+}
+
+/// [`harris`] gives the bits of [`harris_in_floats`] and of [`harris_scalar`] at every
+/// pixel 4 from the edges (at the last column, the eighth lane reads the next row's first
+/// pixel) of seeded random images, of flat ones (all zero sums) and of the extremes
+/// (stripes and checkerboards of 0 and 255: the largest sums, of both signs).
 #[test]
 fn harris_is_the_sums_in_floats() {
     let (w, h) = (41, 23);
@@ -128,6 +152,8 @@ fn harris_is_the_sums_in_floats() {
             for x in 4..w - 4 {
                 let (got, want) = (harris(img, x, y), harris_in_floats(img, x, y));
                 assert_eq!(got.to_bits(), want.to_bits(), "({x}, {y})");
+                let scalar = harris_scalar(img, x, y);
+                assert_eq!(got.to_bits(), scalar.to_bits(), "({x}, {y})");
                 signs[usize::from(want > 0.0) + usize::from(want >= 0.0)] += 1;
             }
         }
