@@ -81,8 +81,10 @@ impl Normal {
             self.pending[k][lane] = q[k];
             self.pending[3 + k][lane] = r[k];
         }
-        for (k, v) in w.iter().enumerate() {
-            self.pending[6 + k][lane] = *v;
+        for (b, column) in w.data.0.iter().enumerate() {
+            for (k, v) in column.iter().enumerate() {
+                self.pending[6 + 3 * b + k][lane] = *v;
+            }
         }
         self.count += 1;
         if self.count == LANES {
@@ -98,7 +100,7 @@ impl Normal {
             return;
         }
         let (deltas, finite) = updates(&self.pending);
-        if count == LANES && finite.iter().all(|f| *f) {
+        if count == LANES && finite == [true; LANES] {
             for (s, d) in self.sums.iter_mut().zip(&deltas) {
                 *s = (((*s + d[0]) + d[1]) + d[2]) + d[3];
             }
@@ -126,7 +128,8 @@ impl Normal {
 /// `f` lane by lane.
 #[inline(always)]
 fn map(f: impl Fn(usize) -> f64) -> Lanes {
-    std::array::from_fn(f)
+    // Written out: `std::array::from_fn` left a call per element in the kernels.
+    [f(0), f(1), f(2), f(3)]
 }
 
 /// `P = Jᵀ w` (6 × 3, by columns `[b][a]`) of each lane's pending point (see
@@ -136,7 +139,7 @@ fn map(f: impl Fn(usize) -> f64) -> Lanes {
 fn jacobian_products(pending: &[Lanes; 15]) -> [[Lanes; 6]; 3] {
     let [q0, q1, q2, ..] = pending;
     let col = |b: usize, k: usize| &pending[6 + 3 * b + k]; // w_kb
-    std::array::from_fn(|b| {
+    let columns = |b: usize| {
         let (c0, c1, c2) = (col(b, 0), col(b, 1), col(b, 2));
         [
             map(|l| q2[l] * c1[l] + (-q1[l]) * c2[l]),
@@ -146,7 +149,8 @@ fn jacobian_products(pending: &[Lanes; 15]) -> [[Lanes; 6]; 3] {
             map(|l| -c1[l]),
             map(|l| -c2[l]),
         ]
-    })
+    };
+    [columns(0), columns(1), columns(2)]
 }
 
 /// Whether each lane's `P` is finite (else its updates are not used: the full products
@@ -157,11 +161,19 @@ fn jacobian_products(pending: &[Lanes; 15]) -> [[Lanes; 6]; 3] {
 #[inline(always)]
 fn finite_lanes(p: &[[Lanes; 6]; 3]) -> [bool; LANES] {
     let row_sum = |a: usize| map(|l| p[0][a][l] + p[1][a][l] + p[2][a][l]);
-    let sums: [Lanes; 6] = std::array::from_fn(row_sum);
-    std::array::from_fn(|l| {
+    let sums = [
+        row_sum(0),
+        row_sum(1),
+        row_sum(2),
+        row_sum(3),
+        row_sum(4),
+        row_sum(5),
+    ];
+    let lane = |l: usize| {
         let s = |a: usize| sums[a][l];
         ((s(0) + s(1)) + (s(2) + s(3)) + (s(4) + s(5))).is_finite()
-    })
+    };
+    [lane(0), lane(1), lane(2), lane(3)]
 }
 
 /// Each lane's update of the entries of `(h, g)` (h by columns, then g) from its pending
