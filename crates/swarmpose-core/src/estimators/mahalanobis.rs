@@ -24,6 +24,7 @@ use nalgebra::{Isometry3, Matrix3, Matrix3x6, Matrix6, Translation3, UnitQuatern
 use crate::error::PoseError;
 use crate::geometry::{Correspondences, CovariancePair, MIN_CORRESPONDENCES};
 use crate::simd;
+pub(crate) use normal::Normal;
 
 /// 99 % quantile of χ² with 3 degrees of freedom, the default gate: `3.368²`, the square
 /// of the isotropic threshold multiplier.
@@ -162,98 +163,22 @@ impl simd::Kernel for NormalEquations<'_> {
     #[inline(always)]
     fn run(self) -> Self::Output {
         let (src_cov, dst_cov) = self.covariance;
-        let mut h = Matrix6::<f64>::zeros();
-        let mut g = Vector6::<f64>::zeros();
+        let mut normal = Normal::zeros();
         // The rotation's matrix once per step, not once per row (the same bits).
         let r = self.pose.rotation.to_rotation_matrix();
         for &i in self.rows {
             let information =
                 inverse3(&(r.matrix() * src_cov[i] * r.matrix().transpose() + dst_cov[i]));
             if let Some(w) = information {
-                add_point(&mut h, &mut g, self.pose, self.data, i, &w);
+                normal.add_point(self.pose, self.data, i, &w);
             }
         }
-        (h, g)
+        normal.parts()
     }
 }
 
-/// Adds correspondence `i` of `data`, weighted by the 3x3 information `w` (1/m²), to the
-/// normal equations `h`, `g` of a Gauss-Newton step on `pose` (the motion `dst = R src + t`)
-/// perturbed on the left by `(ω, ν)` (radians, metres, in the destination frame): residual
-/// `r = dst − pose·src`, Jacobian `[[q]×, −I]` with `q = pose·src`.
-///
-/// The same bits as `h += Jᵀ w J`, `g += Jᵀ w r` through nalgebra (issue 34), with the
-/// Jacobian's zeros left out: nalgebra sums `P = Jᵀ w` and `P J` term by term in order,
-/// and a term `0 · x` (`x` finite) is a zero, which leaves a sum unchanged unless the sum
-/// is itself zero, when only its sign can differ; `h` and `g` start at `+0` in every caller
-/// and never hold `-0` (`+0 + -0 = +0`), so such a zero adds nothing either way. When `w`
-/// or `P` is not finite (`0 · ∞` is NaN) the full products are taken. Inlined into the
-/// [`simd::Kernel`]s that call it.
-#[inline(always)]
-pub(crate) fn add_point(
-    h: &mut Matrix6<f64>,
-    g: &mut Vector6<f64>,
-    pose: &Isometry3<f64>,
-    data: &Correspondences,
-    i: usize,
-    w: &Matrix3<f64>,
-) {
-    let q = (pose * data.src()[i]).coords;
-    let r = data.dst()[i].coords - q;
-    let (q0, q1, q2) = (q[0], q[1], q[2]);
-    let columns = &w.data.0; // columns[b][k] = w_kb
-    // P = Jᵀ w (6 × 3) by columns, pc[b][a] = P[a][b] (h is column-major too, so each
-    // update below is one 6-lane operation the compiler vectorises; the same operations
-    // on every element as row by row): rows 0-2 from the columns of [q]×, whose zero is
-    // left out; rows 3-5 are −w (−1 · x, the same bits as −x for finite x; the −0 terms
-    // left out).
-    let pc: [[f64; 6]; 3] = std::array::from_fn(|b| {
-        let col = &columns[b];
-        [
-            q2 * col[1] + (-q1) * col[2],
-            (-q2) * col[0] + q0 * col[2],
-            q1 * col[0] + (-q0) * col[1],
-            -col[0],
-            -col[1],
-            -col[2],
-        ]
-    });
-    // P's rows 3-5 are −w, so P holds every entry of w. A sum with an infinite or NaN
-    // term is ±∞ or NaN in any order, so these lane sums are all finite only when every
-    // entry of P (and w) is; a sum that overflows merely takes the full products (the
-    // same bits for finite w and P).
-    let lanes: [f64; 6] = std::array::from_fn(|a| pc[0][a] + pc[1][a] + pc[2][a]);
-    let total = (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]) + (lanes[4] + lanes[5]);
-    if !total.is_finite() {
-        add_point_full(h, g, &q, &r, w);
-        return;
-    }
-    // (P J)[a][c]: J's columns 0-2 are those of [q]×, 3-5 those of −I.
-    let [p0, p1, p2] = &pc;
-    let hc = &mut h.data.0; // hc[c][a] = h[(a, c)]
-    for a in 0..6 {
-        hc[0][a] += p1[a] * q2 + p2[a] * (-q1);
-    }
-    for a in 0..6 {
-        hc[1][a] += p0[a] * (-q2) + p2[a] * q0;
-    }
-    for a in 0..6 {
-        hc[2][a] += p0[a] * q1 + p1[a] * (-q0);
-    }
-    for (k, pk) in pc.iter().enumerate() {
-        for a in 0..6 {
-            hc[3 + k][a] += -pk[a];
-        }
-    }
-    let (r0, r1, r2) = (r[0], r[1], r[2]);
-    let gc = &mut g.data.0[0];
-    for a in 0..6 {
-        gc[a] += p0[a] * r0 + p1[a] * r1 + p2[a] * r2;
-    }
-}
-
-/// [`add_point`] through nalgebra's products with the full Jacobian `[[q]×, −I]`.
-fn add_point_full(
+/// [`Normal::add_point`] through nalgebra's products with the full Jacobian `[[q]×, −I]`.
+pub(crate) fn add_point_full(
     h: &mut Matrix6<f64>,
     g: &mut Vector6<f64>,
     q: &nalgebra::Vector3<f64>,
@@ -302,7 +227,7 @@ pub(crate) fn inverse3(m: &Matrix3<f64>) -> Option<Matrix3<f64>> {
     determinant_and_inverse(m).1
 }
 
-/// `pose` moved by the solution `δ = (ω, ν)` of `h δ = −g` ([`add_point`]'s
+/// `pose` moved by the solution `δ = (ω, ν)` of `h δ = −g` ([`Normal::add_point`]'s
 /// perturbation), and `|δ|`; `None` when `h` is singular or the step is not finite.
 pub(crate) fn gauss_newton_step(
     pose: &Isometry3<f64>,
@@ -322,5 +247,6 @@ pub(crate) fn gauss_newton_step(
     Some((moved, delta.norm()))
 }
 
+mod normal;
 #[cfg(test)]
 mod tests;

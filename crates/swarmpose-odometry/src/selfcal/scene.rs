@@ -44,14 +44,6 @@ pub fn off_plane_spread_px(points: &[(f64, f64, f64)]) -> Option<f64> {
         .iter()
         .fold((0.0, 0.0), |(a, b), p| (a + p.0 / n, b + p.1 / n));
     let row = |u: f64, v: f64| Vector3::new(1.0, u - mu, v - mv);
-    let spread = |plane: &Vector3<f64>| {
-        let mut r: Vec<f64> = points
-            .iter()
-            .map(|&(u, v, d)| (d - plane.dot(&row(u, v))).abs())
-            .collect();
-        let mid = r.len() / 2;
-        1.4826 * *r.select_nth_unstable_by(mid, f64::total_cmp).1
-    };
     let fit = |within: f64, plane: Option<&Vector3<f64>>| {
         let mut a = Matrix3::<f64>::zeros();
         let mut b = Vector3::<f64>::zeros();
@@ -66,6 +58,18 @@ pub fn off_plane_spread_px(points: &[(f64, f64, f64)]) -> Option<f64> {
         p.iter().all(|c| c.is_finite()).then_some(p)
     };
     let first = fit(f64::INFINITY, None)?;
+    // One buffer for both spreads (issue 34: it was allocated for each).
+    let mut r: Vec<f64> = Vec::with_capacity(points.len());
+    let mut spread = |plane: &Vector3<f64>| {
+        r.clear();
+        r.extend(
+            points
+                .iter()
+                .map(|&(u, v, d)| (d - plane.dot(&row(u, v))).abs()),
+        );
+        let mid = r.len() / 2;
+        1.4826 * *r.select_nth_unstable_by(mid, f64::total_cmp).1
+    };
     let second = fit(3.0 * spread(&first), Some(&first)).unwrap_or(first);
     Some(spread(&second))
 }
@@ -89,6 +93,69 @@ pub fn more_than_one_plane(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// [`off_plane_spread_px`] as it was before its spreads shared a buffer (issue 34).
+    fn off_plane_spread_px_before(points: &[(f64, f64, f64)]) -> Option<f64> {
+        if points.len() < 4 {
+            return None;
+        }
+        let n = points.len() as f64;
+        let (mu, mv) = points
+            .iter()
+            .fold((0.0, 0.0), |(a, b), p| (a + p.0 / n, b + p.1 / n));
+        let row = |u: f64, v: f64| Vector3::new(1.0, u - mu, v - mv);
+        let spread = |plane: &Vector3<f64>| {
+            let mut r: Vec<f64> = points
+                .iter()
+                .map(|&(u, v, d)| (d - plane.dot(&row(u, v))).abs())
+                .collect();
+            let mid = r.len() / 2;
+            1.4826 * *r.select_nth_unstable_by(mid, f64::total_cmp).1
+        };
+        let fit = |within: f64, plane: Option<&Vector3<f64>>| {
+            let mut a = Matrix3::<f64>::zeros();
+            let mut b = Vector3::<f64>::zeros();
+            for &(u, v, d) in points {
+                let x = row(u, v);
+                if plane.is_none_or(|p| (d - p.dot(&x)).abs() <= within) {
+                    a += x * x.transpose();
+                    b += x * d;
+                }
+            }
+            let p = a.cholesky()?.solve(&b);
+            p.iter().all(|c| c.is_finite()).then_some(p)
+        };
+        let first = fit(f64::INFINITY, None)?;
+        let second = fit(3.0 * spread(&first), Some(&first)).unwrap_or(first);
+        Some(spread(&second))
+    }
+
+    #[test]
+    fn shared_buffer_keeps_the_bits() {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3803);
+        for case in 0..500 {
+            let n = rng.random_range(0..300);
+            let pts: Vec<(f64, f64, f64)> = (0..n)
+                .map(|_| {
+                    let mut c = || match rng.random_range(0..40) {
+                        0 => 0.0,
+                        1 => -0.0,
+                        2 => f64::NAN,
+                        3..=8 => f64::from(rng.random_range(0..3u8)), // ties
+                        _ => rng.random_range(-100.0..1300.0),
+                    };
+                    (c(), c(), c())
+                })
+                .collect();
+            let bits = |s: Option<f64>| s.map(f64::to_bits);
+            assert_eq!(
+                bits(off_plane_spread_px(&pts)),
+                bits(off_plane_spread_px_before(&pts)),
+                "case {case}"
+            );
+        }
+    }
 
     #[test]
     fn a_plane_is_one_plane_whatever_its_offset_and_slant() {

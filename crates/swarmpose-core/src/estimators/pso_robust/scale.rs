@@ -95,6 +95,57 @@ fn truncated_median(x_max: f64) -> f64 {
 /// look uniform in the ball (σ is not identified), above, the Gaussian is not truncated.
 const RATIO_RANGE: (f64, f64) = (0.25, 20.0);
 
+/// Levels of the bisection of [`truncated_sigma`] whose `δ/σ` ratios are computed once
+/// ([`Bisection`]): the midpoints of its first levels are the same in every call.
+const CACHED_LEVELS: usize = 8;
+
+/// [`truncated_sigma`]'s constants, computed once (issue 34: each is 27 evaluations of
+/// [`chi3_cdf`], the same operations as when they were computed on every call, so the
+/// same bits): `ratio(x) = truncated_median(x) / x` at both ends of [`RATIO_RANGE`],
+/// `truncated_median` at its upper end, and `ratio` at the midpoints of the bisection's
+/// first [`CACHED_LEVELS`] levels (heap order: node `k`'s halves are `2k` and `2k + 1`,
+/// the root is 1).
+struct Bisection {
+    of_lo: f64,
+    of_hi: f64,
+    median_hi: f64,
+    of_mid: [f64; 1 << CACHED_LEVELS],
+}
+
+/// `truncated_median(x) / x`, the ratio [`truncated_sigma`] inverts.
+fn ratio_of(x: f64) -> f64 {
+    truncated_median(x) / x
+}
+
+impl Bisection {
+    fn new() -> Self {
+        let mut of_mid = [0.0; 1 << CACHED_LEVELS];
+        fill(&mut of_mid, 1, RATIO_RANGE);
+        Self {
+            of_lo: ratio_of(RATIO_RANGE.0),
+            of_hi: ratio_of(RATIO_RANGE.1),
+            median_hi: truncated_median(RATIO_RANGE.1),
+            of_mid,
+        }
+    }
+
+    fn get() -> &'static Self {
+        static ONCE: std::sync::OnceLock<Bisection> = std::sync::OnceLock::new();
+        ONCE.get_or_init(Self::new)
+    }
+}
+
+/// [`Bisection::of_mid`] from node `k` (the interval `(lo, hi)`) down.
+fn fill(of_mid: &mut [f64], k: usize, (lo, hi): (f64, f64)) {
+    if k >= of_mid.len() {
+        return;
+    }
+    let mid = 0.5 * (lo + hi);
+    of_mid[k] = ratio_of(mid);
+    fill(of_mid, 2 * k, (mid, hi));
+    fill(of_mid, 2 * k + 1, (lo, mid));
+}
+
 /// The noise σ per axis (3D Gaussian) whose residuals, kept only below `delta`, have
 /// median `median_within`: the inlier band truncates the noise, so the plain median
 /// underestimates σ when δ is tight. `None` when the residuals look uniform within the
@@ -105,22 +156,33 @@ pub(super) fn truncated_sigma(median_within: f64, delta: f64) -> Option<f64> {
     }
     let ratio = median_within / delta;
     // ratio(x) = truncated_median(x) / x decreases with x = δ/σ.
-    let of = |x: f64| truncated_median(x) / x;
-    if ratio >= of(RATIO_RANGE.0) {
+    let cached = Bisection::get();
+    if ratio >= cached.of_lo {
         return None;
     }
     let (mut lo, mut hi) = RATIO_RANGE;
-    if ratio <= of(hi) {
+    if ratio <= cached.of_hi {
         // Hardly truncated: the plain median of a 3D Gaussian's norm.
-        return Some(median_within / truncated_median(hi));
+        return Some(median_within / cached.median_hi);
     }
+    // Node k of the cached levels: the larger half (lo moves up) is 2k, the smaller 2k + 1.
+    // Past the cached levels, k stays at the table's length (no entry).
+    let mut k = 1;
     for _ in 0..BISECTIONS {
         let mid = 0.5 * (lo + hi);
-        if of(mid) > ratio {
+        let of_mid = cached
+            .of_mid
+            .get(k)
+            .copied()
+            .unwrap_or_else(|| ratio_of(mid));
+        let smaller = if of_mid > ratio {
             lo = mid;
+            0
         } else {
             hi = mid;
-        }
+            1
+        };
+        k = (2 * k + smaller).min(cached.of_mid.len());
     }
     Some(delta / (0.5 * (lo + hi)))
 }
@@ -139,6 +201,53 @@ mod tests {
         assert!(s > 1.0 && s < 5.0, "{s}");
         let mm: Vec<Point3<f64>> = pts.iter().map(|p| p * 1000.0).collect();
         assert!((scene_scale(&mm) / s - 1000.0).abs() < 1e-9);
+    }
+
+    /// [`truncated_sigma`] as it was before its constants were cached (issue 34).
+    fn truncated_sigma_before(median_within: f64, delta: f64) -> Option<f64> {
+        if !(delta > 0.0 && median_within >= 0.0) {
+            return None;
+        }
+        let ratio = median_within / delta;
+        let of = |x: f64| truncated_median(x) / x;
+        if ratio >= of(RATIO_RANGE.0) {
+            return None;
+        }
+        let (mut lo, mut hi) = RATIO_RANGE;
+        if ratio <= of(hi) {
+            return Some(median_within / truncated_median(hi));
+        }
+        for _ in 0..BISECTIONS {
+            let mid = 0.5 * (lo + hi);
+            if of(mid) > ratio {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        Some(delta / (0.5 * (lo + hi)))
+    }
+
+    #[test]
+    fn cached_bisection_is_bit_identical() {
+        use rand::RngExt;
+        let mut rng = crate::rng::seeded(38);
+        let special = [0.0, -0.0, f64::NAN, f64::INFINITY, -1.0, 1e-300, 1.0];
+        let mut cases: Vec<(f64, f64)> = special
+            .iter()
+            .flat_map(|&a| special.iter().map(move |&b| (a, b)))
+            .collect();
+        // Ratios across the whole range, and exactly at the cached midpoints' values.
+        cases.extend((0..3000).map(|_| (rng.random_range(0.0..1.0), 1.0)));
+        cases.extend((0..300).map(|_| (rng.random_range(0.0..10.0), rng.random_range(0.1..10.0))));
+        let cached = Bisection::get();
+        cases.extend(cached.of_mid.iter().skip(1).map(|&r| (r, 1.0)));
+        cases.extend([(cached.of_lo, 1.0), (cached.of_hi, 1.0)]);
+        for (m, d) in cases {
+            let got = truncated_sigma(m, d).map(f64::to_bits);
+            let want = truncated_sigma_before(m, d).map(f64::to_bits);
+            assert_eq!(got, want, "{m} {d}");
+        }
     }
 
     #[test]

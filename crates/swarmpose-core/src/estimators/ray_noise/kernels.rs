@@ -5,7 +5,7 @@
 use nalgebra::{Isometry3, Matrix3, Matrix6, Vector3, Vector6};
 
 use super::{MIN_WEIGHT, NEGLIGIBLE, RangeNoise, Row, scoring_body};
-use crate::estimators::mahalanobis::{add_point, determinant_and_inverse};
+use crate::estimators::mahalanobis::{Normal, determinant_and_inverse};
 use crate::geometry::Correspondences;
 use crate::simd;
 
@@ -101,16 +101,15 @@ impl simd::Kernel for WeightedNormalEquations<'_> {
 
     #[inline(always)]
     fn run(self) -> Self::Output {
-        let mut h = Matrix6::<f64>::zeros();
-        let mut g = Vector6::<f64>::zeros();
+        let mut normal = Normal::zeros();
         for (i, row) in self.rows.iter().enumerate() {
             if row.weight < MIN_WEIGHT {
                 continue;
             }
             let w = row.information * row.weight;
-            add_point(&mut h, &mut g, self.pose, self.data, i, &w);
+            normal.add_point(self.pose, self.data, i, &w);
         }
-        (h, g)
+        normal.parts()
     }
 }
 
