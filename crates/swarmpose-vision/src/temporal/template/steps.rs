@@ -34,11 +34,12 @@ impl crate::simd::Kernel for Steps<'_> {
     #[inline(always)]
     fn run(self) -> AffineSteps {
         let Steps(gx, gy, contrast) = self;
-        let mut sd = [SVector::<f32, 6>::zeros(); N * N];
-        for (k, (sd, &(x, y))) in sd.iter_mut().zip(&COORDS).enumerate() {
-            let (gx, gy) = (gx[k], gy[k]);
-            *sd = SVector::<f32, 6>::from([gx * x, gx * y, gy * x, gy * y, gx, gy]);
-        }
+        // Each written once (no buffer of zeros first, which `rep stosb` fills a byte at a
+        // time).
+        let mut sd: [SVector<f32, 6>; N * N] = std::array::from_fn(|k| {
+            let ((gx, gy), (x, y)) = ((gx[k], gy[k]), COORDS[k]);
+            SVector::<f32, 6>::from([gx * x, gx * y, gy * x, gy * y, gx, gy])
+        });
         project_out(&mut sd, contrast);
         AffineSteps {
             sd,
@@ -50,20 +51,16 @@ impl crate::simd::Kernel for Steps<'_> {
 /// `Σ v vᵀ` over `sd` in order from zeros, the same bits as nalgebra's
 /// `sd.iter().fold(zeros, |h, v| h + *v * v.transpose())`: entry `(i, j)` adds
 /// `v[i] v[j]` to its running sum in the order of `sd`, as there, but a column `j` at a
-/// time, over rows padded to 8 lanes (the last two unused), without the outer product's
-/// temporaries (one vector multiply and add per image and column).
+/// time, without the outer product's temporaries (a few vector multiplies and adds per
+/// image and column).
 #[inline(always)]
 fn hessian(sd: &[SVector<f32, 6>; N * N]) -> SMatrix<f32, 6, 6> {
-    let mut padded = [[0f32; 8]; N * N];
-    for (p, v) in padded.iter_mut().zip(sd) {
-        p[..6].copy_from_slice(v.as_slice());
-    }
     let mut h = SMatrix::<f32, 6, 6>::zeros();
     for (j, out) in h.column_iter_mut().enumerate() {
-        let mut col = [0f32; 8];
-        for p in &padded {
-            let s = p[j];
-            for (c, &x) in col.iter_mut().zip(p) {
+        let mut col = [0f32; 6];
+        for v in sd {
+            let s = v[j];
+            for (c, &x) in col.iter_mut().zip(v.iter()) {
                 *c += x * s;
             }
         }
