@@ -2,7 +2,7 @@
 //! measured where the patch of the frame where each began appears (with images), and the
 //! tracks that begin in it.
 
-use swarmpose_vision::temporal::template::{AlignLimits, PatchTemplate};
+use swarmpose_vision::temporal::template::AlignLimits;
 
 use super::calibration::corrected;
 use super::{Images, Link, Window};
@@ -70,7 +70,7 @@ impl Window {
     }
 
     /// The track `t` continued by the link `l`: measured where the patch of the frame
-    /// where it began appears in the current image ([`PatchTemplate::align_affine`]);
+    /// where it began appears in the current image ([`PatchTemplate::align_affine`](swarmpose_vision::temporal::template::PatchTemplate::align_affine));
     /// when it is not found again the track ends, and the feature begins a new one at
     /// its detected keypoint.
     fn continue_track(&mut self, t: u32, l: &Link, im: Images<'_>) -> (u32, StereoObservation) {
@@ -93,9 +93,10 @@ impl Window {
             ),
             None => {
                 let t = self.new_track();
-                if let Some(tpl) = PatchTemplate::sample(im.current, at(&l.current_keypoint)) {
-                    self.templates.insert(t, tpl);
-                }
+                // A patch that is no template leaves the track without one.
+                let _ = self
+                    .templates
+                    .sample(t, im.current, at(&l.current_keypoint));
                 (t, l.current_keypoint)
             }
         }
@@ -120,12 +121,10 @@ impl Window {
         if let Some(r) = self.frames.back_mut() {
             r.observations.push((t, z));
         }
-        match images.and_then(|im| PatchTemplate::sample(im.reference, at(&l.reference))) {
-            Some(tpl) => {
-                self.templates.insert(t, tpl);
-                (t, l.current)
-            }
-            None => (t, l.current_keypoint),
+        if images.is_some_and(|im| self.templates.sample(t, im.reference, at(&l.reference))) {
+            (t, l.current)
+        } else {
+            (t, l.current_keypoint)
         }
     }
 }

@@ -4,6 +4,7 @@
 //! (page faults in the window's stage, issue 34). The map holds slot numbers; a slot
 //! freed by a track that ended takes the next new track's template.
 
+use swarmpose_vision::features::GrayView;
 use swarmpose_vision::temporal::template::PatchTemplate;
 
 use super::ids::IdMap;
@@ -26,25 +27,35 @@ impl Templates {
         self.slots.get_mut(i)
     }
 
-    /// Keeps `template` as the template of track `t` (in place of the one it had).
-    pub(super) fn insert(&mut self, t: u32, template: PatchTemplate) {
-        if let Some(&i) = self.slot.get(&t)
-            && let Some(s) = self.slots.get_mut(i)
-        {
-            *s = template;
-            return;
-        }
-        let i = match self.free.pop() {
-            Some(i) => {
-                self.slots[i] = template;
-                i
-            }
+    /// Samples the template of track `t` from `image` at `at` into a slot in place
+    /// ([`PatchTemplate::sample_into`]: a template is not built and then copied in, issue
+    /// 34), in place of the one it had; false, and nothing kept, when
+    /// [`PatchTemplate::sample`] gives `None` (the track keeps the template it had).
+    pub(super) fn sample(&mut self, t: u32, image: GrayView<'_>, at: (f32, f32)) -> bool {
+        let (i, pushed) = match self.free.pop() {
+            Some(i) => (i, false),
             None => {
-                self.slots.push(template);
-                self.slots.len() - 1
+                self.slots.push(PatchTemplate::empty());
+                (self.slots.len() - 1, true)
             }
         };
-        self.slot.insert(t, i);
+        if !self
+            .slots
+            .get_mut(i)
+            .is_some_and(|s| s.sample_into(image, at))
+        {
+            // The slot goes back as it was: free, or not there.
+            if pushed {
+                self.slots.pop();
+            } else {
+                self.free.push(i);
+            }
+            return false;
+        }
+        if let Some(old) = self.slot.insert(t, i) {
+            self.free.push(old);
+        }
+        true
     }
 
     /// Keeps the templates of the tracks for which `live` holds; the others' slots are
@@ -84,7 +95,6 @@ impl Templates {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use swarmpose_vision::features::GrayView;
 
     /// Slots are reused: templates of tracks that ended make room for new ones, each
     /// track finds its own template (by its patch), and clearing forgets them all.
@@ -99,16 +109,16 @@ mod tests {
             height: h,
             data: &pixels,
         };
-        let patch =
-            |k: u32| PatchTemplate::sample(image, (12.0 + k as f32 * 3.0, 20.0)).expect("inside");
+        let at = |k: u32| (12.0 + k as f32 * 3.0, 20.0);
+        let patch = |k: u32| PatchTemplate::sample(image, at(k)).expect("inside");
         let mut templates = Templates::default();
         for t in 0..8 {
-            templates.insert(t, patch(t));
+            assert!(templates.sample(t, image, at(t)));
         }
         templates.retain(|t| t % 2 == 0);
         assert_eq!(templates.len(), 4);
         for t in 8..12 {
-            templates.insert(t, patch(t));
+            assert!(templates.sample(t, image, at(t)));
         }
         // The four freed slots took the four new templates.
         assert_eq!(templates.slots.len(), 8);
@@ -119,9 +129,19 @@ mod tests {
                 None => assert!(!kept, "track {t}"),
             }
         }
-        templates.insert(4, patch(9));
+        // A new template of a track takes a new slot and frees its old one.
+        assert!(templates.sample(4, image, at(9)));
         assert!(templates.get_mut(4).is_some_and(|tpl| *tpl == patch(9)));
-        assert_eq!(templates.slots.len(), 8);
+        assert_eq!((templates.slots.len(), templates.free.len()), (9, 1));
+        // A patch outside the image keeps nothing: the track keeps its template, and the
+        // slots are as they were (a free one taken goes back, a pushed one is removed).
+        assert!(!templates.sample(4, image, (-5.0, 20.0)));
+        assert!(templates.get_mut(4).is_some_and(|tpl| *tpl == patch(9)));
+        assert_eq!((templates.slots.len(), templates.free.len()), (9, 1));
+        assert!(templates.sample(12, image, at(12)));
+        assert!(!templates.sample(13, image, (-5.0, 20.0)));
+        assert!(templates.get_mut(13).is_none());
+        assert_eq!((templates.slots.len(), templates.free.len()), (9, 0));
         templates.clear();
         assert_eq!(templates.len(), 0);
         assert!(templates.get_mut(0).is_none());

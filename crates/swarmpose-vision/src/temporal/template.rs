@@ -18,6 +18,7 @@ use crate::features::GrayView;
 use crate::image::{sample_bilinear, sample_patch};
 use inside::sample_inside;
 use nalgebra::{Matrix3, SMatrix, SVector};
+use steps::AffineSteps;
 
 /// Half the side of the aligned patch, pixels (a 9x9 patch, as the frame-to-frame
 /// alignment of the odometry's refinement).
@@ -84,36 +85,6 @@ impl PartialEq for PatchTemplate {
     }
 }
 
-/// The steps of [`PatchTemplate::align_affine`] that follow from the template alone.
-#[derive(Debug, Clone, PartialEq)]
-struct AffineSteps {
-    /// The steepest-descent images `∇T ∂W/∂p` with the exposure changes projected out.
-    sd: [SVector<f32, 6>; N * N],
-    /// The inverse of their Hessian `Σ sd sdᵀ`; `None` when it is singular (no affine
-    /// alignment).
-    h_inv: Option<SMatrix<f32, 6, 6>>,
-}
-
-impl AffineSteps {
-    /// The steps of the template whose gradients are `(gx, gy)` and whose contrast is
-    /// `contrast`.
-    fn of(gx: &[f32; N * N], gy: &[f32; N * N], contrast: &[f32; N * N]) -> Self {
-        let mut sd = [SVector::<f32, 6>::zeros(); N * N];
-        for (k, (sd, &(x, y))) in sd.iter_mut().zip(&COORDS).enumerate() {
-            let (gx, gy) = (gx[k], gy[k]);
-            *sd = SVector::<f32, 6>::from([gx * x, gx * y, gy * x, gy * y, gx, gy]);
-        }
-        project_out(&mut sd, contrast);
-        let h = sd
-            .iter()
-            .fold(SMatrix::<f32, 6, 6>::zeros(), |h, v| h + *v * v.transpose());
-        Self {
-            sd,
-            h_inv: h.try_inverse(),
-        }
-    }
-}
-
 /// The offset from the patch centre of the aligned patch's sample `k` (row-major), pixels:
 /// `(k % N − R, k / N − R)`, small integers (exact), tabulated once rather than divided
 /// and converted per sample.
@@ -133,15 +104,14 @@ impl PatchTemplate {
     /// of its structure tensor below one grey level squared per pixel).
     #[must_use]
     pub fn sample(image: GrayView<'_>, at: (f32, f32)) -> Option<Self> {
-        crate::simd::dispatch(Sample(image, at))
+        let mut t = Self::empty();
+        t.sample_into(image, at).then_some(t)
     }
 
-    /// [`PatchTemplate::sample`], inlined into each instruction set's compilation.
-    #[inline(always)]
-    fn sample_in(image: GrayView<'_>, at: (f32, f32)) -> Option<Self> {
-        let mut big = [0f32; SIDE * SIDE];
-        sample_patch(image, at.0 - R - 1.0, at.1 - R - 1.0, SIDE, &mut big)?;
-        let mut t = Self {
+    /// A template of zeros: a buffer for [`PatchTemplate::sample_into`].
+    #[must_use]
+    pub fn empty() -> Self {
+        Self {
             values: [0.0; N * N],
             gx: [0.0; N * N],
             gy: [0.0; N * N],
@@ -151,7 +121,26 @@ impl PatchTemplate {
             ptensor: (0.0, 0.0, 0.0),
             contrast: [0.0; N * N],
             affine: None,
-        };
+        }
+    }
+
+    /// [`PatchTemplate::sample`] into `self`, in place (a template is some 4 KB, which
+    /// returning it by value copies; issue 34): true when sampled, `self` then being
+    /// what [`PatchTemplate::sample`] gives; false where that gives `None`, `self` then
+    /// holding an unspecified template.
+    #[must_use]
+    pub fn sample_into(&mut self, image: GrayView<'_>, at: (f32, f32)) -> bool {
+        crate::simd::dispatch(Sample(self, image, at)).is_some()
+    }
+
+    /// [`PatchTemplate::sample_into`], inlined into each instruction set's compilation:
+    /// every field written (the affine steps forgotten) or `None`.
+    #[inline(always)]
+    fn sample_in(&mut self, image: GrayView<'_>, at: (f32, f32)) -> Option<()> {
+        let mut big = [0f32; SIDE * SIDE];
+        sample_patch(image, at.0 - R - 1.0, at.1 - R - 1.0, SIDE, &mut big)?;
+        let t = self;
+        t.affine = None;
         let (mut hxx, mut hxy, mut hyy) = (0f32, 0f32, 0f32);
         for j in 0..N {
             for i in 0..N {
@@ -174,7 +163,7 @@ impl PatchTemplate {
             return None;
         }
         t.tensor = (hxx, hxy, hyy);
-        t.contrast = unit_contrast(&t.values)?;
+        unit_contrast(&t.values, &mut t.contrast)?;
         let mut g = [SVector::<f32, 2>::zeros(); N * N];
         for (k, g) in g.iter_mut().enumerate() {
             *g = SVector::<f32, 2>::new(t.gx[k], t.gy[k]);
@@ -192,7 +181,7 @@ impl PatchTemplate {
             return None;
         }
         t.ptensor = (pxx, pxy, pyy);
-        Some(t)
+        Some(())
     }
 
     /// Where the patch appears in `image`, starting the search at `start` (pixels): the
@@ -279,15 +268,15 @@ impl PatchTemplate {
     }
 }
 
-/// A call of [`PatchTemplate::sample`] for [`crate::simd::dispatch`].
-struct Sample<'a>(GrayView<'a>, (f32, f32));
+/// A call of [`PatchTemplate::sample_into`] for [`crate::simd::dispatch`].
+struct Sample<'a>(&'a mut PatchTemplate, GrayView<'a>, (f32, f32));
 
 impl crate::simd::Kernel for Sample<'_> {
-    type Output = Option<PatchTemplate>;
+    type Output = Option<()>;
 
     #[inline(always)]
-    fn run(self) -> Option<PatchTemplate> {
-        PatchTemplate::sample_in(self.0, self.1)
+    fn run(self) -> Option<()> {
+        self.0.sample_in(self.1, self.2)
     }
 }
 
@@ -398,19 +387,23 @@ impl crate::simd::Kernel for AlignAffine<'_> {
     }
 }
 
-/// The patch's values less their mean, scaled to unit norm (`None` for a flat patch):
-/// with the constant patch, an orthogonal basis of the exposure changes `g T + b`.
-fn unit_contrast(values: &[f32; N * N]) -> Option<[f32; N * N]> {
+/// The patch's values less their mean, scaled to unit norm, into `out` (`None` for a flat
+/// patch, `out` then unspecified): with the constant patch, an orthogonal basis of the
+/// exposure changes `g T + b`.
+#[inline(always)]
+fn unit_contrast(values: &[f32; N * N], out: &mut [f32; N * N]) -> Option<()> {
     let mean = values.iter().sum::<f32>() / (N * N) as f32;
-    let mut out = values.map(|v| v - mean);
+    for (o, v) in out.iter_mut().zip(values) {
+        *o = v - mean;
+    }
     let norm = out.iter().map(|v| v * v).sum::<f32>().sqrt();
     if norm <= 0.0 {
         return None;
     }
-    for v in &mut out {
+    for v in out.iter_mut() {
         *v /= norm;
     }
-    Some(out)
+    Some(())
 }
 
 /// `images` (one steepest-descent vector per pixel) less their components along the
@@ -451,9 +444,13 @@ fn ncc(a: &[f32; N * N], b: &[f32; N * N]) -> f32 {
 }
 
 mod inside;
+mod steps;
 
 #[cfg(test)]
 mod affine_bits;
+
+#[cfg(test)]
+mod sample_bits;
 
 #[cfg(test)]
 mod tests {
