@@ -12,7 +12,8 @@ use swarmpose_vision::frontend::{
     DisparityCorrection, FrameMatches, MotionGuide, StereoFrame, match_frames_guided, match_share,
 };
 use swarmpose_vision::image::GrayImage;
-use swarmpose_vision::temporal::subpixel::align_patch;
+use swarmpose_vision::temporal::subpixel::align_patch_with;
+use swarmpose_vision::temporal::template::PatchTemplate;
 
 use super::calibrate::Best;
 use super::{Reference, Tracker, ambiguity};
@@ -264,10 +265,13 @@ impl<D: Descriptor> Tracker<D> {
         };
         let config = &self.config.refinement;
         let mut keep = 0;
+        // One template for the frame's alignments (each sampling overwrites it).
+        let mut template = PatchTemplate::empty();
         for k in 0..obs.current.len() {
             let za = obs.reference[k];
             let zb = obs.current[k];
-            if let Some((u, v)) = align_patch(
+            if let Some((u, v)) = align_patch_with(
+                &mut template,
                 a.view(),
                 (za.u as f32, za.v as f32),
                 b,
