@@ -8,6 +8,7 @@ use super::residual::{Relative, linearize_point, relative_poses};
 use crate::nls::pose::Pose;
 use crate::nls::products::add_gram;
 use crate::nls::robust::huber;
+use crate::refine::Prepared;
 use crate::refine::model::{StereoModel, StereoObservation};
 
 /// A track seen at least twice in the window: its measurements
@@ -182,6 +183,8 @@ fn step_points(model: &StereoModel, k: f64, (rel, n): (&[Relative], usize), out:
     let Tracks {
         list, measurements, ..
     } = out;
+    // The model's constants once, not per measurement (the same bits).
+    let model = &Prepared::new(model);
     for t in list.iter_mut() {
         let obs = &measurements[t.start..t.end];
         let anchor = obs[0].0;
@@ -257,7 +260,7 @@ mod tests {
             let mut g = Vector3::zeros();
             for (slot, z) in obs {
                 if let Some((residual, d_point)) =
-                    linearize_point(model, (&rel, n), anchor, *slot, &t.point, z)
+                    linearize_point(&Prepared::new(model), (&rel, n), anchor, *slot, &t.point, z)
                 {
                     let (w, _) = huber(residual.norm_squared(), k);
                     h += d_point.transpose() * d_point * w;
