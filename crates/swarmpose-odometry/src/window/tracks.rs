@@ -104,6 +104,8 @@ pub(super) fn tracks_of(
     rel: &mut Vec<Relative>,
     out: &mut Tracks,
 ) {
+    // The model's constants once, its correction inlined (the same bits, issue 34).
+    let model = &Prepared::new(model);
     gather(model, frames, keep, out);
     relative_poses(poses, rel);
     step_points(model, k, (rel, poses.len()), out);
@@ -112,7 +114,7 @@ pub(super) fn tracks_of(
 /// [`tracks_of`]'s tracks seen at least twice, anchored in their first keyframe, in their
 /// deterministic order (by the first measurement's keyframe, then its place in the image).
 #[inline(always)]
-fn gather(model: &StereoModel, frames: &[Keyframe], keep: impl Fn(u32) -> bool, out: &mut Tracks) {
+fn gather(model: &Prepared, frames: &[Keyframe], keep: impl Fn(u32) -> bool, out: &mut Tracks) {
     let Tracks {
         list,
         measurements,
@@ -179,12 +181,10 @@ fn gather(model: &StereoModel, frames: &[Keyframe], keep: impl Fn(u32) -> bool, 
 /// (`rel`: the relative poses of the `n` keyframes), dropping the points it leaves behind
 /// a camera or not finite.
 #[inline(always)]
-fn step_points(model: &StereoModel, k: f64, (rel, n): (&[Relative], usize), out: &mut Tracks) {
+fn step_points(model: &Prepared, k: f64, (rel, n): (&[Relative], usize), out: &mut Tracks) {
     let Tracks {
         list, measurements, ..
     } = out;
-    // The model's constants once, not per measurement (the same bits).
-    let model = &Prepared::new(model);
     for t in list.iter_mut() {
         let obs = &measurements[t.start..t.end];
         let anchor = obs[0].0;
@@ -259,9 +259,14 @@ mod tests {
             let mut h = Matrix3::zeros();
             let mut g = Vector3::zeros();
             for (slot, z) in obs {
-                if let Some((residual, d_point)) =
-                    linearize_point(&Prepared::new(model), (&rel, n), anchor, *slot, &t.point, z)
-                {
+                // The model's own methods, as before [`Prepared`].
+                let l = if *slot == anchor {
+                    Some(model.in_reference(&t.point, z))
+                } else {
+                    let (rot, trans) = &rel[slot * n + anchor];
+                    model.in_current(rot, trans, &t.point, z)
+                };
+                if let Some((residual, d_point)) = l.map(|l| (l.residual, l.d_point)) {
                     let (w, _) = huber(residual.norm_squared(), k);
                     h += d_point.transpose() * d_point * w;
                     g += d_point.transpose() * residual * w;
