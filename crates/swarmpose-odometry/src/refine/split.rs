@@ -91,9 +91,16 @@ pub fn split_check(
     let mut order: Vec<usize> = inliers.to_vec();
     order.sort_by(|&i, &j| current[i].u.total_cmp(&current[j].u));
     let (left, right) = order.split_at(order.len() / 2);
-    let half = |ids: &[usize]| -> Result<Refined, RefineError> {
-        let a: Vec<StereoObservation> = ids.iter().map(|&i| reference[i]).collect();
-        let b: Vec<StereoObservation> = ids.iter().map(|&i| current[i]).collect();
+    // One pair of buffers for both halves (the right one is the larger), refilled.
+    let (mut a, mut b) = (
+        Vec::with_capacity(right.len()),
+        Vec::with_capacity(right.len()),
+    );
+    let mut half = |ids: &[usize]| -> Result<Refined, RefineError> {
+        a.clear();
+        b.clear();
+        a.extend(ids.iter().map(|&i| reference[i]));
+        b.extend(ids.iter().map(|&i| current[i]));
         refine(model, config, &a, &b, None, motion, needed)
     };
     let (one, two) = (half(left)?, half(right)?);

@@ -94,7 +94,15 @@ fn dense_prior(
     for (i, (t, obs)) in tracks.iter().enumerate() {
         let anchor = obs[0].0;
         for (slot, z) in obs {
-            let j = linearize(&m, (&rel, n), anchor, *slot, &t.point, z).expect("in view");
+            let j = linearize(
+                &crate::refine::Prepared::new(&m),
+                (&rel, n),
+                anchor,
+                *slot,
+                &t.point,
+                z,
+            )
+            .expect("in view");
             let (w, _) = huber(j.residual.norm_squared(), k);
             let mut row = DMatrix::zeros(3, size);
             row.view_mut((0, 6 * n + 3 * i), (3, 3))

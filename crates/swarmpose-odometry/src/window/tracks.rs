@@ -8,6 +8,7 @@ use super::residual::{Relative, linearize_point, relative_poses};
 use crate::nls::pose::Pose;
 use crate::nls::products::add_gram;
 use crate::nls::robust::huber;
+use crate::refine::Prepared;
 use crate::refine::model::{StereoModel, StereoObservation};
 
 /// A track seen at least twice in the window: its measurements
@@ -103,6 +104,8 @@ pub(super) fn tracks_of(
     rel: &mut Vec<Relative>,
     out: &mut Tracks,
 ) {
+    // The model's constants once, its correction inlined (the same bits, issue 34).
+    let model = &Prepared::new(model);
     gather(model, frames, keep, out);
     relative_poses(poses, rel);
     step_points(model, k, (rel, poses.len()), out);
@@ -111,7 +114,7 @@ pub(super) fn tracks_of(
 /// [`tracks_of`]'s tracks seen at least twice, anchored in their first keyframe, in their
 /// deterministic order (by the first measurement's keyframe, then its place in the image).
 #[inline(always)]
-fn gather(model: &StereoModel, frames: &[Keyframe], keep: impl Fn(u32) -> bool, out: &mut Tracks) {
+fn gather(model: &Prepared, frames: &[Keyframe], keep: impl Fn(u32) -> bool, out: &mut Tracks) {
     let Tracks {
         list,
         measurements,
@@ -178,7 +181,7 @@ fn gather(model: &StereoModel, frames: &[Keyframe], keep: impl Fn(u32) -> bool, 
 /// (`rel`: the relative poses of the `n` keyframes), dropping the points it leaves behind
 /// a camera or not finite.
 #[inline(always)]
-fn step_points(model: &StereoModel, k: f64, (rel, n): (&[Relative], usize), out: &mut Tracks) {
+fn step_points(model: &Prepared, k: f64, (rel, n): (&[Relative], usize), out: &mut Tracks) {
     let Tracks {
         list, measurements, ..
     } = out;
@@ -256,9 +259,14 @@ mod tests {
             let mut h = Matrix3::zeros();
             let mut g = Vector3::zeros();
             for (slot, z) in obs {
-                if let Some((residual, d_point)) =
-                    linearize_point(model, (&rel, n), anchor, *slot, &t.point, z)
-                {
+                // The model's own methods, as before [`Prepared`].
+                let l = if *slot == anchor {
+                    Some(model.in_reference(&t.point, z))
+                } else {
+                    let (rot, trans) = &rel[slot * n + anchor];
+                    model.in_current(rot, trans, &t.point, z)
+                };
+                if let Some((residual, d_point)) = l.map(|l| (l.residual, l.d_point)) {
                     let (w, _) = huber(residual.norm_squared(), k);
                     h += d_point.transpose() * d_point * w;
                     g += d_point.transpose() * residual * w;

@@ -32,6 +32,7 @@ use crate::nls::pose::Pose;
 use crate::nls::products::{mul, mul_vec, tr_mul};
 use crate::nls::robust::huber;
 use crate::nls::schur::back_substitute;
+use crate::refine::Prepared;
 use crate::refine::evidence::{Matrix6xK, MatrixK, VectorK};
 use crate::refine::model::{Matrix3x6, StereoModel};
 use crate::refine::noise::{Score, cluster_factor, variance_factor};
@@ -48,6 +49,8 @@ fn cost(
     tracks: &Tracks,
     points: &[Vector3<f64>],
 ) -> f64 {
+    // The model's constants once, not per measurement (the same bits).
+    let model = &Prepared::new(model);
     let mut total = 0.0;
     for ((_, obs), p) in tracks.iter().zip(points) {
         let anchor = obs[0].0;

@@ -18,6 +18,7 @@ use crate::nls::pose::Pose;
 use crate::nls::products::{add_product, sub_product};
 use crate::nls::robust::huber;
 use crate::nls::schur::{point_inverse, through_point};
+use crate::refine::Prepared;
 use crate::refine::evidence::Matrix6xK;
 use crate::refine::model::{CALIBRATION_TERMS, Matrix3x6, StereoModel, StereoObservation};
 use crate::window::residual::{linearize, relative_poses};
@@ -168,6 +169,8 @@ fn build_with(
 ) -> Option<()> {
     let n = poses.len();
     let m = n.checked_sub(fixed)?;
+    // The model's constants once per system, not per measurement (the same bits).
+    let model = &Prepared::new(model);
     relative_poses(poses, &mut sc.rel);
     sc.reset(m);
     for ((_, obs), p) in tracks.iter().zip(points) {
@@ -194,7 +197,7 @@ struct PointSums {
 /// returns the point's own blocks, or `None` if the point left a view.
 #[inline(always)]
 fn add_track(
-    model: &StereoModel,
+    model: &Prepared,
     k: f64,
     (n, fixed, m, blocks): (usize, usize, usize, Blocks),
     obs: &[(usize, StereoObservation)],

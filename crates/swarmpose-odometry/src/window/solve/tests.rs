@@ -1,6 +1,7 @@
 //! Tests of the window's bundle adjustment.
 
 use super::*;
+use crate::refine::Prepared;
 use crate::refine::model::StereoObservation;
 use crate::window::residual::linearize;
 use nalgebra::Rotation3;
@@ -29,7 +30,7 @@ fn pose_jacobians_match_finite_differences() {
     let (anchor, slot) = (1, 2);
     let mut rel = Vec::new();
     relative_poses(&poses, &mut rel);
-    let j = linearize(&model, (&rel, 3), anchor, slot, &p, &z).expect("in view");
+    let j = linearize(&Prepared::new(&model), (&rel, 3), anchor, slot, &p, &z).expect("in view");
     let (dj, da) = j.poses.expect("two keyframes");
     let h = 1e-6;
     for (which, analytic) in [(slot, dj), (anchor, da)] {
@@ -44,7 +45,7 @@ fn pose_jacobians_match_finite_differences() {
                 );
                 let mut rel = Vec::new();
                 relative_poses(&moved, &mut rel);
-                linearize(&model, (&rel, 3), anchor, slot, &p, &z)
+                linearize(&Prepared::new(&model), (&rel, 3), anchor, slot, &p, &z)
                     .expect("in view")
                     .residual
             };
@@ -108,8 +109,8 @@ fn the_point_part_is_the_linearisations_bit_for_bit() {
             d: entry(&mut rng, 60.0),
         };
         let (anchor, slot) = (rng.random_range(0..3), rng.random_range(0..3));
-        let want = linearize(&model, (&rel, 3), anchor, slot, &p, &z);
-        let got = linearize_point(&model, (&rel, 3), anchor, slot, &p, &z);
+        let want = linearize(&Prepared::new(&model), (&rel, 3), anchor, slot, &p, &z);
+        let got = linearize_point(&Prepared::new(&model), (&rel, 3), anchor, slot, &p, &z);
         match (want, got) {
             (Some(w), Some((residual, d_point))) => {
                 // NaN for NaN: Rust leaves the sign and payload of an arithmetic NaN
