@@ -6,6 +6,8 @@
 //! middle of a run nor a run that succeeds on a meaningless value (a negative noise
 //! sigma, a negative search tolerance).
 
+use std::fmt::Display;
+
 /// A setting outside its range.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error("{name} is {value}: it must be {rule}")]
@@ -18,9 +20,9 @@ pub struct InvalidSetting {
     pub rule: String,
 }
 
-fn invalid(name: &str, value: impl std::fmt::Display, rule: &str) -> InvalidSetting {
+fn invalid(name: impl Display, value: impl Display, rule: &str) -> InvalidSetting {
     InvalidSetting {
-        name: name.to_owned(),
+        name: name.to_string(),
         value: value.to_string(),
         rule: rule.to_owned(),
     }
@@ -30,7 +32,7 @@ fn invalid(name: &str, value: impl std::fmt::Display, rule: &str) -> InvalidSett
 ///
 /// # Errors
 /// [`InvalidSetting`] naming `name`.
-pub fn finite(name: &str, value: f64) -> Result<(), InvalidSetting> {
+pub fn finite(name: impl Display, value: f64) -> Result<(), InvalidSetting> {
     if value.is_finite() {
         Ok(())
     } else {
@@ -42,7 +44,7 @@ pub fn finite(name: &str, value: f64) -> Result<(), InvalidSetting> {
 ///
 /// # Errors
 /// [`InvalidSetting`] naming `name`.
-pub fn at_least_zero(name: &str, value: f64) -> Result<(), InvalidSetting> {
+pub fn at_least_zero(name: impl Display, value: f64) -> Result<(), InvalidSetting> {
     if value.is_finite() && value >= 0.0 {
         Ok(())
     } else {
@@ -54,7 +56,7 @@ pub fn at_least_zero(name: &str, value: f64) -> Result<(), InvalidSetting> {
 ///
 /// # Errors
 /// [`InvalidSetting`] naming `name`.
-pub fn positive(name: &str, value: f64) -> Result<(), InvalidSetting> {
+pub fn positive(name: impl Display, value: f64) -> Result<(), InvalidSetting> {
     if value.is_finite() && value > 0.0 {
         Ok(())
     } else {
@@ -66,7 +68,7 @@ pub fn positive(name: &str, value: f64) -> Result<(), InvalidSetting> {
 ///
 /// # Errors
 /// [`InvalidSetting`] naming `name`.
-pub fn positive_or_infinite(name: &str, value: f64) -> Result<(), InvalidSetting> {
+pub fn positive_or_infinite(name: impl Display, value: f64) -> Result<(), InvalidSetting> {
     if value > 0.0 {
         Ok(())
     } else {
@@ -78,7 +80,7 @@ pub fn positive_or_infinite(name: &str, value: f64) -> Result<(), InvalidSetting
 ///
 /// # Errors
 /// [`InvalidSetting`] naming `name`.
-pub fn ratio(name: &str, value: f64) -> Result<(), InvalidSetting> {
+pub fn ratio(name: impl Display, value: f64) -> Result<(), InvalidSetting> {
     if value > 0.0 && value <= 1.0 {
         Ok(())
     } else {
@@ -90,7 +92,7 @@ pub fn ratio(name: &str, value: f64) -> Result<(), InvalidSetting> {
 ///
 /// # Errors
 /// [`InvalidSetting`] naming `name`.
-pub fn count_at_least(name: &str, value: usize, min: usize) -> Result<(), InvalidSetting> {
+pub fn count_at_least(name: impl Display, value: usize, min: usize) -> Result<(), InvalidSetting> {
     if value >= min {
         Ok(())
     } else {
@@ -103,7 +105,7 @@ pub fn count_at_least(name: &str, value: usize, min: usize) -> Result<(), Invali
 /// # Errors
 /// [`InvalidSetting`] naming `name`.
 pub fn not_below(
-    name: &str,
+    name: impl Display,
     value: f64,
     low: f64,
     rule: &'static str,
@@ -119,7 +121,7 @@ pub fn not_below(
 ///
 /// # Errors
 /// [`InvalidSetting`] naming `name`.
-pub fn within(name: &str, value: f64, low: f64, high: f64) -> Result<(), InvalidSetting> {
+pub fn within(name: impl Display, value: f64, low: f64, high: f64) -> Result<(), InvalidSetting> {
     if value >= low && value <= high {
         Ok(())
     } else {
@@ -135,7 +137,7 @@ pub fn within(name: &str, value: f64, low: f64, high: f64) -> Result<(), Invalid
 ///
 /// # Errors
 /// [`InvalidSetting`] naming `name`.
-pub fn open_unit(name: &str, value: f64) -> Result<(), InvalidSetting> {
+pub fn open_unit(name: impl Display, value: f64) -> Result<(), InvalidSetting> {
     if value > 0.0 && value < 1.0 {
         Ok(())
     } else {
@@ -148,7 +150,7 @@ pub fn open_unit(name: &str, value: f64) -> Result<(), InvalidSetting> {
 /// # Errors
 /// [`InvalidSetting`] naming `name`.
 pub fn count_within(
-    name: &str,
+    name: impl Display,
     value: usize,
     min: usize,
     max: usize,
@@ -160,14 +162,46 @@ pub fn count_within(
     }
 }
 
-/// The path of setting `name` below `prefix` (`prefix.name`; `name` alone when `prefix`
-/// is empty, as for a configuration given on its own).
-#[must_use]
-pub fn path(prefix: &str, name: &str) -> String {
-    if prefix.is_empty() {
-        name.to_owned()
-    } else {
-        format!("{prefix}.{name}")
+/// The path of a setting in a run configuration (`estimator.pso.inertia`): its name below
+/// its parent's path, written out only when a message needs it, so that a check that
+/// passes allocates nothing (the estimators check their settings at every call).
+#[derive(Debug, Clone, Copy)]
+pub struct Path<'a> {
+    parent: Option<&'a Path<'a>>,
+    name: &'a str,
+}
+
+impl<'a> Path<'a> {
+    /// The top of the paths: `prefix` (`estimator`), or nothing when it is empty (a
+    /// configuration given on its own).
+    #[must_use]
+    pub fn root(prefix: &'a str) -> Self {
+        Self {
+            parent: None,
+            name: prefix,
+        }
+    }
+
+    /// The path of setting `name` below this one.
+    #[must_use]
+    pub fn child(&'a self, name: &'a str) -> Self {
+        Self {
+            parent: Some(self),
+            name,
+        }
+    }
+
+    fn is_empty(&self) -> bool {
+        self.name.is_empty() && self.parent.is_none_or(Path::is_empty)
+    }
+}
+
+impl Display for Path<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.parent {
+            Some(p) if !p.is_empty() => write!(f, "{p}.{}", self.name),
+            _ => f.write_str(self.name),
+        }
     }
 }
 
@@ -200,6 +234,24 @@ mod tests {
         assert_eq!(
             e.to_string(),
             "orb.stereo.row_tolerance_px is -1: it must be a finite number, 0 or more"
+        );
+    }
+
+    #[test]
+    fn paths_are_written_below_their_parents() {
+        let (top, alone) = (Path::root("estimator"), Path::root(""));
+        let (pso, bare) = (top.child("pso"), alone.child("pso"));
+        assert_eq!(pso.child("inertia").to_string(), "estimator.pso.inertia");
+        assert_eq!(bare.child("inertia").to_string(), "pso.inertia");
+        assert_eq!(
+            alone.child("sigma_multiplier").to_string(),
+            "sigma_multiplier"
+        );
+        assert_eq!(top.to_string(), "estimator");
+        let e = within(top.child("ambiguity_ratio"), 2.0, 0.0, 1.0).expect_err("out of range");
+        assert_eq!(
+            e.to_string(),
+            "estimator.ambiguity_ratio is 2: it must be a number from 0 to 1"
         );
     }
 }

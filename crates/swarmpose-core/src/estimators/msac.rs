@@ -11,7 +11,7 @@ use crate::arun::arun_pairs;
 use crate::error::PoseError;
 use crate::geometry::Correspondences;
 use crate::rng::SeededRng;
-use crate::settings::{self, InvalidSetting};
+use crate::settings::{self, InvalidSetting, Path};
 
 /// Settings of [`MsacEstimator`]. Defaults in brackets.
 #[derive(Debug, Clone, PartialEq)]
@@ -80,11 +80,16 @@ impl MsacConfig {
     /// # Errors
     /// [`InvalidSetting`] naming the first setting out of its range.
     pub fn check(&self, prefix: &str) -> Result<(), InvalidSetting> {
-        let name = |n: &str| settings::path(prefix, n);
-        settings::positive(&name("threshold_m"), self.threshold_m)?;
-        settings::open_unit(&name("confidence"), self.confidence)?;
-        settings::count_within(&name("max_iterations"), self.max_iterations, 1, MAX_SAMPLES)?;
-        settings::count_within(&name("refine_rounds"), self.refine_rounds, 1, MAX_SAMPLES)?;
+        self.check_at(&Path::root(prefix))
+    }
+
+    /// [`Self::check`] below the path `at`.
+    pub(crate) fn check_at(&self, at: &Path<'_>) -> Result<(), InvalidSetting> {
+        let name = |n| at.child(n);
+        settings::positive(name("threshold_m"), self.threshold_m)?;
+        settings::open_unit(name("confidence"), self.confidence)?;
+        settings::count_within(name("max_iterations"), self.max_iterations, 1, MAX_SAMPLES)?;
+        settings::count_within(name("refine_rounds"), self.refine_rounds, 1, MAX_SAMPLES)?;
         Ok(())
     }
 }

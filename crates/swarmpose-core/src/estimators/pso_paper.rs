@@ -13,7 +13,7 @@ use crate::error::PoseError;
 use crate::geometry::{Correspondences, rotation_from_particle, wrap_rotation_vector};
 use crate::pso::{ParticleSwarm, PsoConfig};
 use crate::rng::SeededRng;
-use crate::settings::{self, InvalidSetting};
+use crate::settings::{self, InvalidSetting, Path};
 
 /// Settings of [`PsoPaperEstimator`]. Defaults in brackets.
 #[derive(Debug, Clone, PartialEq)]
@@ -54,8 +54,9 @@ impl PsoPaperConfig {
     /// # Errors
     /// [`InvalidSetting`] naming the first setting out of its range.
     pub fn check(&self, prefix: &str) -> Result<(), InvalidSetting> {
-        settings::positive(&settings::path(prefix, "threshold_m"), self.threshold_m)?;
-        self.pso.check(&settings::path(prefix, "pso"))
+        let at = Path::root(prefix);
+        settings::positive(at.child("threshold_m"), self.threshold_m)?;
+        self.pso.check_at(&at.child("pso"))
     }
 
     /// Sets the swarm settings.

@@ -4,7 +4,7 @@ use rand::RngExt;
 
 use crate::error::PoseError;
 use crate::rng::SeededRng;
-use crate::settings::{self, InvalidSetting};
+use crate::settings::{self, InvalidSetting, Path};
 
 /// Most particles a swarm may have (a million: tens of megabytes, and seconds of work
 /// per estimate). More were allocated at once: 10^12 particles asked for 24 TB and
@@ -90,19 +90,24 @@ impl PsoConfig {
     /// # Errors
     /// [`InvalidSetting`] naming the first setting out of its range.
     pub fn check(&self, prefix: &str) -> Result<(), InvalidSetting> {
-        let name = |n: &str| settings::path(prefix, n);
-        settings::count_within(&name("swarm_size"), self.swarm_size, 1, MAX_SWARM_SIZE)?;
+        self.check_at(&Path::root(prefix))
+    }
+
+    /// [`Self::check`] below the path `at`.
+    pub(crate) fn check_at(&self, at: &Path<'_>) -> Result<(), InvalidSetting> {
+        let name = |n| at.child(n);
+        settings::count_within(name("swarm_size"), self.swarm_size, 1, MAX_SWARM_SIZE)?;
         settings::count_within(
-            &name("max_iterations"),
+            name("max_iterations"),
             self.max_iterations,
             0,
             MAX_ITERATIONS,
         )?;
-        settings::at_least_zero(&name("inertia"), self.inertia)?;
-        settings::at_least_zero(&name("acceleration"), self.acceleration)?;
-        settings::ratio(&name("velocity_clamp"), self.velocity_clamp)?;
+        settings::at_least_zero(name("inertia"), self.inertia)?;
+        settings::at_least_zero(name("acceleration"), self.acceleration)?;
+        settings::ratio(name("velocity_clamp"), self.velocity_clamp)?;
         if let Some(n) = self.stall_iterations {
-            settings::count_at_least(&name("stall_iterations"), n, 1)?;
+            settings::count_at_least(name("stall_iterations"), n, 1)?;
         }
         Ok(())
     }

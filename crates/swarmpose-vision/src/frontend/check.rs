@@ -52,26 +52,26 @@ impl StereoConfig {
     /// [`InvalidSetting`] naming the first setting out of range.
     pub fn check(&self, prefix: &str) -> Result<(), InvalidSetting> {
         let name = |field: &str| format!("{prefix}.{field}");
-        at_least_zero(&name("row_tolerance_px"), f64::from(self.row_tolerance_px))?;
-        at_least_zero(&name("min_disparity_px"), f64::from(self.min_disparity_px))?;
+        at_least_zero(name("row_tolerance_px"), f64::from(self.row_tolerance_px))?;
+        at_least_zero(name("min_disparity_px"), f64::from(self.min_disparity_px))?;
         not_below(
-            &name("max_disparity_px"),
+            name("max_disparity_px"),
             f64::from(self.max_disparity_px),
             f64::from(self.min_disparity_px),
             "a finite number of pixels, at least min_disparity_px",
         )?;
-        positive(&name("max_distance"), f64::from(self.max_distance))?;
-        ratio(&name("ratio"), f64::from(self.ratio))?;
+        positive(name("max_distance"), f64::from(self.max_distance))?;
+        ratio(name("ratio"), f64::from(self.ratio))?;
         finite(
-            &name("disparity_offset_px"),
+            name("disparity_offset_px"),
             f64::from(self.disparity_offset_px),
         )?;
         at_least_zero(
-            &name("min_point_disparity_px"),
+            name("min_point_disparity_px"),
             f64::from(self.min_point_disparity_px),
         )?;
-        positive(&name("disparity_sigma_px"), self.disparity_sigma_px)?;
-        positive(&name("position_sigma_px"), self.position_sigma_px)
+        positive(name("disparity_sigma_px"), self.disparity_sigma_px)?;
+        positive(name("position_sigma_px"), self.position_sigma_px)
     }
 }
 
@@ -84,15 +84,15 @@ impl TemporalConfig {
     /// [`InvalidSetting`] naming the first setting out of range.
     pub fn check(&self, prefix: &str) -> Result<(), InvalidSetting> {
         let name = |field: &str| format!("{prefix}.{field}");
-        positive(&name("max_distance"), f64::from(self.max_distance))?;
-        ratio(&name("ratio"), f64::from(self.ratio))?;
+        positive(name("max_distance"), f64::from(self.max_distance))?;
+        ratio(name("ratio"), f64::from(self.ratio))?;
         if let Some(d) = self.max_displacement_px {
-            positive(&name("max_displacement_px"), f64::from(d))?;
+            positive(name("max_displacement_px"), f64::from(d))?;
         }
         if let Some(r) = self.guided_radius_px {
-            positive(&name("guided_radius_px"), f64::from(r))?;
+            positive(name("guided_radius_px"), f64::from(r))?;
         }
-        at_least_zero(&name("guided_min_ratio"), f64::from(self.guided_min_ratio))
+        at_least_zero(name("guided_min_ratio"), f64::from(self.guided_min_ratio))
     }
 }
 
@@ -104,18 +104,18 @@ fn check_orb(c: &OrbConfig, prefix: &str) -> Result<(), InvalidSetting> {
 }
 
 fn check_bucketing(b: &BucketConfig, prefix: &str) -> Result<(), InvalidSetting> {
-    count_at_least(&format!("{prefix}.cell_width"), b.cell_width, 1)?;
-    count_at_least(&format!("{prefix}.cell_height"), b.cell_height, 1)?;
-    count_at_least(&format!("{prefix}.per_cell"), b.per_cell, 1)
+    count_at_least(format!("{prefix}.cell_width"), b.cell_width, 1)?;
+    count_at_least(format!("{prefix}.cell_height"), b.cell_height, 1)?;
+    count_at_least(format!("{prefix}.per_cell"), b.per_cell, 1)
 }
 
 fn check_surf(c: &SurfConfig, prefix: &str) -> Result<(), InvalidSetting> {
     let name = |field: &str| format!("{prefix}.{field}");
-    at_least_zero(&name("hessian_threshold"), f64::from(c.hessian_threshold))?;
-    count_at_least(&name("octaves"), c.octaves, 1)?;
-    count_at_least(&name("intervals"), c.intervals, 1)?;
-    count_at_least(&name("initial_step"), c.initial_step, 1)?;
-    at_least_zero(&name("smoothing"), f64::from(c.smoothing))
+    at_least_zero(name("hessian_threshold"), f64::from(c.hessian_threshold))?;
+    count_at_least(name("octaves"), c.octaves, 1)?;
+    count_at_least(name("intervals"), c.intervals, 1)?;
+    count_at_least(name("initial_step"), c.initial_step, 1)?;
+    at_least_zero(name("smoothing"), f64::from(c.smoothing))
 }
 
 #[cfg(test)]

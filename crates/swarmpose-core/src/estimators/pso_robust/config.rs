@@ -3,7 +3,7 @@
 use crate::error::PoseError;
 use crate::geometry::MIN_CORRESPONDENCES;
 use crate::pso::{MAX_SWARM_SIZE, PsoConfig};
-use crate::settings::{self, InvalidSetting};
+use crate::settings::{self, InvalidSetting, Path};
 
 /// How `pso` chooses its inlier threshold when the data carry no per-point noise.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -175,37 +175,42 @@ impl PsoEstimatorConfig {
     /// # Errors
     /// [`InvalidSetting`] naming the first setting out of its range.
     pub fn check(&self, prefix: &str) -> Result<(), InvalidSetting> {
-        let name = |n: &str| settings::path(prefix, n);
+        self.check_at(&Path::root(prefix))
+    }
+
+    /// [`Self::check`] below the path `at`.
+    pub(crate) fn check_at(&self, at: &Path<'_>) -> Result<(), InvalidSetting> {
+        let name = |n| at.child(n);
         if let Threshold::Fixed(d) = self.threshold {
-            settings::positive(&name("threshold"), d)?;
+            settings::positive(name("threshold"), d)?;
         }
-        settings::positive(&name("auto_initial_fraction"), self.auto_initial_fraction)?;
-        settings::positive(&name("auto_min_fraction"), self.auto_min_fraction)?;
+        settings::positive(name("auto_initial_fraction"), self.auto_initial_fraction)?;
+        settings::positive(name("auto_min_fraction"), self.auto_min_fraction)?;
         settings::not_below(
-            &name("auto_max_fraction"),
+            name("auto_max_fraction"),
             self.auto_max_fraction,
             self.auto_min_fraction,
             "a finite fraction, at least auto_min_fraction",
         )?;
-        settings::count_at_least(&name("max_sample_growth"), self.max_sample_growth, 1)?;
-        settings::positive(&name("sigma_multiplier"), self.sigma_multiplier)?;
-        self.pso.check(&name("pso"))?;
+        settings::count_at_least(name("max_sample_growth"), self.max_sample_growth, 1)?;
+        settings::positive(name("sigma_multiplier"), self.sigma_multiplier)?;
+        self.pso.check_at(&name("pso"))?;
         settings::count_within(
-            &name("seeded_particles"),
+            name("seeded_particles"),
             self.seeded_particles,
             0,
             MAX_SWARM_SIZE,
         )?;
-        settings::count_at_least(&name("max_points"), self.max_points, MIN_CORRESPONDENCES)?;
-        settings::count_at_least(&name("max_pairs"), self.max_pairs, 1)?;
-        settings::count_at_least(&name("refine_rounds"), self.refine_rounds, 1)?;
+        settings::count_at_least(name("max_points"), self.max_points, MIN_CORRESPONDENCES)?;
+        settings::count_at_least(name("max_pairs"), self.max_pairs, 1)?;
+        settings::count_at_least(name("refine_rounds"), self.refine_rounds, 1)?;
         settings::within(
-            &name("restart_below_ratio"),
+            name("restart_below_ratio"),
             self.restart_below_ratio,
             0.0,
             1.0,
         )?;
-        settings::within(&name("ambiguity_ratio"), self.ambiguity_ratio, 0.0, 1.0)?;
+        settings::within(name("ambiguity_ratio"), self.ambiguity_ratio, 0.0, 1.0)?;
         Ok(())
     }
 }
