@@ -156,8 +156,9 @@ pub fn image_to_depth_m(img: &Image) -> Result<Vec<f32>, String> {
             })
             .collect()),
         "32FC1" => {
+            let rows = rows(img, 4)?;
             let mut out = Vec::with_capacity(img.width as usize * img.height as usize);
-            for row in rows(img, 4)? {
+            for row in rows {
                 out.extend(row.chunks_exact(4).map(|p| {
                     let b = [p[0], p[1], p[2], p[3]];
                     let m = if img.is_bigendian != 0 {
@@ -238,7 +239,7 @@ mod tests {
 
     /// A header claiming a huge image over a few bytes of data is refused before anything
     /// is allocated for its size (the fuzzer's bag asked for 260 GB, and the process
-    /// aborted), in every encoding.
+    /// aborted), in every encoding, depth images' too.
     #[test]
     fn a_size_beyond_the_data_allocates_nothing() {
         for encoding in ["mono8", "8UC1", "mono16", "rgb8", "bgra8"] {
@@ -249,6 +250,14 @@ mod tests {
             let err = image_to_gray(&img).expect_err("too short");
             assert!(err.contains("bytes of data"), "{encoding}: {err}");
             assert_eq!(image_into_gray(img).expect_err("too short"), err);
+        }
+        for encoding in ["16UC1", "32FC1"] {
+            let img = Image {
+                encoding: encoding.to_owned(),
+                ..mono8(300_000, 1_200_000, 290_000, 64)
+            };
+            let err = image_to_depth_m(&img).expect_err("too short");
+            assert!(err.contains("bytes of data"), "{encoding}: {err}");
         }
     }
 }
