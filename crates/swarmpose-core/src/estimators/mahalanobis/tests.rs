@@ -144,19 +144,24 @@ fn add_point_has_the_bits_of_the_full_products() {
     }
 }
 
+/// One draw of the bit tests' inputs: of `cases` equally likely cases, 0, -0, NaN and
+/// infinity one each, else uniform in `(-half_width, half_width)`.
+fn special_or_uniform(rng: &mut crate::rng::SeededRng, cases: u32, half_width: f64) -> f64 {
+    use rand::RngExt;
+    match rng.random_range(0..cases) {
+        0 => 0.0,
+        1 => -0.0,
+        2 => f64::NAN,
+        3 => f64::INFINITY,
+        _ => rng.random_range(-half_width..half_width),
+    }
+}
+
 #[test]
 fn normal_equations_have_the_same_bits_in_every_instruction_set() {
     use rand::RngExt;
     let mut rng = crate::rng::seeded(37);
-    let value = |rng: &mut crate::rng::SeededRng| -> f64 {
-        match rng.random_range(0..40) {
-            0 => 0.0,
-            1 => -0.0,
-            2 => f64::NAN,
-            3 => f64::INFINITY,
-            _ => rng.random_range(-20.0..20.0),
-        }
-    };
+    let value = |rng: &mut crate::rng::SeededRng| special_or_uniform(rng, 40, 20.0);
     // Every NaN as one: Rust leaves a NaN's sign and payload unspecified (x86 passes on
     // the first operand's NaN, and SSE and AVX code may order the operands of a
     // commutative operation differently); the callers only ask whether a value is finite.
@@ -243,15 +248,7 @@ fn select_reference(
 fn selection_matches_the_reference_in_every_instruction_set() {
     use rand::RngExt;
     let mut rng = crate::rng::seeded(41);
-    let value = |rng: &mut crate::rng::SeededRng| -> f64 {
-        match rng.random_range(0..60) {
-            0 => 0.0,
-            1 => -0.0,
-            2 => f64::NAN,
-            3 => f64::INFINITY,
-            _ => rng.random_range(-3.0..3.0),
-        }
-    };
+    let value = |rng: &mut crate::rng::SeededRng| special_or_uniform(rng, 60, 3.0);
     let mut selected = 0;
     for case in 0..200 {
         let n = 60;
