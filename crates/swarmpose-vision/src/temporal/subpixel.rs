@@ -59,6 +59,15 @@ pub fn align_patch_with(
 mod tests {
     use super::*;
 
+    /// A `width` x `height` view of `data`.
+    fn view(width: usize, height: usize, data: &[u8]) -> GrayView<'_> {
+        GrayView {
+            width,
+            height,
+            data,
+        }
+    }
+
     /// A smooth 2D pattern shifted by a known sub-pixel amount is found.
     #[test]
     fn sub_pixel_shift_is_recovered() {
@@ -75,26 +84,14 @@ mod tests {
                 .collect()
         };
         let (da, db) = (img(0.0, 0.0), img(sx, sy));
-        let a = GrayView {
-            width: w,
-            height: h,
-            data: &da,
-        };
-        let b = GrayView {
-            width: w,
-            height: h,
-            data: &db,
-        };
+        let a = view(w, h, &da);
+        let b = view(w, h, &db);
         let found = align_patch(a, (40.0, 30.0), b, (41.0, 30.0), 20, 3.0).expect("aligned");
         assert!((found.0 - 40.0 - sx).abs() < 0.05, "{found:?}");
         assert!((found.1 - 30.0 - sy).abs() < 0.05, "{found:?}");
         // A flat patch has no position.
         let flat = vec![100u8; w * h];
-        let f = GrayView {
-            width: w,
-            height: h,
-            data: &flat,
-        };
+        let f = view(w, h, &flat);
         assert!(align_patch(f, (40.0, 30.0), f, (40.0, 30.0), 20, 3.0).is_none());
     }
 
@@ -139,16 +136,8 @@ mod tests {
     fn a_reused_template_aligns_as_a_fresh_one() {
         let (w, h) = (80usize, 60usize);
         let (da, db) = (textured(w, h, 1, 0.0), textured(w, h, 2, 1.3));
-        let a = GrayView {
-            width: w,
-            height: h,
-            data: &da,
-        };
-        let b = GrayView {
-            width: w,
-            height: h,
-            data: &db,
-        };
+        let a = view(w, h, &da);
+        let b = view(w, h, &db);
         let mut template = PatchTemplate::empty();
         let (mut found, mut failed) = (0, 0);
         for k in 0..600 {
